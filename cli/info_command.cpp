@@ -1,0 +1,37 @@
+#include "cli/commands.hpp"
+#include "engine/gpu_device.hpp"
+
+#include <iostream>
+#include <memory>
+#include <string>
+
+namespace vkray::cli {
+
+Action add_info_command(CLI::App& app) {
+  CLI::App* command = app.add_subcommand("info", "List the Vulkan devices, the one vkray would use, and its limits.");
+  auto device_filter = std::make_shared<std::string>();
+  command->add_option("--device", *device_filter, "Show which device a name (substring, any case) picks");
+  return [device_filter] {
+    const auto devices = list_gpu_devices();
+    const size_t chosen = choose_gpu_device(devices, *device_filter);
+    for (size_t i = 0; i < devices.size(); ++i) {
+      const GpuDeviceInfo& d = devices[i];
+      std::cout << (i == chosen ? "* " : "  ") << "[" << i << "] " << d.name << " (" << d.type << ", Vulkan "
+                << d.api_version << ", " << d.driver << ")" << (d.can_compute ? "" : " - no compute queue") << '\n';
+    }
+    const GpuDeviceInfo& d = devices[chosen];
+    std::cout << "\nvkray uses [" << chosen << "] " << d.name << '\n'
+              << "  max workgroup count        " << d.max_workgroup_count[0] << " x " << d.max_workgroup_count[1]
+              << " x " << d.max_workgroup_count[2] << '\n'
+              << "  max workgroup invocations  " << d.max_workgroup_invocations << '\n'
+              << "  max storage buffer range   " << d.max_storage_buffer_range << " bytes ("
+              << (d.max_storage_buffer_range >> 20) << " MiB)\n"
+              << "  subgroup size              " << d.subgroup_size << '\n'
+              << "  timestamps                 "
+              << (d.timestamp_period_ns > 0.0 ? std::to_string(d.timestamp_period_ns) + " ns per tick" : "none") << '\n'
+              << "  shaderFloat64              " << (d.shader_float64 ? "yes" : "no") << '\n';
+    return 0;
+  };
+}
+
+}  // namespace vkray::cli

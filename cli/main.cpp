@@ -1,0 +1,40 @@
+// vkray: ray-cast a scene on the GPU (Vulkan compute) into depth and normal images.
+// Exit codes: 0 success, 2 usage or input errors, 1 runtime failures (no Vulkan device, I/O).
+#include "cli/commands.hpp"
+#include "engine/gpu_device.hpp"
+#include "engine/scene.hpp"
+
+#include <iostream>
+
+#ifndef VKRAY_VERSION
+#error "VKRAY_VERSION comes from CMake"
+#endif
+
+int main(int argc, char** argv) {
+  CLI::App app("vkray: a Vulkan compute raycaster that writes per-pixel depth and normal images.", "vkray");
+  app.set_version_flag("--version", "vkray " VKRAY_VERSION);
+  app.require_subcommand(1);
+  app.fallthrough(false);
+  const vkray::cli::Action render = vkray::cli::add_render_command(app);
+  const vkray::cli::Action info = vkray::cli::add_info_command(app);
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& error) {
+    // --help and --version end parsing with exit code 0 and print to stdout; real errors get one
+    // line on stderr and exit code 2.
+    if (error.get_exit_code() == 0) return app.exit(error);
+    std::cerr << "vkray: " << error.what() << " (see 'vkray --help')\n";
+    return 2;
+  }
+
+  try {
+    return app.got_subcommand("render") ? render() : info();
+  } catch (const vkray::InputError& error) {
+    std::cerr << "vkray: " << error.what() << '\n';
+    return 2;
+  } catch (const std::exception& error) {
+    std::cerr << "vkray: " << error.what() << '\n';
+    return 1;
+  }
+}

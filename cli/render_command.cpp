@@ -1,0 +1,151 @@
+#include "cli/commands.hpp"
+#include "engine/compare.hpp"
+#include "engine/image_io.hpp"
+#include "engine/reference.hpp"
+#include "engine/renderer.hpp"
+#include "engine/scene_loader.hpp"
+
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+#include <memory>
+#include <optional>
+
+namespace vkray::cli {
+namespace {
+
+struct RenderOptions {
+  std::string scene_path;
+  std::string output = "render.exr";
+  std::optional<std::string> preview;
+  bool no_preview = false;
+  std::optional<uint32_t> width, height;
+  std::string aovs = "depth,normal";
+  std::string device;
+  bool timings = false;
+  bool check = false;
+  bool reference = false;
+};
+
+AovSet parse_aov_list(const std::string& list) {
+  AovSet aovs;
+  size_t start = 0;
+  while (start <= list.size()) {
+    const size_t comma = std::min(list.find(',', start), list.size());
+    const std::string name = list.substr(start, comma - start);
+    const auto aov = aov_from_name(name);
+    if (!aov) throw InputError("--aov: unknown output '" + name + "' (choose from " + aov_names_help + ")");
+    aovs.add(*aov);
+    start = comma + 1;
+  }
+  return aovs;
+}
+
+class Stopwatch {
+ public:
+  double lap_ms() {
+    const auto now = std::chrono::steady_clock::now();
+    const double ms = std::chrono::duration<double, std::milli>(now - last_).count();
+    last_ = now;
+    return ms;
+  }
+
+ private:
+  std::chrono::steady_clock::time_point last_ = std::chrono::steady_clock::now();
+};
+
+void print_timing(const char* what, double ms) { std::printf("  %-22s %10.3f ms\n", what, ms); }
+
+int run_render(const RenderOptions& options) {
+  Stopwatch stopwatch;
+  Scene scene = options.scene_path.empty() ? default_scene() : load_scene_file(options.scene_path);
+  if (options.width) scene.width = *options.width;
+  if (options.height) scene.height = *options.height;
+  check_image_size(scene.width, scene.height);
+  const AovSet aovs = parse_aov_list(options.aovs);
+  const double load_ms = stopwatch.lap_ms();
+
+  Frame frame;
+  std::optional<RenderTimings> gpu_timings;
+  double reference_ms = 0.0;
+  std::string device_name = "CPU reference (double precision)";
+  std::optional<std::vector<ReferenceHit>> reference_hits;
+  auto reference = [&] {
+    if (!reference_hits) {
+      Stopwatch reference_watch;
+      const ReferenceScene reference_scene(scene);
+      reference_hits = render_reference_hits(reference_scene, make_camera_basis(scene.camera, scene.width, scene.height),
+                                             scene.width, scene.height);
+      reference_ms = reference_watch.lap_ms();
+    }
+    return *reference_hits;
+  };
+
+  if (options.reference) {
+    frame = reference_frame(reference(), scene.width, scene.height, aovs);
+  } else {
+    GpuDevice device(options.device);
+    device_name = device.info().name;
+    Renderer renderer(device, scene);
+    frame = renderer.render(scene.camera, scene.width, scene.height, aovs);
+    gpu_timings = renderer.timings();
+  }
+  const double render_ms = stopwatch.lap_ms() - reference_ms;
+
+  std::optional<FrameError> error;
+  if (options.check && !options.reference) error = measure_error(frame, reference());
+  stopwatch.lap_ms();
+
+  write_exr(options.output, frame);
+  std::string written = options.output;
+  if (!options.no_preview) {
+    const std::string preview =
+        options.preview.value_or(std::filesystem::path(options.output).replace_extension(".png").string());
+    write_preview_png(preview, frame);
+    written += " and " + preview;
+  }
+  const double write_ms = stopwatch.lap_ms();
+
+  std::printf("vkray: wrote %s (%ux%u, %s) on %s\n", written.c_str(), scene.width, scene.height,
+              aovs.names().c_str(), device_name.c_str());
+  if (error) std::printf("error vs. double-precision reference: %s\n", error->summary().c_str());
+  if (options.timings) {
+    std::printf("timings:\n");
+    print_timing("scene load", load_ms);
+    if (gpu_timings) {
+      print_timing("upload", gpu_timings->upload_ms);
+      print_timing("pipeline creation", gpu_timings->pipeline_ms);
+      print_timing("dispatch (GPU)", gpu_timings->dispatch_gpu_ms);
+      print_timing("readback", gpu_timings->readback_ms);
+      print_timing("render total (wall)", render_ms);
+      std::printf("  %-22s %10u\n", "tiles", gpu_timings->tiles);
+    }
+    if (reference_hits) print_timing("reference (CPU)", reference_ms);
+    print_timing("file writing", write_ms);
+  }
+  return 0;
+}
+
+}  // namespace
+
+Action add_render_command(CLI::App& app) {
+  CLI::App* command = app.add_subcommand("render", "Render a scene (or the built-in one) to OpenEXR and a PNG preview.");
+  auto options = std::make_shared<RenderOptions>();
+  command->add_option("scene", options->scene_path, "Scene file (JSON); the built-in course scene when omitted");
+  command->add_option("-o,--output", options->output, "OpenEXR file to write")->capture_default_str();
+  command->add_option("--width", options->width, "Image width in pixels (overrides the scene)");
+  command->add_option("--height", options->height, "Image height in pixels (overrides the scene)");
+  command->add_option("--aov", options->aovs, std::string("Outputs to compute, comma-separated: ") + aov_names_help)
+      ->capture_default_str();
+  command->add_option("--preview", options->preview, "PNG preview to write (default: the output with .png)");
+  command->add_flag("--no-preview", options->no_preview, "Write no PNG preview");
+  command->add_option("--device", options->device, "Use the Vulkan device whose name contains this text");
+  command->add_flag("--timings", options->timings, "Print where the time went");
+  command->add_flag("--check", options->check,
+                    "Also render the double-precision CPU reference and print the GPU's error against it");
+  command->add_flag("--reference", options->reference, "Render with the double-precision CPU reference instead");
+  return [options] { return run_render(*options); };
+}
+
+}  // namespace vkray::cli

@@ -1,0 +1,54 @@
+#include "engine/camera.hpp"
+
+#include <glm/geometric.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+namespace vkray {
+
+glm::dvec2 pixel_uv(uint32_t i, uint32_t j, uint32_t width, uint32_t height) {
+  const double shorter = std::min(width, height);
+  return {(2.0 * (i + 0.5) - width) / shorter, (height - 2.0 * (j + 0.5)) / shorter};
+}
+
+glm::dvec3 CameraBasis::direction(glm::dvec2 uv) const {
+  return glm::normalize(uv.x * right + uv.y * up - plane_distance * forward);
+}
+
+namespace {
+
+// Below this sine of the angle between `up` and the view direction the two are taken as parallel.
+// normalize(up x forward) is still accurate to ~1e-7 at this angle in double, far better than the
+// float32 the GPU receives, so the fallback only replaces frames that are truly undefined.
+constexpr double parallel_sine = 1e-9;
+
+glm::dvec3 least_aligned_axis(const glm::dvec3& direction) {
+  const glm::dvec3 axes[] = {{0, 0, 1}, {1, 0, 0}, {0, 1, 0}};
+  const glm::dvec3* best = &axes[0];
+  for (const auto& axis : axes) {
+    if (std::abs(glm::dot(axis, direction)) < std::abs(glm::dot(*best, direction))) best = &axis;
+  }
+  return *best;
+}
+
+}  // namespace
+
+CameraBasis make_camera_basis(const Camera& camera, uint32_t width, uint32_t height) {
+  CameraBasis basis;
+  basis.origin = camera.from;
+  basis.forward = glm::normalize(camera.from - camera.to);
+  glm::dvec3 side = glm::cross(camera.up, basis.forward);
+  if (glm::length(side) <= parallel_sine * glm::length(camera.up)) {
+    side = glm::cross(least_aligned_axis(basis.forward), basis.forward);
+  }
+  basis.right = glm::normalize(side);
+  basis.up = glm::cross(basis.forward, basis.right);
+  const double half_height = static_cast<double>(height) / std::min(width, height);
+  const double half_fovy = camera.fovy_degrees * std::numbers::pi / 360.0;
+  basis.plane_distance = half_height / std::tan(half_fovy);
+  return basis;
+}
+
+}  // namespace vkray

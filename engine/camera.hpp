@@ -1,0 +1,41 @@
+// The course's image-plane and camera model, in double precision. The GPU receives the basis
+// computed here (see RayGenParams) and only evaluates the final linear combination per pixel.
+#pragma once
+
+#include <glm/vec2.hpp>
+#include <glm/vec3.hpp>
+
+#include <cstdint>
+
+namespace vkray {
+
+struct Camera {
+  glm::dvec3 from{0.0, 0.0, 0.0};
+  glm::dvec3 to{0.0, 0.0, -1.0};
+  glm::dvec3 up{0.0, 1.0, 0.0};
+  double fovy_degrees = 60.0;
+};
+
+// UV of the centre of pixel (i, j), j counted from the top row: origin at the image centre, the
+// shorter side spans [-1, 1], +y up.
+glm::dvec2 pixel_uv(uint32_t i, uint32_t j, uint32_t width, uint32_t height);
+
+// Orthonormal camera frame and image-plane distance for one image size.
+struct CameraBasis {
+  glm::dvec3 origin;
+  glm::dvec3 right;
+  glm::dvec3 up;
+  glm::dvec3 forward;     // normalize(from - to): the camera looks along -forward
+  double plane_distance;  // sy / tan(fovy / 2), sy = half-height of the image in UV
+
+  // Unit direction of the primary ray through image-plane point uv.
+  glm::dvec3 direction(glm::dvec2 uv) const;
+};
+
+// Builds the course's frame: right = normalize(up x forward), up' = forward x right. When `up` is
+// parallel to the view direction (looking straight up or down) that cross product vanishes; the
+// frame then uses the coordinate axis least aligned with the view direction as `up` (ties: +z,
+// then +x), so the image is well defined instead of NaN.
+CameraBasis make_camera_basis(const Camera& camera, uint32_t width, uint32_t height);
+
+}  // namespace vkray

@@ -1,0 +1,65 @@
+#include "engine/compare.hpp"
+
+#include <glm/geometric.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <numbers>
+
+namespace vkray {
+namespace {
+
+// Nearest-rank percentile; sorts `values`.
+double percentile(std::vector<double>& values, double fraction) {
+  if (values.empty()) return 0.0;
+  std::sort(values.begin(), values.end());
+  const size_t rank = static_cast<size_t>(std::ceil(fraction * static_cast<double>(values.size())));
+  return values[std::clamp<size_t>(rank, 1, values.size()) - 1];
+}
+
+// Angle between unit vectors via atan2(|a x b|, a.b), accurate for tiny angles, where acos(a.b) is not.
+double angle_degrees(const glm::dvec3& a, const glm::dvec3& b) {
+  return std::atan2(glm::length(glm::cross(a, b)), glm::dot(a, b)) * 180.0 / std::numbers::pi;
+}
+
+}  // namespace
+
+FrameError measure_error(const Frame& frame, const std::vector<ReferenceHit>& reference) {
+  FrameError error;
+  error.pixels = frame.pixel_count();
+  std::vector<double> depth_errors, normal_errors;
+  for (size_t p = 0; p < error.pixels; ++p) {
+    const bool reference_hit = reference[p].kind != PrimitiveKind::none;
+    if (frame.hit(p) != reference_hit) {
+      ++error.hit_mismatches;
+      continue;
+    }
+    if (!reference_hit) continue;
+    ++error.both_hit;
+    if (frame.aovs.has(Aov::depth)) depth_errors.push_back(std::abs(frame.depth[p] - reference[p].t) / reference[p].t);
+    if (frame.aovs.has(Aov::normal)) {
+      const glm::dvec3 normal(frame.normal[3 * p], frame.normal[3 * p + 1], frame.normal[3 * p + 2]);
+      normal_errors.push_back(angle_degrees(normal, reference[p].normal));
+    }
+  }
+  error.depth_max = depth_errors.empty() ? 0.0 : *std::max_element(depth_errors.begin(), depth_errors.end());
+  error.normal_deg_max = normal_errors.empty() ? 0.0 : *std::max_element(normal_errors.begin(), normal_errors.end());
+  error.depth_p50 = percentile(depth_errors, 0.5);
+  error.depth_p99 = percentile(depth_errors, 0.99);
+  error.normal_deg_p50 = percentile(normal_errors, 0.5);
+  error.normal_deg_p99 = percentile(normal_errors, 0.99);
+  return error;
+}
+
+std::string FrameError::summary() const {
+  char line[400];
+  std::snprintf(line, sizeof line,
+                "hit/miss mismatches %zu of %zu (%.4f%%); depth rel. error p50 %.2e p99 %.2e max %.2e; "
+                "normal error p50 %.2e p99 %.2e max %.2e deg",
+                hit_mismatches, pixels, 100.0 * mismatch_fraction(), depth_p50, depth_p99, depth_max, normal_deg_p50,
+                normal_deg_p99, normal_deg_max);
+  return line;
+}
+
+}  // namespace vkray

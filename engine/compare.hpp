@@ -1,0 +1,29 @@
+// Error of a rendered frame against the double-precision reference: the figures vkray reports next
+// to every timing (render --check, bench) and the tests' summary statistics.
+#pragma once
+
+#include "engine/frame.hpp"
+#include "engine/reference.hpp"
+
+#include <string>
+#include <vector>
+
+namespace vkray {
+
+struct FrameError {
+  size_t pixels = 0;
+  size_t hit_mismatches = 0;  // pixels where one says hit and the other miss
+  size_t both_hit = 0;
+  // Relative depth error |z - z_ref| / z_ref and normal angle error in degrees, over pixels where
+  // both hit; percentiles by nearest rank.
+  double depth_p50 = 0, depth_p99 = 0, depth_max = 0;
+  double normal_deg_p50 = 0, normal_deg_p99 = 0, normal_deg_max = 0;
+
+  double mismatch_fraction() const { return pixels ? static_cast<double>(hit_mismatches) / static_cast<double>(pixels) : 0.0; }
+  std::string summary() const;  // one line
+};
+
+// Compares the depth and normal outputs that `frame` has with the reference hits of the same size.
+FrameError measure_error(const Frame& frame, const std::vector<ReferenceHit>& reference);
+
+}  // namespace vkray

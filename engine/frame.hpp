@@ -1,0 +1,50 @@
+// Per-pixel outputs ("AOVs") of one render, on the host, row-major from the top row.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace vkray {
+
+enum class Aov : uint32_t { depth = 1, normal = 2, uv = 4 };
+
+// A set of outputs as a bit mask of Aov values.
+class AovSet {
+ public:
+  constexpr AovSet() = default;
+  constexpr AovSet(std::initializer_list<Aov> aovs) {
+    for (Aov aov : aovs) bits_ |= static_cast<uint32_t>(aov);
+  }
+  constexpr bool has(Aov aov) const { return (bits_ & static_cast<uint32_t>(aov)) != 0; }
+  constexpr void add(Aov aov) { bits_ |= static_cast<uint32_t>(aov); }
+  constexpr bool empty() const { return bits_ == 0; }
+  constexpr uint32_t bits() const { return bits_; }
+  // Depth or normal need a ray cast; uv alone does not.
+  constexpr bool needs_rays() const { return has(Aov::depth) || has(Aov::normal); }
+  std::string names() const;  // "depth,normal"
+
+ private:
+  uint32_t bits_ = 0;
+};
+
+// "depth", "normal" or "uv"; nullopt for anything else.
+std::optional<Aov> aov_from_name(std::string_view name);
+inline constexpr const char* aov_names_help = "depth, normal, uv";
+
+struct Frame {
+  uint32_t width = 0;
+  uint32_t height = 0;
+  AovSet aovs;
+  std::vector<float> depth;   // distance along the primary ray, +inf on a miss
+  std::vector<float> normal;  // 3 per pixel: unit geometric normal facing the ray, 0 on a miss
+  std::vector<float> uv;      // 2 per pixel: image-plane coordinates of the pixel centre
+
+  size_t pixel_count() const { return size_t{width} * height; }
+  // A hit is known from depth (finite) or, when only normals were asked for, from a non-zero normal.
+  bool hit(size_t pixel) const;
+};
+
+}  // namespace vkray

@@ -1,0 +1,57 @@
+#include "engine/gpu_scene.hpp"
+
+#include <glm/geometric.hpp>
+
+namespace vkray {
+namespace {
+
+glm::vec4 to_float4(const glm::dvec3& v, double w = 0.0) { return glm::vec4(glm::dvec4(v, w)); }
+
+struct Bounds {
+  glm::dvec3 lower{std::numeric_limits<double>::infinity()};
+  glm::dvec3 upper{-std::numeric_limits<double>::infinity()};
+  void add(const glm::dvec3& p) {
+    lower = glm::min(lower, p);
+    upper = glm::max(upper, p);
+  }
+};
+
+}  // namespace
+
+GpuScene make_gpu_scene(const Scene& scene) {
+  Bounds bounds;
+  bounds.add(scene.camera.from);
+  for (const auto& sphere : scene.spheres) {
+    bounds.add(sphere.center - sphere.radius);
+    bounds.add(sphere.center + sphere.radius);
+  }
+  for (const auto& mesh : scene.meshes) {
+    for (const auto& position : mesh.positions) bounds.add(position);
+  }
+  GpuScene gpu;
+  gpu.anchor = 0.5 * (bounds.lower + bounds.upper);
+
+  for (const auto& sphere : scene.spheres) gpu.spheres.push_back({to_float4(sphere.center - gpu.anchor, sphere.radius)});
+  for (const auto& plane : scene.planes) {
+    gpu.planes.push_back({to_float4(plane.normal, glm::dot(plane.normal, plane.point - gpu.anchor))});
+  }
+  for (const auto& mesh : scene.meshes) {
+    for (const auto& corners : mesh.triangles) {
+      const glm::dvec3 v0 = mesh.positions[corners[0]] - gpu.anchor;
+      const glm::dvec3 v1 = mesh.positions[corners[1]] - gpu.anchor;
+      const glm::dvec3 v2 = mesh.positions[corners[2]] - gpu.anchor;
+      const glm::dvec3 cross = glm::cross(v1 - v0, v2 - v0);
+      if (cross == glm::dvec3(0.0)) continue;
+      gpu.triangles.push_back({to_float4(v0), to_float4(v1), to_float4(v2), to_float4(glm::normalize(cross))});
+    }
+  }
+  return gpu;
+}
+
+gpu::RayGenParams make_ray_gen_params(const CameraBasis& camera, const glm::dvec3& anchor, uint32_t width,
+                                      uint32_t height, uint32_t first_row, uint32_t row_count) {
+  return {to_float4(camera.origin - anchor), to_float4(camera.right), to_float4(camera.up),
+          to_float4(-camera.plane_distance * camera.forward), glm::uvec4(width, height, first_row, row_count)};
+}
+
+}  // namespace vkray

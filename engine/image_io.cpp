@@ -1,0 +1,102 @@
+#include "engine/image_io.hpp"
+
+#include <OpenImageIO/imageio.h>
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace vkray {
+namespace {
+
+void write_image(const std::filesystem::path& path, const OIIO::ImageSpec& spec, OIIO::TypeDesc type, const void* pixels) {
+  auto output = OIIO::ImageOutput::create(path.string());
+  if (!output) throw std::runtime_error(path.string() + ": cannot write: " + OIIO::geterror());
+  if (!output->open(path.string(), spec) || !output->write_image(type, pixels) || !output->close()) {
+    throw std::runtime_error(path.string() + ": cannot write: " + output->geterror());
+  }
+}
+
+}  // namespace
+
+void write_exr(const std::filesystem::path& path, const Frame& frame) {
+  const bool has_hits = frame.aovs.needs_rays();
+  std::vector<std::string> names;
+  if (frame.aovs.has(Aov::depth)) names.push_back("Z");
+  if (frame.aovs.has(Aov::normal)) names.insert(names.end(), {"N.X", "N.Y", "N.Z"});
+  if (frame.aovs.has(Aov::uv)) names.insert(names.end(), {"U", "V"});
+  if (has_hits) names.push_back("A");
+  if (names.empty()) throw std::runtime_error(path.string() + ": no outputs to write");
+
+  const size_t channels = names.size();
+  std::vector<float> pixels(frame.pixel_count() * channels);
+  for (size_t p = 0; p < frame.pixel_count(); ++p) {
+    float* out = &pixels[p * channels];
+    if (frame.aovs.has(Aov::depth)) *out++ = frame.depth[p];
+    if (frame.aovs.has(Aov::normal)) out = std::copy_n(&frame.normal[3 * p], 3, out);
+    if (frame.aovs.has(Aov::uv)) out = std::copy_n(&frame.uv[2 * p], 2, out);
+    if (has_hits) *out++ = frame.hit(p) ? 1.0f : 0.0f;
+  }
+
+  OIIO::ImageSpec spec(static_cast<int>(frame.width), static_cast<int>(frame.height), static_cast<int>(channels),
+                       OIIO::TypeDesc::FLOAT);
+  spec.channelnames = names;
+  spec.alpha_channel = has_hits ? static_cast<int>(channels) - 1 : -1;
+  spec.z_channel = frame.aovs.has(Aov::depth) ? 0 : -1;
+  spec.attribute("compression", "zip");
+  spec.attribute("Software", "vkray");
+  write_image(path, spec, OIIO::TypeDesc::FLOAT, pixels.data());
+}
+
+void write_preview_png(const std::filesystem::path& path, const Frame& frame) {
+  const size_t panels = (frame.aovs.has(Aov::depth) ? 1 : 0) + (frame.aovs.has(Aov::normal) ? 1 : 0) +
+                        (frame.aovs.has(Aov::uv) ? 1 : 0);
+  if (panels == 0) throw std::runtime_error(path.string() + ": no outputs to preview");
+  const size_t width = frame.width, height = frame.height, row_width = width * panels;
+  std::vector<uint8_t> rgb(row_width * height * 3, 0);
+  auto to_byte = [](double v) { return static_cast<uint8_t>(std::lround(255.0 * std::clamp(v, 0.0, 1.0))); };
+  size_t panel = 0;
+  auto put = [&](size_t p, double r, double g, double b) {
+    uint8_t* out = &rgb[((p / width) * row_width + panel * width + p % width) * 3];
+    out[0] = to_byte(r), out[1] = to_byte(g), out[2] = to_byte(b);
+  };
+
+  if (frame.aovs.has(Aov::depth)) {
+    // Grey from inverse depth, which keeps near detail visible when a ground plane runs to the
+    // horizon; every hit stays at 10% or brighter so it never reads as a miss.
+    double near = INFINITY, far = 0.0;
+    for (float z : frame.depth) {
+      if (std::isfinite(z)) near = std::min<double>(near, z), far = std::max<double>(far, z);
+    }
+    for (size_t p = 0; p < frame.pixel_count(); ++p) {
+      const double z = frame.depth[p];
+      if (!std::isfinite(z)) continue;
+      const double span = 1.0 / near - 1.0 / far;
+      const double grey = span > 0.0 ? 0.1 + 0.9 * (1.0 / z - 1.0 / far) / span : 1.0;
+      put(p, grey, grey, grey);
+    }
+    ++panel;
+  }
+  if (frame.aovs.has(Aov::normal)) {
+    for (size_t p = 0; p < frame.pixel_count(); ++p) {
+      if (!frame.hit(p)) continue;
+      const float* n = &frame.normal[3 * p];
+      put(p, 0.5 * (n[0] + 1.0), 0.5 * (n[1] + 1.0), 0.5 * (n[2] + 1.0));
+    }
+    ++panel;
+  }
+  if (frame.aovs.has(Aov::uv)) {
+    for (size_t p = 0; p < frame.pixel_count(); ++p) {
+      const double u = frame.uv[2 * p], v = frame.uv[2 * p + 1];
+      const double brightness = u * u + v * v <= 1.0 ? 1.0 : 0.3;
+      put(p, brightness * 0.5 * (u + 1.0), brightness * 0.5 * (v + 1.0), brightness * 0.5);
+    }
+  }
+
+  OIIO::ImageSpec spec(static_cast<int>(row_width), static_cast<int>(height), 3, OIIO::TypeDesc::UINT8);
+  write_image(path, spec, OIIO::TypeDesc::UINT8, rgb.data());
+}
+
+}  // namespace vkray

@@ -1,0 +1,180 @@
+#include "engine/obj_loader.hpp"
+
+#include <tiny_obj_loader.h>
+
+#include <charconv>
+#include <cmath>
+#include <fstream>
+#include <sstream>
+#include <vector>
+
+namespace vkray {
+namespace {
+
+struct ElementCounts {
+  long positions = 0;
+  long texcoords = 0;
+  long normals = 0;
+};
+
+std::vector<std::string_view> split_tokens(std::string_view line) {
+  std::vector<std::string_view> tokens;
+  size_t pos = 0;
+  while (pos < line.size()) {
+    const size_t start = line.find_first_not_of(" \t\r", pos);
+    if (start == std::string_view::npos) break;
+    const size_t end = std::min(line.find_first_of(" \t\r", start), line.size());
+    tokens.push_back(line.substr(start, end - start));
+    pos = end;
+  }
+  return tokens;
+}
+
+bool parse_whole_double(std::string_view token, double& value) {
+  const char* end = token.data() + token.size();
+  const auto result = std::from_chars(token.data(), end, value);
+  return result.ec == std::errc() && result.ptr == end;
+}
+
+bool parse_whole_long(std::string_view token, long& value) {
+  const char* end = token.data() + token.size();
+  const auto result = std::from_chars(token.data(), end, value);
+  return result.ec == std::errc() && result.ptr == end;
+}
+
+// Checks one index of a face vertex reference against the elements defined so far. OBJ indices are
+// 1-based; negative ones count back from the last element defined (-1 is the newest).
+std::string check_index(std::string_view token, long defined, const char* what) {
+  long index = 0;
+  if (!parse_whole_long(token, index)) return "'" + std::string(token) + "' is not an integer " + what + " index";
+  if (index == 0) return std::string(what) + " index 0 (OBJ indices start at 1)";
+  if (index > defined || -index > defined) {
+    return std::string(what) + " index " + std::string(token) + " is out of range (" +
+           std::to_string(defined) + " defined so far)";
+  }
+  return {};
+}
+
+// Returns an empty string when the statement is acceptable, else what is wrong with it.
+std::string check_statement(const std::vector<std::string_view>& tokens, ElementCounts& counts) {
+  const std::string_view keyword = tokens[0];
+  if (keyword == "v" || keyword == "vn" || keyword == "vt") {
+    const size_t needed = keyword == "vt" ? 1 : 3;
+    if (tokens.size() - 1 < needed) {
+      return "'" + std::string(keyword) + "' needs " + std::to_string(needed) + " coordinates, got " +
+             std::to_string(tokens.size() - 1);
+    }
+    for (size_t k = 1; k < tokens.size(); ++k) {
+      double value = 0.0;
+      if (!parse_whole_double(tokens[k], value)) return "'" + std::string(tokens[k]) + "' is not a number";
+      if (!std::isfinite(value)) return "coordinate '" + std::string(tokens[k]) + "' is not finite";
+    }
+    (keyword == "v" ? counts.positions : keyword == "vn" ? counts.normals : counts.texcoords) += 1;
+    return {};
+  }
+  if (keyword != "f") return {};  // groups, materials, smoothing, lines and points: not geometry we use
+  if (tokens.size() < 4) return "a face needs at least 3 vertices, got " + std::to_string(tokens.size() - 1);
+  size_t form = std::string_view::npos;  // number of '/'-separated fields (with "//" as an empty one)
+  bool form_has_texcoord = false;
+  for (size_t k = 1; k < tokens.size(); ++k) {
+    std::vector<std::string_view> fields;
+    size_t start = 0;
+    for (;;) {
+      const size_t slash = tokens[k].find('/', start);
+      fields.push_back(tokens[k].substr(start, slash == std::string_view::npos ? std::string_view::npos : slash - start));
+      if (slash == std::string_view::npos) break;
+      start = slash + 1;
+    }
+    const bool has_texcoord = fields.size() >= 2 && !fields[1].empty();
+    if (fields.size() > 3 || (fields.size() == 2 && !has_texcoord) || fields[0].empty() ||
+        (fields.size() == 3 && fields[2].empty())) {
+      return "malformed face vertex '" + std::string(tokens[k]) + "'";
+    }
+    if (form == std::string_view::npos) {
+      form = fields.size();
+      form_has_texcoord = has_texcoord;
+    } else if (fields.size() != form || has_texcoord != form_has_texcoord) {
+      return "face vertex '" + std::string(tokens[k]) + "' has a different form than '" +
+             std::string(tokens[1]) + "'";
+    }
+    if (auto error = check_index(fields[0], counts.positions, "vertex"); !error.empty()) return error;
+    if (has_texcoord) {
+      if (auto error = check_index(fields[1], counts.texcoords, "texture"); !error.empty()) return error;
+    }
+    if (fields.size() == 3) {
+      if (auto error = check_index(fields[2], counts.normals, "normal"); !error.empty()) return error;
+    }
+  }
+  return {};
+}
+
+void validate_obj_text(std::string_view text, const std::string& name) {
+  ElementCounts counts;
+  size_t line_number = 0;
+  size_t pos = 0;
+  while (pos < text.size()) {
+    ++line_number;
+    const size_t newline = text.find('\n', pos);
+    const bool terminated = newline != std::string_view::npos;
+    std::string_view line = text.substr(pos, terminated ? newline - pos : std::string_view::npos);
+    pos = terminated ? newline + 1 : text.size();
+    if (const size_t hash = line.find('#'); hash != std::string_view::npos) line = line.substr(0, hash);
+    const auto tokens = split_tokens(line);
+    if (tokens.empty()) continue;
+    if (const std::string error = check_statement(tokens, counts); !error.empty()) {
+      throw InputError(name + ":" + std::to_string(line_number) + ": " + error +
+                       (terminated ? "" : " (the file ends without a newline: cut off in the middle of this line?)"));
+    }
+  }
+  if (counts.positions == 0) throw InputError(name + ": no vertices ('v' lines) found");
+}
+
+}  // namespace
+
+Mesh load_obj_text(std::string_view text, const std::string& name) {
+  validate_obj_text(text, name);
+
+  tinyobj::ObjReaderConfig config;
+  config.triangulate = true;
+  config.vertex_color = false;
+  tinyobj::ObjReader reader;
+  if (!reader.ParseFromString(std::string(text), "", config)) {
+    throw InputError(name + ": " + reader.Error());
+  }
+
+  Mesh mesh;
+  const auto& coords = reader.GetAttrib().vertices;
+  mesh.positions.reserve(coords.size() / 3);
+  for (size_t k = 0; k + 2 < coords.size(); k += 3) mesh.positions.emplace_back(coords[k], coords[k + 1], coords[k + 2]);
+  for (const auto& shape : reader.GetShapes()) {
+    const auto& indices = shape.mesh.indices;
+    for (size_t k = 0; k + 2 < indices.size(); k += 3) {
+      std::array<uint32_t, 3> triangle;
+      for (size_t c = 0; c < 3; ++c) {
+        const int index = indices[k + c].vertex_index;
+        if (index < 0 || static_cast<size_t>(index) >= mesh.positions.size()) {
+          throw InputError(name + ": face refers to a missing vertex");  // the validation pass rules this out
+        }
+        triangle[c] = static_cast<uint32_t>(index);
+      }
+      mesh.triangles.push_back(triangle);
+    }
+  }
+  if (mesh.triangles.empty()) throw InputError(name + ": no faces ('f' lines) found");
+  return mesh;
+}
+
+Mesh load_obj_file(const std::filesystem::path& path) {
+  std::error_code error;
+  if (!std::filesystem::is_regular_file(path, error)) {
+    throw InputError(path.string() + (std::filesystem::exists(path, error) ? ": is not a regular file" : ": no such OBJ file"));
+  }
+  std::ifstream file(path, std::ios::binary);
+  if (!file) throw InputError(path.string() + ": cannot open OBJ file");
+  std::ostringstream contents;
+  contents << file.rdbuf();
+  if (file.bad()) throw InputError(path.string() + ": cannot read OBJ file");
+  return load_obj_text(contents.str(), path.string());
+}
+
+}  // namespace vkray

@@ -1,0 +1,21 @@
+// Wavefront OBJ meshes through tinyobjloader. Polygons are triangulated, negative (relative)
+// indices work, and every group and object merges into one mesh. Before tinyobjloader parses a
+// file, a strict pass checks what it would accept silently (missing coordinates, NaN, bad or
+// out-of-range indices, a face line cut off at the end of a truncated file) and reports the line.
+#pragma once
+
+#include "engine/scene.hpp"
+
+#include <filesystem>
+#include <string>
+#include <string_view>
+
+namespace vkray {
+
+// Throws InputError "<path>: ..." or "<path>:<line>: ..." for unreadable or malformed files.
+Mesh load_obj_file(const std::filesystem::path& path);
+
+// The same for OBJ text already in memory; `name` stands for the file in error messages.
+Mesh load_obj_text(std::string_view text, const std::string& name);
+
+}  // namespace vkray

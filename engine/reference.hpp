@@ -1,0 +1,58 @@
+// CPU reference ray caster in double precision: the ground truth the GPU output is measured
+// against. Brute force over every primitive (exact, no acceleration structure yet), parallel over
+// image rows.
+#pragma once
+
+#include "engine/camera.hpp"
+#include "engine/frame.hpp"
+#include "engine/scene.hpp"
+
+#include <glm/vec3.hpp>
+
+#include <limits>
+#include <vector>
+
+namespace vkray {
+
+inline constexpr double no_hit = std::numeric_limits<double>::infinity();
+
+// The individual intersectors, in the same form as shaders/intersect.glsl. Each returns the ray
+// parameter of the nearest hit in (0, t_max), else t_max.
+double intersect_sphere(const glm::dvec3& origin_minus_center, double radius, const glm::dvec3& dir, double t_max);
+double intersect_plane(const glm::dvec3& normal, const glm::dvec3& point, const glm::dvec3& origin,
+                       const glm::dvec3& dir, double t_max);
+double intersect_triangle(const glm::dvec3& v0, const glm::dvec3& v1, const glm::dvec3& v2, const glm::dvec3& origin,
+                          const glm::dvec3& dir, double t_max);
+
+enum class PrimitiveKind : uint8_t { none, sphere, plane, triangle };
+
+struct ReferenceHit {
+  double t = no_hit;
+  glm::dvec3 normal{0.0};  // unit, facing the ray; 0 on a miss
+  PrimitiveKind kind = PrimitiveKind::none;
+  uint32_t index = 0;  // within its kind; triangles are numbered across meshes in scene order
+};
+
+class ReferenceScene {
+ public:
+  explicit ReferenceScene(const Scene& scene);
+  ReferenceHit trace(const glm::dvec3& origin, const glm::dvec3& dir) const;
+
+ private:
+  struct Triangle {
+    glm::dvec3 v0, v1, v2, normal;
+    uint32_t index;
+  };
+  std::vector<Sphere> spheres_;
+  std::vector<Plane> planes_;
+  std::vector<Triangle> triangles_;  // zero-area triangles left out: no ray can hit them
+};
+
+// Every pixel's hit for the scene's camera at width x height.
+std::vector<ReferenceHit> render_reference_hits(const ReferenceScene& scene, const CameraBasis& camera,
+                                                uint32_t width, uint32_t height);
+
+// The same outputs the GPU writes, from reference hits (rounded to float only at the end).
+Frame reference_frame(const std::vector<ReferenceHit>& hits, uint32_t width, uint32_t height, AovSet aovs);
+
+}  // namespace vkray

@@ -1,0 +1,60 @@
+// The scene model. The host keeps everything in double precision; conversion to the GPU's float32
+// layout happens once, relative to an anchor point, in gpu_scene.cpp.
+#pragma once
+
+#include "engine/camera.hpp"
+
+#include <glm/vec3.hpp>
+
+#include <array>
+#include <cstdint>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace vkray {
+
+// Bad input from the user (scene file, OBJ file, option value). The message names the file and the
+// place (a JSON path or a line number). The CLI maps it to exit code 2.
+class InputError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+struct Sphere {
+  glm::dvec3 center;
+  double radius;
+};
+
+struct Plane {
+  glm::dvec3 point;
+  glm::dvec3 normal;  // unit length
+};
+
+struct Mesh {
+  std::vector<glm::dvec3> positions;
+  std::vector<std::array<uint32_t, 3>> triangles;  // 0-based, checked against positions
+};
+
+inline constexpr uint32_t default_image_width = 800;
+inline constexpr uint32_t default_image_height = 600;
+// Largest image side and pixel count accepted: beyond these, host memory for the outputs
+// (28 bytes per pixel with every output) passes several GiB and the request is almost surely a typo.
+inline constexpr uint32_t max_image_side = 65536;
+inline constexpr uint64_t max_image_pixels = uint64_t{1} << 27;
+
+struct Scene {
+  Camera camera;
+  uint32_t width = default_image_width;
+  uint32_t height = default_image_height;
+  std::vector<Sphere> spheres;
+  std::vector<Plane> planes;
+  std::vector<Mesh> meshes;
+
+  size_t triangle_count() const;
+};
+
+// Throws InputError unless 1 <= side <= max_image_side and the pixel count is within the limit.
+void check_image_size(uint32_t width, uint32_t height);
+
+}  // namespace vkray

@@ -1,0 +1,276 @@
+#include "engine/scene_loader.hpp"
+
+#include "engine/obj_loader.hpp"
+
+#include <glm/geometric.hpp>
+#include <glm/gtc/quaternion.hpp>
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <initializer_list>
+#include <limits>
+#include <numbers>
+#include <sstream>
+
+namespace vkray {
+namespace {
+
+using Json = nlohmann::json;
+
+size_t edit_distance(std::string_view a, std::string_view b) {
+  std::vector<size_t> row(b.size() + 1);
+  for (size_t j = 0; j <= b.size(); ++j) row[j] = j;
+  for (size_t i = 1; i <= a.size(); ++i) {
+    size_t diagonal = row[0];
+    row[0] = i;
+    for (size_t j = 1; j <= b.size(); ++j) {
+      const size_t substitution = diagonal + (a[i - 1] == b[j - 1] ? 0 : 1);
+      diagonal = row[j];
+      row[j] = std::min({row[j] + 1, row[j - 1] + 1, substitution});
+    }
+  }
+  return row[b.size()];
+}
+
+std::string describe(const Json& value) {
+  std::string text = value.dump();
+  return text.size() > 40 ? text.substr(0, 37) + "..." : text;
+}
+
+// A JSON value together with its path from the root, so every check can say where it failed.
+class Node {
+ public:
+  Node(const Json& value, std::string path, const std::string& file) : value_(value), path_(std::move(path)), file_(file) {}
+
+  [[noreturn]] void fail(const std::string& message) const {
+    throw InputError(file_ + ": " + (path_.empty() ? "top level" : path_) + ": " + message);
+  }
+
+  const Json& json() const { return value_; }
+  bool has(const char* key) const { return value_.contains(key); }
+
+  // An object whose keys are all in `allowed`; an unknown key fails with the nearest allowed name.
+  const Node& expect_object(std::initializer_list<const char*> allowed) const {
+    if (!value_.is_object()) fail("expected an object, got " + describe(value_));
+    for (const auto& item : value_.items()) {
+      if (std::find_if(allowed.begin(), allowed.end(), [&](const char* k) { return item.key() == k; }) != allowed.end()) {
+        continue;
+      }
+      std::string message = "unknown key '" + item.key() + "'";
+      const char* nearest = nullptr;
+      size_t nearest_distance = std::numeric_limits<size_t>::max();
+      for (const char* key : allowed) {
+        const size_t distance = edit_distance(item.key(), key);
+        if (distance < nearest_distance) nearest = key, nearest_distance = distance;
+      }
+      if (nearest && nearest_distance <= std::max<size_t>(2, item.key().size() / 3)) {
+        message += " (did you mean '" + std::string(nearest) + "'?)";
+      } else {
+        std::string list;
+        for (const char* key : allowed) {
+          if (!list.empty()) list += ", ";
+          list += key;
+        }
+        message += " (expected one of: " + list + ")";
+      }
+      Node(item.value(), child_path(item.key()), file_).fail(message);
+    }
+    return *this;
+  }
+
+  Node at(const char* key) const {
+    if (!value_.contains(key)) fail(std::string("missing required key '") + key + "'");
+    return Node(value_.at(key), child_path(key), file_);
+  }
+
+  std::vector<Node> elements() const {
+    if (!value_.is_array()) fail("expected an array, got " + describe(value_));
+    std::vector<Node> nodes;
+    for (size_t i = 0; i < value_.size(); ++i) nodes.emplace_back(value_[i], path_ + "[" + std::to_string(i) + "]", file_);
+    return nodes;
+  }
+
+  double number() const {
+    if (!value_.is_number()) fail("expected a number, got " + describe(value_));
+    const double result = value_.get<double>();
+    if (!std::isfinite(result)) fail("number is not finite");
+    return result;
+  }
+
+  glm::dvec3 vec3() const {
+    const auto items = elements();
+    if (items.size() != 3) fail("expected 3 numbers [x, y, z], got " + describe(value_));
+    return {items[0].number(), items[1].number(), items[2].number()};
+  }
+
+  glm::dvec3 nonzero_vec3() const {
+    const glm::dvec3 result = vec3();
+    if (result == glm::dvec3(0.0)) fail("must not be the zero vector");
+    return result;
+  }
+
+  uint32_t index(uint64_t limit, const char* what) const {
+    if (!value_.is_number_integer() && !(value_.is_number_float() && std::floor(number()) == number())) {
+      fail("expected a whole number, got " + describe(value_));
+    }
+    const double result = number();
+    if (result < 0 || result >= static_cast<double>(limit)) {
+      fail(std::string(what) + " " + describe(value_) + " is out of range 0.." + std::to_string(limit) + "-1");
+    }
+    return static_cast<uint32_t>(result);
+  }
+
+  std::string string() const {
+    if (!value_.is_string()) fail("expected a string, got " + describe(value_));
+    return value_.get<std::string>();
+  }
+
+ private:
+  std::string child_path(const std::string& key) const { return path_.empty() ? key : path_ + "." + key; }
+
+  const Json& value_;
+  std::string path_;
+  const std::string& file_;
+};
+
+Camera parse_camera(const Node& node) {
+  node.expect_object({"from", "to", "up", "fovy"});
+  Camera camera;
+  camera.from = node.at("from").vec3();
+  camera.to = node.at("to").vec3();
+  if (camera.from == camera.to) node.at("to").fail("must differ from camera.from");
+  if (node.has("up")) camera.up = node.at("up").nonzero_vec3();
+  const Node fovy = node.at("fovy");
+  camera.fovy_degrees = fovy.number();
+  if (!(camera.fovy_degrees > 0.0 && camera.fovy_degrees < 180.0)) {
+    fovy.fail("field of view must be in (0, 180) degrees, got " + describe(fovy.json()));
+  }
+  return camera;
+}
+
+void parse_image(const Node& node, Scene& scene) {
+  node.expect_object({"width", "height"});
+  scene.width = node.has("width") ? node.at("width").index(uint64_t{max_image_side} + 1, "width") : default_image_width;
+  scene.height = node.has("height") ? node.at("height").index(uint64_t{max_image_side} + 1, "height") : default_image_height;
+  try {
+    check_image_size(scene.width, scene.height);
+  } catch (const InputError& error) {
+    node.fail(error.what());
+  }
+}
+
+Sphere parse_sphere(const Node& node) {
+  node.expect_object({"center", "radius"});
+  Sphere sphere{node.at("center").vec3(), node.at("radius").number()};
+  if (!(sphere.radius > 0.0)) node.at("radius").fail("must be > 0, got " + describe(node.at("radius").json()));
+  return sphere;
+}
+
+Plane parse_plane(const Node& node) {
+  node.expect_object({"point", "normal"});
+  return Plane{node.at("point").vec3(), glm::normalize(node.at("normal").nonzero_vec3())};
+}
+
+void apply_transform(const Node& node, Mesh& mesh) {
+  node.expect_object({"scale", "rotate", "translate"});
+  glm::dvec3 scale(1.0);
+  if (node.has("scale")) {
+    const Node value = node.at("scale");
+    scale = value.json().is_array() ? value.vec3() : glm::dvec3(value.number());
+    if (scale.x == 0.0 || scale.y == 0.0 || scale.z == 0.0) value.fail("scale factors must be non-zero");
+  }
+  glm::dquat rotation(1.0, 0.0, 0.0, 0.0);
+  if (node.has("rotate")) {
+    const Node rotate = node.at("rotate");
+    rotate.expect_object({"axis", "degrees"});
+    const glm::dvec3 axis = glm::normalize(rotate.at("axis").nonzero_vec3());
+    rotation = glm::angleAxis(rotate.at("degrees").number() * std::numbers::pi / 180.0, axis);
+  }
+  const glm::dvec3 translation = node.has("translate") ? node.at("translate").vec3() : glm::dvec3(0.0);
+  for (auto& position : mesh.positions) position = rotation * (scale * position) + translation;
+}
+
+Mesh parse_mesh(const Node& node, const std::filesystem::path& base_dir, const ObjFileLoader& load_obj) {
+  node.expect_object({"positions", "triangles", "obj", "transform"});
+  Mesh mesh;
+  if (node.has("obj")) {
+    if (node.has("positions") || node.has("triangles")) node.fail("give either 'obj' or 'positions' and 'triangles', not both");
+    const Node obj = node.at("obj");
+    const std::filesystem::path path = base_dir / obj.string();
+    try {
+      mesh = load_obj(path);
+    } catch (const InputError& error) {
+      obj.fail(error.what());
+    }
+  } else {
+    for (const Node& position : node.at("positions").elements()) mesh.positions.push_back(position.vec3());
+    for (const Node& triangle : node.at("triangles").elements()) {
+      const auto corners = triangle.elements();
+      if (corners.size() != 3) triangle.fail("expected 3 vertex indices [i, j, k], got " + describe(triangle.json()));
+      mesh.triangles.push_back({corners[0].index(mesh.positions.size(), "vertex index"),
+                                corners[1].index(mesh.positions.size(), "vertex index"),
+                                corners[2].index(mesh.positions.size(), "vertex index")});
+    }
+    if (mesh.triangles.empty()) node.at("triangles").fail("a mesh needs at least one triangle");
+  }
+  if (node.has("transform")) apply_transform(node.at("transform"), mesh);
+  return mesh;
+}
+
+std::string line_and_column(std::string_view text, size_t byte) {
+  byte = std::min(byte, text.size());
+  const size_t line = 1 + static_cast<size_t>(std::count(text.begin(), text.begin() + static_cast<long>(byte), '\n'));
+  const size_t line_start = text.rfind('\n', byte == 0 ? 0 : byte - 1);
+  const size_t column = line_start == std::string_view::npos ? byte : byte - line_start - 1;
+  return std::to_string(line) + ":" + std::to_string(std::max<size_t>(column, 1));
+}
+
+}  // namespace
+
+Scene parse_scene(std::string_view json_text, const std::string& name, const std::filesystem::path& base_dir,
+                  const ObjFileLoader& load_obj) {
+  Json root;
+  try {
+    root = Json::parse(json_text);
+  } catch (const Json::parse_error& error) {
+    // nlohmann's message starts with "[json.exception.parse_error.101] parse error at line L, column C: ";
+    // keep the part after "parse error" and put the location in our own form.
+    std::string detail = error.what();
+    if (const size_t colon = detail.find(": ", detail.find("parse error")); colon != std::string::npos) {
+      detail = detail.substr(colon + 2);
+    }
+    throw InputError(name + ":" + line_and_column(json_text, error.byte == 0 ? 0 : error.byte - 1) + ": invalid JSON: " + detail);
+  }
+
+  const Node top(root, "", name);
+  top.expect_object({"camera", "image", "spheres", "planes", "meshes"});
+  Scene scene;
+  scene.camera = parse_camera(top.at("camera"));
+  if (top.has("image")) parse_image(top.at("image"), scene);
+  if (top.has("spheres")) {
+    for (const Node& sphere : top.at("spheres").elements()) scene.spheres.push_back(parse_sphere(sphere));
+  }
+  if (top.has("planes")) {
+    for (const Node& plane : top.at("planes").elements()) scene.planes.push_back(parse_plane(plane));
+  }
+  if (top.has("meshes")) {
+    for (const Node& mesh : top.at("meshes").elements()) scene.meshes.push_back(parse_mesh(mesh, base_dir, load_obj));
+  }
+  return scene;
+}
+
+Scene load_scene_file(const std::filesystem::path& path) {
+  std::error_code error;
+  if (!std::filesystem::is_regular_file(path, error)) {
+    throw InputError(path.string() + (std::filesystem::exists(path, error) ? ": is not a regular file" : ": no such scene file"));
+  }
+  std::ifstream file(path, std::ios::binary);
+  std::ostringstream contents;
+  contents << file.rdbuf();
+  if (!file) throw InputError(path.string() + ": cannot read scene file");
+  return parse_scene(contents.str(), path.string(), path.parent_path(), load_obj_file);
+}
+
+}  // namespace vkray

@@ -1,0 +1,29 @@
+// Scene files: JSON (format in README.md) parsed with nlohmann::json and checked strictly. Every
+// error names the file and the JSON path of the offending value, e.g. "a.json: spheres[2].radius:
+// must be > 0 (got -1)".
+#pragma once
+
+#include "engine/scene.hpp"
+
+#include <filesystem>
+#include <functional>
+#include <string>
+#include <string_view>
+
+namespace vkray {
+
+// Loads the mesh an "obj" entry names; the path is already resolved against the scene's folder.
+using ObjFileLoader = std::function<Mesh(const std::filesystem::path&)>;
+
+Scene load_scene_file(const std::filesystem::path& path);
+
+// Parses scene JSON held in memory. `name` stands for the file in messages; relative OBJ paths
+// resolve against `base_dir` and load through `load_obj`.
+Scene parse_scene(std::string_view json_text, const std::string& name, const std::filesystem::path& base_dir,
+                  const ObjFileLoader& load_obj);
+
+// The course scene, built in: a camera, a sphere, a ground plane, a handcrafted triangle mesh and
+// a mesh that goes through the OBJ loader (from an OBJ text compiled into the binary).
+Scene default_scene();
+
+}  // namespace vkray

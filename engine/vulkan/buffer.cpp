@@ -1,0 +1,64 @@
+#include "engine/vulkan/buffer.hpp"
+
+#include <cstring>
+
+namespace vkray {
+namespace {
+
+constexpr auto host_access = vk::MemoryPropertyFlagBits::eHostVisible | vk::MemoryPropertyFlagBits::eHostCoherent;
+
+// First memory type allowed by `type_bits` with all `required` flags, preferring one that also has
+// all `preferred` flags.
+uint32_t find_memory_type(const VulkanContext& context, uint32_t type_bits, vk::MemoryPropertyFlags required,
+                          vk::MemoryPropertyFlags preferred) {
+  const auto& memory = context.memory_properties;
+  for (const auto wanted : {required | preferred, required}) {
+    for (uint32_t i = 0; i < memory.memoryTypeCount; ++i) {
+      if ((type_bits & (1u << i)) && (memory.memoryTypes[i].propertyFlags & wanted) == wanted) return i;
+    }
+  }
+  throw GpuError("no suitable Vulkan memory type for a buffer");
+}
+
+GpuBuffer create_buffer(VulkanContext& context, vk::DeviceSize size, vk::BufferUsageFlags usage,
+                        vk::MemoryPropertyFlags required, vk::MemoryPropertyFlags preferred) {
+  GpuBuffer result;
+  result.size = size;
+  result.buffer = vk::raii::Buffer(context.device, vk::BufferCreateInfo({}, size, usage));
+  const vk::MemoryRequirements requirements = result.buffer.getMemoryRequirements();
+  const uint32_t type = find_memory_type(context, requirements.memoryTypeBits, required, preferred);
+  result.memory = vk::raii::DeviceMemory(context.device, vk::MemoryAllocateInfo(requirements.size, type));
+  result.buffer.bindMemory(*result.memory, 0);
+  if ((context.memory_properties.memoryTypes[type].propertyFlags & host_access) == host_access) {
+    result.mapped = result.memory.mapMemory(0, VK_WHOLE_SIZE);
+  }
+  return result;
+}
+
+}  // namespace
+
+GpuBuffer create_storage_buffer(VulkanContext& context, vk::DeviceSize size, vk::BufferUsageFlags extra_usage) {
+  return create_buffer(context, size, vk::BufferUsageFlagBits::eStorageBuffer | extra_usage, {},
+                       vk::MemoryPropertyFlagBits::eDeviceLocal);
+}
+
+GpuBuffer create_readback_buffer(VulkanContext& context, vk::DeviceSize size) {
+  return create_buffer(context, size, vk::BufferUsageFlagBits::eTransferDst, host_access,
+                       vk::MemoryPropertyFlagBits::eHostCached);
+}
+
+GpuBuffer upload_storage_buffer(VulkanContext& context, const void* data, size_t bytes) {
+  GpuBuffer target = create_storage_buffer(context, bytes, vk::BufferUsageFlagBits::eTransferDst);
+  if (target.mapped) {
+    std::memcpy(target.mapped, data, bytes);
+    return target;
+  }
+  GpuBuffer staging = create_buffer(context, bytes, vk::BufferUsageFlagBits::eTransferSrc, host_access, {});
+  std::memcpy(staging.mapped, data, bytes);
+  context.submit_and_wait([&](const vk::raii::CommandBuffer& commands) {
+    commands.copyBuffer(*staging.buffer, *target.buffer, vk::BufferCopy(0, 0, bytes));
+  });
+  return target;
+}
+
+}  // namespace vkray

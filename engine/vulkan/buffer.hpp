@@ -1,0 +1,26 @@
+// Storage buffers: allocation with a memory-type choice, upload and host access.
+#pragma once
+
+#include "engine/vulkan/context.hpp"
+
+namespace vkray {
+
+struct GpuBuffer {
+  vk::raii::Buffer buffer{nullptr};
+  vk::raii::DeviceMemory memory{nullptr};
+  vk::DeviceSize size = 0;
+  void* mapped = nullptr;  // set when the memory is host-visible and coherent
+};
+
+// A storage buffer in device-local memory where the device has it. On devices whose device-local
+// memory is also host-visible (integrated GPUs, lavapipe, resizable BAR) the buffer is mapped, so
+// uploads and readbacks skip the staging copy.
+GpuBuffer create_storage_buffer(VulkanContext& context, vk::DeviceSize size, vk::BufferUsageFlags extra_usage = {});
+
+// A host-visible, coherent buffer (cached where possible) to copy results into for reading.
+GpuBuffer create_readback_buffer(VulkanContext& context, vk::DeviceSize size);
+
+// A device-local storage buffer holding `bytes` of `data` (through a staging buffer if needed).
+GpuBuffer upload_storage_buffer(VulkanContext& context, const void* data, size_t bytes);
+
+}  // namespace vkray

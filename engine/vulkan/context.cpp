@@ -1,0 +1,159 @@
+#include "engine/vulkan/context.hpp"
+
+#include <algorithm>
+#include <cctype>
+
+namespace vkray {
+namespace {
+
+constexpr const char* no_vulkan_fix =
+    "install a Vulkan driver: on Debian, 'apt-get install mesa-vulkan-drivers' provides lavapipe, a "
+    "software GPU that always works";
+
+vk::raii::Instance create_instance(const vk::raii::Context& context) {
+  const vk::ApplicationInfo application("vkray", 1, "vkray", 1, VK_API_VERSION_1_1);
+  try {
+    return vk::raii::Instance(context, vk::InstanceCreateInfo({}, &application));
+  } catch (const vk::SystemError& error) {
+    throw GpuError(std::string("cannot start Vulkan (") + error.what() + "): " + no_vulkan_fix);
+  }
+}
+
+std::string type_name(vk::PhysicalDeviceType type) {
+  switch (type) {
+    case vk::PhysicalDeviceType::eDiscreteGpu: return "discrete";
+    case vk::PhysicalDeviceType::eIntegratedGpu: return "integrated";
+    case vk::PhysicalDeviceType::eVirtualGpu: return "virtual";
+    case vk::PhysicalDeviceType::eCpu: return "cpu";
+    default: return "other";
+  }
+}
+
+int type_rank(const std::string& type) {
+  const char* order[] = {"discrete", "integrated", "virtual", "cpu", "other"};
+  return static_cast<int>(std::find(std::begin(order), std::end(order), type) - std::begin(order));
+}
+
+std::string lower(std::string_view text) {
+  std::string result(text);
+  std::transform(result.begin(), result.end(), result.begin(), [](unsigned char c) { return std::tolower(c); });
+  return result;
+}
+
+// First queue family with compute; UINT32_MAX if none.
+uint32_t compute_queue_family(const vk::raii::PhysicalDevice& physical_device) {
+  const auto families = physical_device.getQueueFamilyProperties();
+  for (uint32_t i = 0; i < families.size(); ++i) {
+    if (families[i].queueFlags & vk::QueueFlagBits::eCompute) return i;
+  }
+  return UINT32_MAX;
+}
+
+GpuDeviceInfo describe(const vk::raii::PhysicalDevice& physical_device) {
+  const auto chain = physical_device.getProperties2<vk::PhysicalDeviceProperties2, vk::PhysicalDeviceSubgroupProperties,
+                                                    vk::PhysicalDeviceDriverProperties>();
+  const auto& properties = chain.get<vk::PhysicalDeviceProperties2>().properties;
+  const auto& limits = properties.limits;
+  GpuDeviceInfo info;
+  info.name = properties.deviceName.data();
+  info.type = type_name(properties.deviceType);
+  const auto& driver = chain.get<vk::PhysicalDeviceDriverProperties>();
+  info.driver = std::string(driver.driverName.data()) + " " + driver.driverInfo.data();
+  info.api_version = std::to_string(VK_API_VERSION_MAJOR(properties.apiVersion)) + "." +
+                     std::to_string(VK_API_VERSION_MINOR(properties.apiVersion)) + "." +
+                     std::to_string(VK_API_VERSION_PATCH(properties.apiVersion));
+  for (int k = 0; k < 3; ++k) info.max_workgroup_count[k] = limits.maxComputeWorkGroupCount[k];
+  info.max_workgroup_invocations = limits.maxComputeWorkGroupInvocations;
+  info.max_storage_buffer_range = limits.maxStorageBufferRange;
+  info.subgroup_size = chain.get<vk::PhysicalDeviceSubgroupProperties>().subgroupSize;
+  info.shader_float64 = physical_device.getFeatures().shaderFloat64 == VK_TRUE;
+  const uint32_t family = compute_queue_family(physical_device);
+  info.can_compute = family != UINT32_MAX;
+  if (info.can_compute && physical_device.getQueueFamilyProperties()[family].timestampValidBits > 0) {
+    info.timestamp_period_ns = limits.timestampPeriod;
+  }
+  return info;
+}
+
+}  // namespace
+
+std::vector<GpuDeviceInfo> list_gpu_devices() {
+  return with_vulkan_errors("listing Vulkan devices", [] {
+    vk::raii::Context context;
+    const vk::raii::Instance instance = create_instance(context);
+    std::vector<GpuDeviceInfo> devices;
+    for (const auto& physical_device : vk::raii::PhysicalDevices(instance)) devices.push_back(describe(physical_device));
+    return devices;
+  });
+}
+
+size_t choose_gpu_device(const std::vector<GpuDeviceInfo>& devices, std::string_view name_filter) {
+  if (devices.empty()) throw GpuError(std::string("no Vulkan device found: ") + no_vulkan_fix);
+  size_t best = devices.size();
+  for (size_t i = 0; i < devices.size(); ++i) {
+    if (!devices[i].can_compute) continue;
+    if (!name_filter.empty()) {
+      if (lower(devices[i].name).find(lower(name_filter)) != std::string::npos) return i;
+    } else if (best == devices.size() || type_rank(devices[i].type) < type_rank(devices[best].type)) {
+      best = i;
+    }
+  }
+  if (best == devices.size()) {
+    std::string names;
+    for (const auto& device : devices) {
+      if (!names.empty()) names += ", ";
+      names += "'" + device.name + "'";
+    }
+    throw GpuError(name_filter.empty() ? "no Vulkan device with a compute queue among " + names
+                                       : "no Vulkan device named like '" + std::string(name_filter) +
+                                             "' with a compute queue; found " + names);
+  }
+  return best;
+}
+
+void VulkanContext::submit_and_wait(const std::function<void(const vk::raii::CommandBuffer&)>& record) {
+  command_buffer.reset();
+  command_buffer.begin(vk::CommandBufferBeginInfo(vk::CommandBufferUsageFlagBits::eOneTimeSubmit));
+  record(command_buffer);
+  command_buffer.end();
+  device.resetFences(*fence);
+  const vk::CommandBuffer buffers[] = {*command_buffer};
+  queue.submit(vk::SubmitInfo({}, {}, buffers), *fence);
+  if (device.waitForFences(*fence, VK_TRUE, UINT64_MAX) != vk::Result::eSuccess) {
+    throw GpuError("waiting for the GPU failed");
+  }
+}
+
+GpuDevice::GpuDevice(std::string_view name_filter) : context_(std::make_unique<VulkanContext>()) {
+  with_vulkan_errors("opening the Vulkan device", [&] {
+    VulkanContext& vk_context = *context_;
+    vk_context.instance = create_instance(vk_context.context);
+    vk::raii::PhysicalDevices physical_devices(vk_context.instance);
+    std::vector<GpuDeviceInfo> infos;
+    for (const auto& physical_device : physical_devices) infos.push_back(describe(physical_device));
+    const size_t chosen = choose_gpu_device(infos, name_filter);
+    vk_context.physical_device = std::move(physical_devices[chosen]);
+    vk_context.info = infos[chosen];
+    vk_context.limits = vk_context.physical_device.getProperties().limits;
+    vk_context.memory_properties = vk_context.physical_device.getMemoryProperties();
+    vk_context.queue_family = compute_queue_family(vk_context.physical_device);
+
+    const float priority = 1.0f;
+    const vk::DeviceQueueCreateInfo queue_info({}, vk_context.queue_family, 1, &priority);
+    vk_context.device = vk::raii::Device(vk_context.physical_device, vk::DeviceCreateInfo({}, queue_info));
+    vk_context.queue = vk::raii::Queue(vk_context.device, vk_context.queue_family, 0);
+    vk_context.command_pool = vk::raii::CommandPool(
+        vk_context.device,
+        vk::CommandPoolCreateInfo(vk::CommandPoolCreateFlagBits::eResetCommandBuffer, vk_context.queue_family));
+    vk_context.command_buffer = std::move(vk::raii::CommandBuffers(
+        vk_context.device,
+        vk::CommandBufferAllocateInfo(*vk_context.command_pool, vk::CommandBufferLevel::ePrimary, 1))[0]);
+    vk_context.fence = vk::raii::Fence(vk_context.device, vk::FenceCreateInfo());
+  });
+}
+
+GpuDevice::~GpuDevice() = default;
+
+const GpuDeviceInfo& GpuDevice::info() const { return context_->info; }
+
+}  // namespace vkray

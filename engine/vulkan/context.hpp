@@ -1,0 +1,41 @@
+// Vulkan instance, the chosen physical device, a logical device with one compute queue, and
+// one-shot command submission. Only engine/ code includes this file.
+#pragma once
+
+#include "engine/gpu_device.hpp"
+
+#include <vulkan/vulkan_raii.hpp>
+
+#include <functional>
+
+namespace vkray {
+
+struct VulkanContext {
+  vk::raii::Context context;
+  vk::raii::Instance instance{nullptr};
+  vk::raii::PhysicalDevice physical_device{nullptr};
+  GpuDeviceInfo info;
+  vk::PhysicalDeviceLimits limits;
+  vk::PhysicalDeviceMemoryProperties memory_properties;
+  uint32_t queue_family = 0;
+  vk::raii::Device device{nullptr};
+  vk::raii::Queue queue{nullptr};
+  vk::raii::CommandPool command_pool{nullptr};
+  vk::raii::CommandBuffer command_buffer{nullptr};
+  vk::raii::Fence fence{nullptr};
+
+  // Records commands into the context's command buffer, submits them and waits for completion.
+  void submit_and_wait(const std::function<void(const vk::raii::CommandBuffer&)>& record);
+};
+
+// Runs `body`, turning Vulkan's exceptions into GpuError with `what` as context.
+template <typename Body>
+auto with_vulkan_errors(const char* what, Body&& body) {
+  try {
+    return body();
+  } catch (const vk::SystemError& error) {
+    throw GpuError(std::string(what) + ": " + error.what());
+  }
+}
+
+}  // namespace vkray

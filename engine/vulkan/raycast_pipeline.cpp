@@ -1,0 +1,66 @@
+#include "engine/vulkan/raycast_pipeline.hpp"
+
+#include "raycast.comp.spv.h"
+
+#include <chrono>
+
+namespace vkray {
+
+RaycastPipeline::RaycastPipeline(VulkanContext& context, PrimitiveCounts counts) : context_(context), counts_(counts) {
+  std::array<vk::DescriptorSetLayoutBinding, VKRAY_BINDING_COUNT> bindings;
+  for (uint32_t i = 0; i < bindings.size(); ++i) {
+    bindings[i] = vk::DescriptorSetLayoutBinding(i, vk::DescriptorType::eStorageBuffer, 1,
+                                                 vk::ShaderStageFlagBits::eCompute);
+  }
+  set_layout_ = vk::raii::DescriptorSetLayout(context.device, vk::DescriptorSetLayoutCreateInfo({}, bindings));
+  const vk::PushConstantRange push_range(vk::ShaderStageFlagBits::eCompute, 0, sizeof(gpu::RayGenParams));
+  const vk::DescriptorSetLayout set_layout = *set_layout_;
+  layout_ = vk::raii::PipelineLayout(context.device, vk::PipelineLayoutCreateInfo({}, set_layout, push_range));
+  shader_ = vk::raii::ShaderModule(context.device, vk::ShaderModuleCreateInfo({}, sizeof(raycast_comp), raycast_comp));
+
+  const vk::DescriptorPoolSize pool_size(vk::DescriptorType::eStorageBuffer, VKRAY_BINDING_COUNT);
+  pool_ = vk::raii::DescriptorPool(
+      context.device, vk::DescriptorPoolCreateInfo(vk::DescriptorPoolCreateFlagBits::eFreeDescriptorSet, 1, pool_size));
+  set_ = std::move(vk::raii::DescriptorSets(context.device, vk::DescriptorSetAllocateInfo(*pool_, set_layout))[0]);
+}
+
+const vk::raii::Pipeline& RaycastPipeline::pipeline(AovSet aovs, double& created_ms) {
+  created_ms = 0.0;
+  if (auto found = pipelines_.find(aovs.bits()); found != pipelines_.end()) return found->second;
+
+  const auto start = std::chrono::steady_clock::now();
+  // Specialization data in the order of the VKRAY_SPEC_* ids; booleans are 32-bit in SPIR-V.
+  const std::array<uint32_t, 6> values = {counts_.spheres,
+                                          counts_.planes,
+                                          counts_.triangles,
+                                          aovs.has(Aov::depth) ? 1u : 0u,
+                                          aovs.has(Aov::normal) ? 1u : 0u,
+                                          aovs.has(Aov::uv) ? 1u : 0u};
+  std::array<vk::SpecializationMapEntry, values.size()> entries;
+  for (uint32_t id = 0; id < entries.size(); ++id) entries[id] = vk::SpecializationMapEntry(id, id * 4u, 4u);
+  const vk::SpecializationInfo specialization(entries, vk::ArrayProxyNoTemporaries<const uint32_t>(values));
+  const vk::PipelineShaderStageCreateInfo stage({}, vk::ShaderStageFlagBits::eCompute, *shader_, "main", &specialization);
+  auto [entry, inserted] = pipelines_.emplace(
+      aovs.bits(), vk::raii::Pipeline(context_.device, nullptr, vk::ComputePipelineCreateInfo({}, stage, *layout_)));
+  created_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  return entry->second;
+}
+
+void RaycastPipeline::bind_buffers(const std::array<vk::Buffer, VKRAY_BINDING_COUNT>& buffers) {
+  std::array<vk::DescriptorBufferInfo, VKRAY_BINDING_COUNT> infos;
+  std::array<vk::WriteDescriptorSet, VKRAY_BINDING_COUNT> writes;
+  for (uint32_t i = 0; i < buffers.size(); ++i) {
+    infos[i] = vk::DescriptorBufferInfo(buffers[i], 0, VK_WHOLE_SIZE);
+    writes[i] = vk::WriteDescriptorSet(*set_, i, 0, vk::DescriptorType::eStorageBuffer, {}, infos[i]);
+  }
+  context_.device.updateDescriptorSets(writes, {});
+}
+
+void RaycastPipeline::bind(const vk::raii::CommandBuffer& commands, const vk::raii::Pipeline& pipeline,
+                           const gpu::RayGenParams& params) const {
+  commands.bindPipeline(vk::PipelineBindPoint::eCompute, *pipeline);
+  commands.bindDescriptorSets(vk::PipelineBindPoint::eCompute, *layout_, 0, {*set_}, {});
+  commands.pushConstants<gpu::RayGenParams>(*layout_, vk::ShaderStageFlagBits::eCompute, 0, params);
+}
+
+}  // namespace vkray

@@ -1,0 +1,45 @@
+// The compute pipeline of shaders/raycast.comp: its descriptor set, push constants, and one
+// pipeline per set of requested outputs, specialized on the scene's primitive counts.
+#pragma once
+
+#include "engine/frame.hpp"
+#include "engine/vulkan/context.hpp"
+#include "shaders/gpu_layout.h"
+
+#include <array>
+#include <map>
+
+namespace vkray {
+
+struct PrimitiveCounts {
+  uint32_t spheres = 0;
+  uint32_t planes = 0;
+  uint32_t triangles = 0;
+};
+
+class RaycastPipeline {
+ public:
+  RaycastPipeline(VulkanContext& context, PrimitiveCounts counts);
+
+  // The pipeline for this set of outputs, created on first request. `created_ms` receives the
+  // creation time, 0 when it was already there.
+  const vk::raii::Pipeline& pipeline(AovSet aovs, double& created_ms);
+
+  // Points every binding (VKRAY_BINDING_*) of the descriptor set at its buffer.
+  void bind_buffers(const std::array<vk::Buffer, VKRAY_BINDING_COUNT>& buffers);
+
+  void bind(const vk::raii::CommandBuffer& commands, const vk::raii::Pipeline& pipeline,
+            const gpu::RayGenParams& params) const;
+
+ private:
+  VulkanContext& context_;
+  PrimitiveCounts counts_;
+  vk::raii::DescriptorSetLayout set_layout_{nullptr};
+  vk::raii::PipelineLayout layout_{nullptr};
+  vk::raii::ShaderModule shader_{nullptr};
+  vk::raii::DescriptorPool pool_{nullptr};
+  vk::raii::DescriptorSet set_{nullptr};
+  std::map<uint32_t, vk::raii::Pipeline> pipelines_;  // by AovSet bits
+};
+
+}  // namespace vkray

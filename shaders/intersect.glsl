@@ -1,0 +1,89 @@
+// Ray/primitive intersection in float32. Each routine returns the ray parameter t of the nearest
+// hit with 0 < t < t_max, or t_max when there is none. Rays are normalized, so t is a distance.
+// The double-precision reference (engine/reference.cpp) evaluates the same formulas in double.
+#ifndef VKRAY_INTERSECT_GLSL
+#define VKRAY_INTERSECT_GLSL
+
+// Ray/sphere after Haines, Guenther and Akenine-Moeller, "Precision Improvements for Ray/Sphere
+// Intersection", Ray Tracing Gems (2019), ch. 7:
+// - the discriminant is r^2 - |f_perp|^2, with f_perp the part of (origin - center) orthogonal to
+//   the ray, instead of b^2 - c, which cancels catastrophically for small spheres far away;
+// - the two roots come from q = -(b + sign(b) sqrt(disc)) as c/q and q/a, so neither root is a
+//   difference of nearly equal numbers.
+float intersect_sphere(vec3 f, float radius, vec3 dir, float t_max) {
+  float a = dot(dir, dir);
+  float b = dot(f, dir);
+  vec3 f_perp = f - (b / a) * dir;
+  float disc = radius * radius - dot(f_perp, f_perp);
+  if (disc < 0.0) return t_max;
+  float c = dot(f, f) - radius * radius;
+  float q = -(b + (b >= 0.0 ? 1.0 : -1.0) * sqrt(a * disc));
+  if (q == 0.0) return t_max;  // origin on the surface and tangent ray: no hit in front
+  float t0 = c / q;
+  float t1 = q / a;
+  float t_near = min(t0, t1);
+  float t_far = max(t0, t1);
+  float t = t_near > 0.0 ? t_near : t_far;  // camera inside the sphere: the far root
+  return (t > 0.0 && t < t_max) ? t : t_max;
+}
+
+// Ray/plane: t = (offset - n.o) / (n.d). A ray parallel to the plane (n.d == 0) never hits it,
+// which the explicit test states instead of relying on inf/NaN comparisons.
+float intersect_plane(vec4 normal_offset, vec3 origin, vec3 dir, float t_max) {
+  float denom = dot(normal_offset.xyz, dir);
+  if (denom == 0.0) return t_max;
+  float t = (normal_offset.w - dot(normal_offset.xyz, origin)) / denom;
+  return (t > 0.0 && t < t_max) ? t : t_max;
+}
+
+// Watertight ray/triangle test of Woop, Benthin and Wald, "Watertight Ray/Triangle Intersection",
+// JCGT 2(1), 2013. The vertices are moved into a ray-aligned frame in which the ray is the +z axis;
+// the 2D edge functions U, V, W then decide inside/outside. Two triangles sharing an edge evaluate
+// the same edge function with opposite sign from bit-identical inputs, so a ray through a shared
+// edge hits at least one of them: no cracks between the triangles of a mesh (Moeller-Trumbore
+// computes barycentrics per triangle and can miss both). `precise` forbids the compiler from
+// fusing these products into FMAs differently per triangle, which would break that symmetry.
+struct RayFrame {
+  ivec3 axes;   // kx, ky, kz: kz is the dominant axis of the direction
+  vec3 shear;   // Sx, Sy, Sz
+};
+
+RayFrame make_ray_frame(vec3 dir) {
+  vec3 ad = abs(dir);
+  int kz = (ad.x > ad.y) ? (ad.x > ad.z ? 0 : 2) : (ad.y > ad.z ? 1 : 2);
+  int kx = (kz + 1) % 3;
+  int ky = (kx + 1) % 3;
+  if (dir[kz] < 0.0) {  // keep the winding of the projected triangle
+    int swap = kx;
+    kx = ky;
+    ky = swap;
+  }
+  RayFrame frame;
+  frame.axes = ivec3(kx, ky, kz);
+  frame.shear = vec3(dir[kx] / dir[kz], dir[ky] / dir[kz], 1.0 / dir[kz]);
+  return frame;
+}
+
+// Vertex relative to the ray origin, in the ray frame (z not yet scaled by Sz).
+vec3 to_ray_frame(RayFrame frame, vec3 vertex, vec3 origin) {
+  precise vec3 p = vertex - origin;
+  precise float px = p[frame.axes.x] - frame.shear.x * p[frame.axes.z];
+  precise float py = p[frame.axes.y] - frame.shear.y * p[frame.axes.z];
+  return vec3(px, py, p[frame.axes.z]);
+}
+
+float intersect_triangle(RayFrame frame, vec3 origin, vec3 v0, vec3 v1, vec3 v2, float t_max) {
+  vec3 a = to_ray_frame(frame, v0, origin);
+  vec3 b = to_ray_frame(frame, v1, origin);
+  vec3 c = to_ray_frame(frame, v2, origin);
+  precise float u = c.x * b.y - c.y * b.x;
+  precise float v = a.x * c.y - a.y * c.x;
+  precise float w = b.x * a.y - b.y * a.x;
+  if ((u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0)) return t_max;
+  float det = u + v + w;
+  if (det == 0.0) return t_max;  // ray in the triangle's plane, or a degenerate projection
+  float t = frame.shear.z * (u * a.z + v * b.z + w * c.z) / det;
+  return (t > 0.0 && t < t_max) ? t : t_max;
+}
+
+#endif  // VKRAY_INTERSECT_GLSL

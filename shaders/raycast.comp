@@ -1,0 +1,89 @@
+#version 460
+// One primary ray per pixel through the pixel centre; the nearest hit over every primitive wins.
+// Writes the requested outputs (depth, normal, uv) for one tile of rows of the image.
+#extension GL_GOOGLE_include_directive : require
+
+#include "gpu_layout.h"
+#include "intersect.glsl"
+
+layout(local_size_x = VKRAY_WORKGROUP_X, local_size_y = VKRAY_WORKGROUP_Y) in;
+
+// A count of 0 removes that primitive loop entirely once the pipeline is specialized.
+layout(constant_id = VKRAY_SPEC_SPHERE_COUNT) const uint SPHERE_COUNT = 0;
+layout(constant_id = VKRAY_SPEC_PLANE_COUNT) const uint PLANE_COUNT = 0;
+layout(constant_id = VKRAY_SPEC_TRIANGLE_COUNT) const uint TRIANGLE_COUNT = 0;
+layout(constant_id = VKRAY_SPEC_WRITE_DEPTH) const bool WRITE_DEPTH = true;
+layout(constant_id = VKRAY_SPEC_WRITE_NORMAL) const bool WRITE_NORMAL = true;
+layout(constant_id = VKRAY_SPEC_WRITE_UV) const bool WRITE_UV = false;
+
+layout(push_constant) uniform PushConstants { RayGenParams params; };
+
+layout(std430, binding = VKRAY_BINDING_SPHERES) readonly buffer Spheres { GpuSphere spheres[]; };
+layout(std430, binding = VKRAY_BINDING_PLANES) readonly buffer Planes { GpuPlane planes[]; };
+layout(std430, binding = VKRAY_BINDING_TRIANGLES) readonly buffer Triangles { GpuTriangle triangles[]; };
+layout(std430, binding = VKRAY_BINDING_DEPTH) writeonly buffer DepthOut { float depth_out[]; };
+layout(std430, binding = VKRAY_BINDING_NORMAL) writeonly buffer NormalOut { float normal_out[]; };
+layout(std430, binding = VKRAY_BINDING_UV) writeonly buffer UvOut { vec2 uv_out[]; };
+
+void main() {
+  uint width = params.image.x;
+  uint height = params.image.y;
+  uvec2 tile_pixel = gl_GlobalInvocationID.xy;
+  if (tile_pixel.x >= width || tile_pixel.y >= params.image.w) return;
+  uint row = params.image.z + tile_pixel.y;
+  uint out_index = tile_pixel.y * width + tile_pixel.x;
+
+  // UV of the pixel centre: origin at the image centre, the shorter side spans [-1, 1]. The
+  // numerators are small integers, exact in float; each coordinate takes a single rounding.
+  float shorter = float(min(width, height));
+  vec2 uv = vec2(float(2 * tile_pixel.x + 1) - float(width),
+                 float(height) - float(2 * row + 1)) / shorter;
+  if (WRITE_UV) uv_out[out_index] = uv;
+  if (!WRITE_DEPTH && !WRITE_NORMAL) return;
+
+  vec3 origin = params.origin.xyz;
+  vec3 dir = normalize(uv.x * params.right.xyz + uv.y * params.up.xyz + params.forward_scaled.xyz);
+
+  const float no_hit = uintBitsToFloat(0x7f800000u);  // +infinity
+  float t_best = no_hit;
+  vec3 normal = vec3(0.0);
+
+  for (uint i = 0; i < SPHERE_COUNT; ++i) {
+    vec4 sphere = spheres[i].center_radius;
+    vec3 f = origin - sphere.xyz;
+    float t = intersect_sphere(f, sphere.w, dir, t_best);
+    if (t < t_best) {
+      t_best = t;
+      normal = (f + t * dir) / sphere.w;
+    }
+  }
+  for (uint i = 0; i < PLANE_COUNT; ++i) {
+    vec4 plane = planes[i].normal_offset;
+    float t = intersect_plane(plane, origin, dir, t_best);
+    if (t < t_best) {
+      t_best = t;
+      normal = plane.xyz;
+    }
+  }
+  if (TRIANGLE_COUNT > 0) {
+    RayFrame frame = make_ray_frame(dir);
+    for (uint i = 0; i < TRIANGLE_COUNT; ++i) {
+      float t = intersect_triangle(frame, origin, triangles[i].v0.xyz, triangles[i].v1.xyz,
+                                   triangles[i].v2.xyz, t_best);
+      if (t < t_best) {
+        t_best = t;
+        normal = triangles[i].normal.xyz;
+      }
+    }
+  }
+
+  if (WRITE_DEPTH) depth_out[out_index] = t_best;
+  if (WRITE_NORMAL) {
+    // Unit length again (the sphere normal carries rounding) and turned to face the ray.
+    if (t_best < no_hit) normal = normalize(normal);
+    if (dot(normal, dir) > 0.0) normal = -normal;
+    normal_out[3 * out_index + 0] = normal.x;
+    normal_out[3 * out_index + 1] = normal.y;
+    normal_out[3 * out_index + 2] = normal.z;
+  }
+}
