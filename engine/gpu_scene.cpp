@@ -20,7 +20,6 @@ struct Bounds {
 
 GpuScene make_gpu_scene(const Scene& scene) {
   Bounds bounds;
-  bounds.add(scene.camera.from);
   for (const auto& sphere : scene.spheres) {
     bounds.add(sphere.center - sphere.radius);
     bounds.add(sphere.center + sphere.radius);
@@ -28,6 +27,9 @@ GpuScene make_gpu_scene(const Scene& scene) {
   for (const auto& mesh : scene.meshes) {
     for (const auto& position : mesh.positions) bounds.add(position);
   }
+  // Only a scene of planes alone has no bounds; its camera is then the natural origin. The camera
+  // is otherwise left out, so a Renderer gives the same bits whatever camera it was built with.
+  if (bounds.lower.x > bounds.upper.x) bounds.add(scene.camera.from);
   GpuScene gpu;
   gpu.anchor = 0.5 * (bounds.lower + bounds.upper);
 

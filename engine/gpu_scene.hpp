@@ -19,7 +19,7 @@ struct GpuScene {
   std::vector<gpu::GpuTriangle> triangles;  // zero-area triangles left out: no ray can hit them
 };
 
-// The anchor is the centre of the bounding box of the finite primitives and the camera position.
+// The anchor is the centre of the bounding box of the finite primitives (spheres, meshes).
 GpuScene make_gpu_scene(const Scene& scene);
 
 // Push constants for one tile of rows of a width x height image.

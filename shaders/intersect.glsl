@@ -4,19 +4,66 @@
 #ifndef VKRAY_INTERSECT_GLSL
 #define VKRAY_INTERSECT_GLSL
 
+// s + e == a + b exactly (Knuth's TwoSum).
+void two_sum(float a, float b, out float s, out float e) {
+  precise float sum = a + b;
+  precise float b_virtual = sum - a;
+  precise float a_virtual = sum - b_virtual;
+  precise float error = (a - a_virtual) + (b - b_virtual);
+  s = sum;
+  e = error;
+}
+
+// p + e == a * b exactly (Dekker's TwoProduct with Veltkamp's split). It is written with plain
+// products and sums rather than fma, because Vulkan lets fma be evaluated unfused (lavapipe does).
+void two_product(float a, float b, out float p, out float e) {
+  const float splitter = 4097.0;  // 2^12 + 1 splits a float's 24-bit significand into 12 + 12 bits
+  precise float a_big = splitter * a;
+  precise float a_hi = a_big - (a_big - a);
+  precise float a_lo = a - a_hi;
+  precise float b_big = splitter * b;
+  precise float b_hi = b_big - (b_big - b);
+  precise float b_lo = b - b_hi;
+  precise float product = a * b;
+  precise float error = ((a_hi * b_hi - product) + a_hi * b_lo + a_lo * b_hi) + a_lo * b_lo;
+  p = product;
+  e = error;
+}
+
+// |f|^2 - r^2 with a relative error of about 2^-24 however close |f| is to r: products and sums
+// are split into exact value and error terms (Ogita, Rump and Oishi, "Accurate Sum and Dot
+// Product", SIAM J. Sci. Comput. 26(6), 2005, algorithm Dot2). Plain float loses all digits when
+// the camera is near the surface of a sphere much larger than that distance (a planet as ground).
+// Only rays that pass the discriminant test get here, so the cost is one call per hit candidate.
+float sphere_c(vec3 f, float radius) {
+  vec4 x = vec4(f, radius);
+  vec4 y = vec4(f, -radius);
+  float sum, error;
+  two_product(x[0], y[0], sum, error);
+  for (int k = 1; k < 4; ++k) {
+    float product, product_error, sum_error;
+    two_product(x[k], y[k], product, product_error);
+    two_sum(sum, product, sum, sum_error);
+    precise float total_error = error + (sum_error + product_error);
+    error = total_error;
+  }
+  precise float c = sum + error;
+  return c;
+}
+
 // Ray/sphere after Haines, Guenther and Akenine-Moeller, "Precision Improvements for Ray/Sphere
 // Intersection", Ray Tracing Gems (2019), ch. 7:
 // - the discriminant is r^2 - |f_perp|^2, with f_perp the part of (origin - center) orthogonal to
 //   the ray, instead of b^2 - c, which cancels catastrophically for small spheres far away;
 // - the two roots come from q = -(b + sign(b) sqrt(disc)) as c/q and q/a, so neither root is a
-//   difference of nearly equal numbers.
+//   difference of nearly equal numbers; c itself comes from sphere_c.
 float intersect_sphere(vec3 f, float radius, vec3 dir, float t_max) {
   float a = dot(dir, dir);
   float b = dot(f, dir);
   vec3 f_perp = f - (b / a) * dir;
   float disc = radius * radius - dot(f_perp, f_perp);
   if (disc < 0.0) return t_max;
-  float c = dot(f, f) - radius * radius;
+  float c = sphere_c(f, radius);
   float q = -(b + (b >= 0.0 ? 1.0 : -1.0) * sqrt(a * disc));
   if (q == 0.0) return t_max;  // origin on the surface and tangent ray: no hit in front
   float t0 = c / q;

@@ -1,0 +1,168 @@
+// How far may a float32 GPU pixel be from the double-precision reference?
+//
+// Error model (eps = 2^-24, the float32 unit roundoff):
+// - Direction. The GPU rounds the pixel's uv (1 rounding), the camera basis (1 per component),
+//   forms x*right + y*up + forward_scaled (2 products, 2 sums) and normalizes (~3 roundings): its
+//   ray is within an angle of about 8 eps of the exact one. We take eta = 16 eps.
+// - Positions. Camera and geometry are stored relative to the scene anchor and rounded once, and
+//   the intersectors subtract them once more: absolute position error <= ~4 eps R, where R bounds
+//   the distance of anything in the scene from the anchor.
+//
+// The reference therefore traces five rays per pixel: the exact one and four turned by eta towards
+// +-right and +-up. Where all five hit the same primitive (or all miss), the pixel is "stable" and
+// the GPU must agree closely:
+// - hit/miss identical;
+// - depth within [min, max] of the five depths, widened by the position error seen along the ray:
+//   16 eps (t + R) / cos(theta), theta the angle of incidence (a surface shifted by d moves the hit
+//   by d / cos(theta) along the ray);
+// - normal within the spread of the five normals plus 16 eps (1 + (R + t) / rho), rho the radius
+//   of curvature (a sphere's radius; planes and triangles have constant normals, rounded once).
+// Elsewhere the pixel lies on a silhouette or an edge between primitives, where which primitive is
+// hit legitimately depends on rounding. There the GPU must reproduce one of the five outcomes: miss
+// only if a sample missed; a depth inside the samples' range widened by sqrt(2 eta) relative (the
+// depth along a ray grazing a convex surface changes like the square root of the angle) plus the
+// position term; a normal within the samples' spread of one of the sample normals.
+#include "tests/reference_envelope.hpp"
+
+#include "engine/gpu_scene.hpp"
+#include "engine/reference.hpp"
+
+#include <glm/geometric.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <thread>
+
+namespace vkray::test {
+namespace {
+
+constexpr double eps = 0x1p-24;
+constexpr double eta = 16 * eps;
+
+double angle(const glm::dvec3& a, const glm::dvec3& b) {
+  return std::atan2(glm::length(glm::cross(a, b)), glm::dot(a, b));
+}
+
+bool same_primitive(const ReferenceHit& a, const ReferenceHit& b) { return a.kind == b.kind && a.index == b.index; }
+
+// Bound on the distance from the GPU anchor of everything the rays can meet or start from.
+double scene_radius(const Scene& scene, const glm::dvec3& anchor) {
+  double radius = glm::length(scene.camera.from - anchor);
+  for (const auto& sphere : scene.spheres) radius = std::max(radius, glm::length(sphere.center - anchor) + sphere.radius);
+  for (const auto& plane : scene.planes) radius = std::max(radius, std::abs(glm::dot(plane.normal, plane.point - anchor)));
+  for (const auto& mesh : scene.meshes) {
+    for (const auto& p : mesh.positions) radius = std::max(radius, glm::length(p - anchor));
+  }
+  return radius;
+}
+
+struct PixelSamples {
+  ReferenceHit hits[5];
+  glm::dvec3 dir;
+};
+
+}  // namespace
+
+std::string EnvelopeReport::describe() const {
+  std::string text = std::to_string(failures) + " of " + std::to_string(pixels) + " pixels outside the error envelope (" +
+                     std::to_string(boundary_pixels) + " boundary pixels); " + stats.summary();
+  for (const auto& failure : first_failures) text += "\n  " + failure;
+  return text;
+}
+
+EnvelopeReport check_against_reference(const Scene& scene, const Frame& frame) {
+  const uint32_t width = frame.width, height = frame.height;
+  const ReferenceScene reference(scene);
+  const CameraBasis camera = make_camera_basis(scene.camera, width, height);
+  const double radius = scene_radius(scene, make_gpu_scene(scene).anchor);
+
+  std::vector<PixelSamples> samples(frame.pixel_count());
+  const unsigned workers = std::max(1u, std::thread::hardware_concurrency());
+  {
+    std::vector<std::jthread> threads;
+    for (unsigned worker = 0; worker < workers; ++worker) {
+      threads.emplace_back([&, worker] {
+        for (size_t p = worker; p < samples.size(); p += workers) {
+          const glm::dvec3 dir = camera.direction(pixel_uv(static_cast<uint32_t>(p % width), static_cast<uint32_t>(p / width), width, height));
+          const glm::dvec3 turns[5] = {dir, dir + eta * camera.right, dir - eta * camera.right, dir + eta * camera.up,
+                                       dir - eta * camera.up};
+          samples[p].dir = dir;
+          for (int k = 0; k < 5; ++k) samples[p].hits[k] = reference.trace(camera.origin, glm::normalize(turns[k]));
+        }
+      });
+    }
+  }
+
+  std::vector<ReferenceHit> centre(samples.size());
+  for (size_t p = 0; p < samples.size(); ++p) centre[p] = samples[p].hits[0];
+
+  EnvelopeReport report;
+  report.pixels = frame.pixel_count();
+  report.stats = measure_error(frame, centre);
+  const bool has_depth = frame.aovs.has(Aov::depth), has_normal = frame.aovs.has(Aov::normal);
+
+  for (size_t p = 0; p < samples.size(); ++p) {
+    const PixelSamples& s = samples[p];
+    const bool stable = std::all_of(std::begin(s.hits), std::end(s.hits),
+                                    [&](const ReferenceHit& h) { return same_primitive(h, s.hits[0]); });
+    if (!stable) ++report.boundary_pixels;
+    const bool gpu_hit = frame.hit(p);
+    const float gpu_depth = has_depth ? frame.depth[p] : 0.0f;
+    const glm::dvec3 gpu_normal = has_normal ? glm::dvec3(frame.normal[3 * p], frame.normal[3 * p + 1], frame.normal[3 * p + 2])
+                                             : glm::dvec3(0.0);
+
+    std::string failure;
+    const bool any_miss = std::any_of(std::begin(s.hits), std::end(s.hits), [](const ReferenceHit& h) { return h.kind == PrimitiveKind::none; });
+    const bool any_hit = std::any_of(std::begin(s.hits), std::end(s.hits), [](const ReferenceHit& h) { return h.kind != PrimitiveKind::none; });
+    if (!gpu_hit && ((has_depth && gpu_depth != INFINITY) || gpu_normal != glm::dvec3(0.0))) {
+      failure = "a miss must have depth +inf and normal 0";
+    } else if (gpu_hit && has_normal && std::abs(glm::length(gpu_normal) - 1.0) > 8 * eps) {
+      failure = "normal length " + std::to_string(glm::length(gpu_normal));
+    } else if (gpu_hit ? !any_hit : !any_miss) {
+      failure = gpu_hit ? "GPU hits, reference misses" : "GPU misses, reference hits at t=" + std::to_string(s.hits[0].t);
+    } else if (gpu_hit) {
+      double lo = INFINITY, hi = 0.0, spread = 0.0, curvature_radius = INFINITY;
+      for (const auto& h : s.hits) {
+        if (h.kind == PrimitiveKind::none) continue;
+        lo = std::min(lo, h.t), hi = std::max(hi, h.t);
+        for (const auto& other : s.hits) {
+          if (other.kind != PrimitiveKind::none) spread = std::max(spread, angle(h.normal, other.normal));
+        }
+      }
+      const ReferenceHit& main = s.hits[0].kind != PrimitiveKind::none ? s.hits[0] : *std::find_if(std::begin(s.hits), std::end(s.hits), [](const ReferenceHit& h) { return h.kind != PrimitiveKind::none; });
+      if (main.kind == PrimitiveKind::sphere) curvature_radius = scene.spheres[main.index].radius;
+      const double cos_theta = std::max(std::abs(glm::dot(main.normal, s.dir)), 1e-12);
+      const double position_slack = 16 * eps * (main.t + radius) / cos_theta;
+      const double grazing = stable ? 0.0 : std::sqrt(2 * eta);
+      const double depth_lo = lo * (1 - grazing) - position_slack, depth_hi = hi * (1 + grazing) + position_slack;
+      if (has_depth && !(gpu_depth >= depth_lo && gpu_depth <= depth_hi)) {
+        char text[200];
+        std::snprintf(text, sizeof text, "depth %.9g outside [%.9g, %.9g] (reference %.9g)", double(gpu_depth), depth_lo,
+                      depth_hi, main.t);
+        failure = text;
+      }
+      const double normal_slack = 16 * eps * (1 + (radius + main.t) / curvature_radius);
+      double best = INFINITY;
+      for (const auto& h : s.hits) {
+        if (h.kind != PrimitiveKind::none) best = std::min(best, angle(gpu_normal, h.normal));
+      }
+      if (has_normal && failure.empty() && !(best <= spread + normal_slack)) {
+        char text[200];
+        std::snprintf(text, sizeof text, "normal (%.7f, %.7f, %.7f) is %.3g rad from the reference (allowed %.3g)",
+                      gpu_normal.x, gpu_normal.y, gpu_normal.z, best, spread + normal_slack);
+        failure = text;
+      }
+    }
+    if (!failure.empty()) {
+      ++report.failures;
+      if (report.first_failures.size() < 10) {
+        report.first_failures.push_back("pixel (" + std::to_string(p % width) + ", " + std::to_string(p / width) + ")" +
+                                        (stable ? "" : " [boundary]") + ": " + failure);
+      }
+    }
+  }
+  return report;
+}
+
+}  // namespace vkray::test

@@ -1,0 +1,26 @@
+// Pixel-by-pixel check of a GPU frame against the double-precision reference, with tolerances
+// derived from float32 error bounds (see reference_envelope.cpp for the derivation).
+#pragma once
+
+#include "engine/compare.hpp"
+#include "engine/frame.hpp"
+#include "engine/scene.hpp"
+
+#include <string>
+#include <vector>
+
+namespace vkray::test {
+
+struct EnvelopeReport {
+  size_t pixels = 0;
+  size_t boundary_pixels = 0;  // the reference's hit primitive changes within the error cone
+  size_t failures = 0;
+  std::vector<std::string> first_failures;  // up to 10, "pixel (i, j): ..."
+  FrameError stats;                         // plain GPU-vs-reference figures (centre ray only)
+  std::string describe() const;
+};
+
+// Renders the reference for `scene` at the frame's size and checks every pixel of `frame`.
+EnvelopeReport check_against_reference(const Scene& scene, const Frame& frame);
+
+}  // namespace vkray::test
