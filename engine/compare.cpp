@@ -39,7 +39,7 @@ FrameError measure_error(const Frame& frame, const std::vector<ReferenceHit>& re
     ++error.both_hit;
     if (frame.aovs.has(Aov::depth)) depth_errors.push_back(std::abs(frame.depth[p] - reference[p].t) / reference[p].t);
     if (frame.aovs.has(Aov::normal)) {
-      const glm::dvec3 normal(frame.normal[3 * p], frame.normal[3 * p + 1], frame.normal[3 * p + 2]);
+      const glm::dvec3 normal(frame.normal_at(p));
       normal_errors.push_back(angle_degrees(normal, reference[p].normal));
     }
   }

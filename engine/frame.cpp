@@ -29,11 +29,15 @@ std::optional<Aov> aov_from_name(std::string_view name) {
   return std::nullopt;
 }
 
+void Frame::allocate() {
+  depth.assign(aovs.has(Aov::depth) ? pixel_count() : 0, 0.0f);
+  normal.assign(aovs.has(Aov::normal) ? 3 * pixel_count() : 0, 0.0f);
+  uv.assign(aovs.has(Aov::uv) ? 2 * pixel_count() : 0, 0.0f);
+}
+
 bool Frame::hit(size_t pixel) const {
   if (aovs.has(Aov::depth)) return std::isfinite(depth[pixel]);
-  if (aovs.has(Aov::normal)) {
-    return normal[3 * pixel] != 0.0f || normal[3 * pixel + 1] != 0.0f || normal[3 * pixel + 2] != 0.0f;
-  }
+  if (aovs.has(Aov::normal)) return normal_at(pixel) != glm::vec3(0.0f);
   return false;
 }
 

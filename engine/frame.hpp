@@ -1,6 +1,9 @@
 // Per-pixel outputs ("AOVs") of one render, on the host, row-major from the top row.
 #pragma once
 
+#include <glm/vec2.hpp>
+#include <glm/vec3.hpp>
+
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -34,15 +37,23 @@ class AovSet {
 std::optional<Aov> aov_from_name(std::string_view name);
 inline constexpr const char* aov_names_help = "depth, normal, uv";
 
+// Multi-component outputs are stored as planes (all x, then all y, ...), the layout the shader
+// writes: neighbouring invocations then store to neighbouring addresses.
 struct Frame {
   uint32_t width = 0;
   uint32_t height = 0;
   AovSet aovs;
   std::vector<float> depth;   // distance along the primary ray, +inf on a miss
-  std::vector<float> normal;  // 3 per pixel: unit geometric normal facing the ray, 0 on a miss
-  std::vector<float> uv;      // 2 per pixel: image-plane coordinates of the pixel centre
+  std::vector<float> normal;  // 3 planes: unit geometric normal facing the ray, 0 on a miss
+  std::vector<float> uv;      // 2 planes: image-plane coordinates of the pixel centre
 
   size_t pixel_count() const { return size_t{width} * height; }
+  // Sizes the buffers of the outputs in `aovs` for width x height.
+  void allocate();
+  glm::vec3 normal_at(size_t pixel) const {
+    return {normal[pixel], normal[pixel_count() + pixel], normal[2 * pixel_count() + pixel]};
+  }
+  glm::vec2 uv_at(size_t pixel) const { return {uv[pixel], uv[pixel_count() + pixel]}; }
   // A hit is known from depth (finite) or, when only normals were asked for, from a non-zero normal.
   bool hit(size_t pixel) const;
 };

@@ -2,6 +2,8 @@
 
 #include <glm/geometric.hpp>
 
+#include <limits>
+
 namespace vkray {
 namespace {
 
@@ -38,13 +40,21 @@ GpuScene make_gpu_scene(const Scene& scene) {
     gpu.planes.push_back({to_float4(plane.normal, glm::dot(plane.normal, plane.point - gpu.anchor))});
   }
   for (const auto& mesh : scene.meshes) {
+    const size_t first = gpu.triangles.size();
+    glm::vec4 lower(std::numeric_limits<float>::infinity()), upper(-std::numeric_limits<float>::infinity());
     for (const auto& corners : mesh.triangles) {
       const glm::dvec3 v0 = mesh.positions[corners[0]] - gpu.anchor;
       const glm::dvec3 v1 = mesh.positions[corners[1]] - gpu.anchor;
       const glm::dvec3 v2 = mesh.positions[corners[2]] - gpu.anchor;
       const glm::dvec3 cross = glm::cross(v1 - v0, v2 - v0);
       if (cross == glm::dvec3(0.0)) continue;
-      gpu.triangles.push_back({to_float4(v0), to_float4(v1), to_float4(v2), to_float4(glm::normalize(cross))});
+      const gpu::GpuTriangle triangle{to_float4(v0), to_float4(v1), to_float4(v2), to_float4(glm::normalize(cross))};
+      // Bounds of the float32 vertices the shader tests, so the box holds them exactly.
+      for (const auto& v : {triangle.v0, triangle.v1, triangle.v2}) lower = glm::min(lower, v), upper = glm::max(upper, v);
+      gpu.triangles.push_back(triangle);
+    }
+    if (gpu.triangles.size() > first) {
+      gpu.meshes.push_back({lower, upper, glm::uvec4(first, gpu.triangles.size() - first, 0, 0)});
     }
   }
   return gpu;

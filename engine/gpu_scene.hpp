@@ -17,6 +17,7 @@ struct GpuScene {
   std::vector<gpu::GpuSphere> spheres;
   std::vector<gpu::GpuPlane> planes;
   std::vector<gpu::GpuTriangle> triangles;  // zero-area triangles left out: no ray can hit them
+  std::vector<gpu::GpuMesh> meshes;         // non-empty meshes only, with their float32 bounds
 };
 
 // The anchor is the centre of the bounding box of the finite primitives (spheres, meshes).

@@ -35,8 +35,14 @@ void write_exr(const std::filesystem::path& path, const Frame& frame) {
   for (size_t p = 0; p < frame.pixel_count(); ++p) {
     float* out = &pixels[p * channels];
     if (frame.aovs.has(Aov::depth)) *out++ = frame.depth[p];
-    if (frame.aovs.has(Aov::normal)) out = std::copy_n(&frame.normal[3 * p], 3, out);
-    if (frame.aovs.has(Aov::uv)) out = std::copy_n(&frame.uv[2 * p], 2, out);
+    if (frame.aovs.has(Aov::normal)) {
+      const glm::vec3 n = frame.normal_at(p);
+      *out++ = n.x, *out++ = n.y, *out++ = n.z;
+    }
+    if (frame.aovs.has(Aov::uv)) {
+      const glm::vec2 uv = frame.uv_at(p);
+      *out++ = uv.x, *out++ = uv.y;
+    }
     if (has_hits) *out++ = frame.hit(p) ? 1.0f : 0.0f;
   }
 
@@ -82,14 +88,14 @@ void write_preview_png(const std::filesystem::path& path, const Frame& frame) {
   if (frame.aovs.has(Aov::normal)) {
     for (size_t p = 0; p < frame.pixel_count(); ++p) {
       if (!frame.hit(p)) continue;
-      const float* n = &frame.normal[3 * p];
-      put(p, 0.5 * (n[0] + 1.0), 0.5 * (n[1] + 1.0), 0.5 * (n[2] + 1.0));
+      const glm::vec3 n = frame.normal_at(p);
+      put(p, 0.5 * (n.x + 1.0), 0.5 * (n.y + 1.0), 0.5 * (n.z + 1.0));
     }
     ++panel;
   }
   if (frame.aovs.has(Aov::uv)) {
     for (size_t p = 0; p < frame.pixel_count(); ++p) {
-      const double u = frame.uv[2 * p], v = frame.uv[2 * p + 1];
+      const double u = frame.uv_at(p).x, v = frame.uv_at(p).y;
       const double brightness = u * u + v * v <= 1.0 ? 1.0 : 0.3;
       put(p, brightness * 0.5 * (u + 1.0), brightness * 0.5 * (v + 1.0), brightness * 0.5);
     }

@@ -2,6 +2,7 @@
 
 #include <tiny_obj_loader.h>
 
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <fstream>
@@ -30,13 +31,20 @@ std::vector<std::string_view> split_tokens(std::string_view line) {
   return tokens;
 }
 
+// from_chars takes no leading '+', but OBJ writers emit it ("+0.5") and tinyobjloader reads it.
+std::string_view without_plus(std::string_view token) {
+  return token.size() >= 2 && token[0] == '+' && token[1] != '-' ? token.substr(1) : token;
+}
+
 bool parse_whole_double(std::string_view token, double& value) {
+  token = without_plus(token);
   const char* end = token.data() + token.size();
   const auto result = std::from_chars(token.data(), end, value);
   return result.ec == std::errc() && result.ptr == end;
 }
 
 bool parse_whole_long(std::string_view token, long& value) {
+  token = without_plus(token);
   const char* end = token.data() + token.size();
   const auto result = std::from_chars(token.data(), end, value);
   return result.ec == std::errc() && result.ptr == end;
@@ -48,7 +56,7 @@ std::string check_index(std::string_view token, long defined, const char* what) 
   long index = 0;
   if (!parse_whole_long(token, index)) return "'" + std::string(token) + "' is not an integer " + what + " index";
   if (index == 0) return std::string(what) + " index 0 (OBJ indices start at 1)";
-  if (index > defined || -index > defined) {
+  if (index > defined || index < -defined) {  // not -index > defined: -LONG_MIN overflows
     return std::string(what) + " index " + std::string(token) + " is out of range (" +
            std::to_string(defined) + " defined so far)";
   }
@@ -137,9 +145,22 @@ Mesh load_obj_text(std::string_view text, const std::string& name) {
   tinyobj::ObjReaderConfig config;
   config.triangulate = true;
   config.vertex_color = false;
+  // tinyobjloader only knows comments that start a line: in "f 1 2 3 # note" it reads '#' as index 0
+  // and fails. The validation pass takes '#' anywhere as the start of a comment, so blank those out.
+  std::string source(text);
+  for (size_t hash = source.find('#'); hash != std::string::npos; hash = source.find('#', hash)) {
+    const size_t end = std::min(source.find('\n', hash), source.size());
+    std::fill(source.begin() + static_cast<long>(hash), source.begin() + static_cast<long>(end), ' ');
+    hash = end;
+  }
   tinyobj::ObjReader reader;
-  if (!reader.ParseFromString(std::string(text), "", config)) {
-    throw InputError(name + ": " + reader.Error());
+  if (!reader.ParseFromString(source, "", config)) {
+    // The validation pass should leave nothing for tinyobjloader to reject; if it does, keep the
+    // message on one line (tinyobjloader ends each of its messages with a newline).
+    std::string detail = reader.Error();
+    while (!detail.empty() && (detail.back() == '\n' || detail.back() == '\r')) detail.pop_back();
+    std::replace(detail.begin(), detail.end(), '\n', ' ');
+    throw InputError(name + ": " + detail);
   }
 
   Mesh mesh;

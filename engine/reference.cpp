@@ -116,21 +116,19 @@ std::vector<ReferenceHit> render_reference_hits(const ReferenceScene& scene, con
 
 Frame reference_frame(const std::vector<ReferenceHit>& hits, uint32_t width, uint32_t height, AovSet aovs) {
   Frame frame{width, height, aovs, {}, {}, {}};
+  frame.allocate();
   const size_t pixels = frame.pixel_count();
-  if (aovs.has(Aov::depth)) frame.depth.resize(pixels);
-  if (aovs.has(Aov::normal)) frame.normal.resize(3 * pixels);
-  if (aovs.has(Aov::uv)) frame.uv.resize(2 * pixels);
   for (uint32_t j = 0; j < height; ++j) {
     for (uint32_t i = 0; i < width; ++i) {
       const size_t p = size_t{j} * width + i;
       if (aovs.has(Aov::depth)) frame.depth[p] = static_cast<float>(hits[p].t);
       if (aovs.has(Aov::normal)) {
-        for (int c = 0; c < 3; ++c) frame.normal[3 * p + c] = static_cast<float>(hits[p].normal[c]);
+        for (size_t c = 0; c < 3; ++c) frame.normal[c * pixels + p] = static_cast<float>(hits[p].normal[int(c)]);
       }
       if (aovs.has(Aov::uv)) {
         const glm::dvec2 uv = pixel_uv(i, j, width, height);
-        frame.uv[2 * p] = static_cast<float>(uv.x);
-        frame.uv[2 * p + 1] = static_cast<float>(uv.y);
+        frame.uv[p] = static_cast<float>(uv.x);
+        frame.uv[pixels + p] = static_cast<float>(uv.y);
       }
     }
   }

@@ -61,7 +61,7 @@ struct Renderer::Impl {
   RendererOptions options;
   glm::dvec3 anchor{0.0};
   GpuBuffer placeholder;  // bound wherever the scene lacks a primitive type or an output is off
-  std::optional<GpuBuffer> spheres, planes, triangles;
+  std::optional<GpuBuffer> spheres, planes, triangles, meshes;
   std::optional<RaycastPipeline> pipeline;
   vk::raii::QueryPool timestamps{nullptr};
   TileOutputs tile;
@@ -88,6 +88,7 @@ struct Renderer::Impl {
     bindings[VKRAY_BINDING_SPHERES] = handle(spheres);
     bindings[VKRAY_BINDING_PLANES] = handle(planes);
     bindings[VKRAY_BINDING_TRIANGLES] = handle(triangles);
+    bindings[VKRAY_BINDING_MESHES] = handle(meshes);
     bindings[VKRAY_BINDING_DEPTH] = output_handle(tile.depth);
     bindings[VKRAY_BINDING_NORMAL] = output_handle(tile.normal);
     bindings[VKRAY_BINDING_UV] = output_handle(tile.uv);
@@ -120,9 +121,11 @@ Renderer::Renderer(GpuDevice& device, const Scene& scene, RendererOptions option
     r.spheres = upload_if_any(r.context, gpu_scene.spheres);
     r.planes = upload_if_any(r.context, gpu_scene.planes);
     r.triangles = upload_if_any(r.context, gpu_scene.triangles);
+    r.meshes = upload_if_any(r.context, gpu_scene.meshes);
+    checked_count(gpu_scene.triangles.size(), "triangles");
     r.pipeline.emplace(r.context, PrimitiveCounts{checked_count(gpu_scene.spheres.size(), "spheres"),
                                                   checked_count(gpu_scene.planes.size(), "planes"),
-                                                  checked_count(gpu_scene.triangles.size(), "triangles")});
+                                                  checked_count(gpu_scene.meshes.size(), "meshes")});
     if (r.context.info.timestamp_period_ns > 0.0) {
       r.timestamps = vk::raii::QueryPool(r.context.device, vk::QueryPoolCreateInfo({}, vk::QueryType::eTimestamp, 3));
     }
@@ -138,9 +141,7 @@ Frame Renderer::render(const Camera& camera, uint32_t width, uint32_t height, Ao
   check_image_size(width, height);
   Impl& r = *impl_;
   Frame frame{width, height, aovs, {}, {}, {}};
-  if (aovs.has(Aov::depth)) frame.depth.resize(frame.pixel_count());
-  if (aovs.has(Aov::normal)) frame.normal.resize(3 * frame.pixel_count());
-  if (aovs.has(Aov::uv)) frame.uv.resize(2 * frame.pixel_count());
+  frame.allocate();
   r.timings = RenderTimings{r.timings.upload_ms, 0.0, 0.0, 0.0, 0};
   if (aovs.empty()) return frame;
 
@@ -190,13 +191,21 @@ Frame Renderer::render(const Camera& camera, uint32_t width, uint32_t height, Ao
         r.timings.readback_ms += static_cast<double>(ticks[2] - ticks[1]) * period_ms;
       }
       const auto copy_start = Clock::now();
+      // The shader packs each plane of this tile to width * rows floats (see raycast.comp); each
+      // lands in the same plane of the frame.
       const size_t first_pixel = size_t{first_row} * width;
       const size_t tile_pixels = size_t{rows} * width;
-      if (r.tile.depth) std::memcpy(frame.depth.data() + first_pixel, r.tile.depth->host(), tile_pixels * depth_bytes);
-      if (r.tile.normal) {
-        std::memcpy(frame.normal.data() + 3 * first_pixel, r.tile.normal->host(), tile_pixels * normal_bytes);
-      }
-      if (r.tile.uv) std::memcpy(frame.uv.data() + 2 * first_pixel, r.tile.uv->host(), tile_pixels * uv_bytes);
+      auto copy_planes = [&](const std::optional<OutputBuffer>& output, std::vector<float>& target, size_t planes) {
+        if (!output) return;
+        const auto* source = static_cast<const float*>(output->host());
+        for (size_t plane = 0; plane < planes; ++plane) {
+          std::memcpy(target.data() + plane * frame.pixel_count() + first_pixel,
+                      source + plane * tile_pixels, tile_pixels * sizeof(float));
+        }
+      };
+      copy_planes(r.tile.depth, frame.depth, 1);
+      copy_planes(r.tile.normal, frame.normal, 3);
+      copy_planes(r.tile.uv, frame.uv, 2);
       r.timings.readback_ms += elapsed_ms(copy_start);
       ++r.timings.tiles;
     }

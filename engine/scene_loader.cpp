@@ -34,8 +34,37 @@ size_t edit_distance(std::string_view a, std::string_view b) {
   return row[b.size()];
 }
 
+// A key as JSON writes it, without the quotes: a key holding a newline or another control character
+// must not break the one-line message.
+std::string printable(const std::string& key) {
+  const std::string quoted = Json(key).dump();
+  return quoted.substr(1, quoted.size() - 2);
+}
+
+// Appends value as compact JSON, stopping once `out` is longer than `limit`. Unlike dump(), which
+// recurses once per nesting level and overflows the stack on [[[[...]]]] a million levels deep,
+// this recurses at most `limit` levels, since each level adds a character.
+void append_json(const Json& value, std::string& out, size_t limit) {
+  if (out.size() > limit) return;
+  if (!value.is_array() && !value.is_object()) {
+    out += value.dump();
+    return;
+  }
+  out += value.is_array() ? '[' : '{';
+  bool first = true;
+  for (const auto& item : value.items()) {
+    if (out.size() > limit) return;
+    if (!first) out += ',';
+    first = false;
+    if (value.is_object()) out += Json(item.key()).dump() + ":";
+    append_json(item.value(), out, limit);
+  }
+  out += value.is_array() ? ']' : '}';
+}
+
 std::string describe(const Json& value) {
-  std::string text = value.dump();
+  std::string text;
+  append_json(value, text, 40);
   return text.size() > 40 ? text.substr(0, 37) + "..." : text;
 }
 
@@ -58,7 +87,7 @@ class Node {
       if (std::find_if(allowed.begin(), allowed.end(), [&](const char* k) { return item.key() == k; }) != allowed.end()) {
         continue;
       }
-      std::string message = "unknown key '" + item.key() + "'";
+      std::string message = "unknown key '" + printable(item.key()) + "'";
       const char* nearest = nullptr;
       size_t nearest_distance = std::numeric_limits<size_t>::max();
       for (const char* key : allowed) {
@@ -117,7 +146,8 @@ class Node {
     }
     const double result = number();
     if (result < 0 || result >= static_cast<double>(limit)) {
-      fail(std::string(what) + " " + describe(value_) + " is out of range 0.." + std::to_string(limit) + "-1");
+      fail(std::string(what) + " " + describe(value_) + " is out of range " +
+           (limit == 0 ? std::string("(there are none)") : "0.." + std::to_string(limit - 1)));
     }
     return static_cast<uint32_t>(result);
   }
@@ -128,7 +158,7 @@ class Node {
   }
 
  private:
-  std::string child_path(const std::string& key) const { return path_.empty() ? key : path_ + "." + key; }
+  std::string child_path(const std::string& key) const { return path_.empty() ? printable(key) : path_ + "." + printable(key); }
 
   const Json& value_;
   std::string path_;
@@ -219,13 +249,52 @@ Mesh parse_mesh(const Node& node, const std::filesystem::path& base_dir, const O
   return mesh;
 }
 
+// 1-based line and column of the 0-based byte offset `byte`.
 std::string line_and_column(std::string_view text, size_t byte) {
   byte = std::min(byte, text.size());
   const size_t line = 1 + static_cast<size_t>(std::count(text.begin(), text.begin() + static_cast<long>(byte), '\n'));
-  const size_t line_start = text.rfind('\n', byte == 0 ? 0 : byte - 1);
-  const size_t column = line_start == std::string_view::npos ? byte : byte - line_start - 1;
-  return std::to_string(line) + ":" + std::to_string(std::max<size_t>(column, 1));
+  const size_t line_start = byte == 0 ? std::string_view::npos : text.rfind('\n', byte - 1);
+  const size_t column = 1 + (line_start == std::string_view::npos ? byte : byte - line_start - 1);
+  return std::to_string(line) + ":" + std::to_string(column);
 }
+
+// nlohmann::json refuses a number that overflows a double (1e999) with out_of_range.406, which
+// carries no position. Parsing once more with this handler finds the JSON path of that number.
+class ErrorPathFinder : public Json::json_sax_t {
+ public:
+  std::string path;
+
+  bool null() override { return value(); }
+  bool boolean(bool) override { return value(); }
+  bool number_integer(number_integer_t) override { return value(); }
+  bool number_unsigned(number_unsigned_t) override { return value(); }
+  bool number_float(number_float_t, const string_t&) override { return value(); }
+  bool string(string_t&) override { return value(); }
+  bool binary(binary_t&) override { return value(); }
+  bool start_object(std::size_t) override { return levels_.push_back({false, 0, {}}), true; }
+  bool key(string_t& member) override { return levels_.back().key = member, true; }
+  bool end_object() override { return levels_.pop_back(), value(); }
+  bool start_array(std::size_t) override { return levels_.push_back({true, 0, {}}), true; }
+  bool end_array() override { return levels_.pop_back(), value(); }
+  bool parse_error(std::size_t, const std::string&, const Json::exception&) override {
+    for (const Level& level : levels_) {
+      path += level.array ? "[" + std::to_string(level.index) + "]" : (path.empty() ? "" : ".") + printable(level.key);
+    }
+    return false;
+  }
+
+ private:
+  struct Level {
+    bool array;
+    size_t index;  // of the current element, in an array
+    std::string key;  // of the current member, in an object
+  };
+  bool value() {
+    if (!levels_.empty() && levels_.back().array) ++levels_.back().index;
+    return true;
+  }
+  std::vector<Level> levels_;
+};
 
 }  // namespace
 
@@ -242,6 +311,13 @@ Scene parse_scene(std::string_view json_text, const std::string& name, const std
       detail = detail.substr(colon + 2);
     }
     throw InputError(name + ":" + line_and_column(json_text, error.byte == 0 ? 0 : error.byte - 1) + ": invalid JSON: " + detail);
+  } catch (const Json::out_of_range& error) {
+    ErrorPathFinder finder;
+    Json::sax_parse(json_text, &finder);
+    std::string detail = error.what();  // "[json.exception.out_of_range.406] number overflow parsing '1e999'"
+    if (const size_t bracket = detail.find("] "); bracket != std::string::npos) detail = detail.substr(bracket + 2);
+    if (detail.size() > 80) detail = detail.substr(0, 77) + "...";  // the number may have thousands of digits
+    throw InputError(name + ": " + (finder.path.empty() ? "top level" : finder.path) + ": number is not finite (" + detail + ")");
   }
 
   const Node top(root, "", name);

@@ -28,13 +28,14 @@ using uvec4 = glm::uvec4;
 #define VKRAY_BINDING_DEPTH 3
 #define VKRAY_BINDING_NORMAL 4
 #define VKRAY_BINDING_UV 5
-#define VKRAY_BINDING_COUNT 6
+#define VKRAY_BINDING_MESHES 6
+#define VKRAY_BINDING_COUNT 7
 
 // Specialization constants: primitive counts (0 removes that loop and its buffer reads) and which
 // outputs are written.
 #define VKRAY_SPEC_SPHERE_COUNT 0
 #define VKRAY_SPEC_PLANE_COUNT 1
-#define VKRAY_SPEC_TRIANGLE_COUNT 2
+#define VKRAY_SPEC_MESH_COUNT 2
 #define VKRAY_SPEC_WRITE_DEPTH 3
 #define VKRAY_SPEC_WRITE_NORMAL 4
 #define VKRAY_SPEC_WRITE_UV 5
@@ -63,6 +64,15 @@ struct GpuTriangle {
   vec4 normal;
 };
 VKRAY_CHECK_SIZE(GpuTriangle, 64);
+
+// A mesh's bounding box (relative to the anchor; w unused) and its range of triangles: rays that
+// miss the box skip all of them.
+struct GpuMesh {
+  vec4 lower;
+  vec4 upper;
+  uvec4 triangles;  // x: first triangle, y: triangle count
+};
+VKRAY_CHECK_SIZE(GpuMesh, 48);
 
 // Per-dispatch camera and image parameters (push constants). The camera basis is computed in
 // double on the host; the shader only evaluates direction = x*right + y*up + forward_scaled.

@@ -91,32 +91,35 @@ float intersect_plane(vec4 normal_offset, vec3 origin, vec3 dir, float t_max) {
 // computes barycentrics per triangle and can miss both). `precise` forbids the compiler from
 // fusing these products into FMAs differently per triangle, which would break that symmetry.
 struct RayFrame {
-  ivec3 axes;   // kx, ky, kz: kz is the dominant axis of the direction
+  int kz;       // dominant axis of the direction: the ray frame's z
+  bool swap_xy; // keeps the winding of the projected triangle when dir[kz] < 0
   vec3 shear;   // Sx, Sy, Sz
 };
 
+// (p[kx], p[ky], p[kz]) with kx = (kz + 1) % 3, ky = (kx + 1) % 3, swapped when the frame says so.
+// Written with selects, not dynamic component indexing, which compilers turn into memory accesses.
+vec3 permute(RayFrame frame, vec3 p) {
+  vec3 q = frame.kz == 0 ? p.yzx : (frame.kz == 1 ? p.zxy : p);
+  return frame.swap_xy ? q.yxz : q;
+}
+
 RayFrame make_ray_frame(vec3 dir) {
   vec3 ad = abs(dir);
-  int kz = (ad.x > ad.y) ? (ad.x > ad.z ? 0 : 2) : (ad.y > ad.z ? 1 : 2);
-  int kx = (kz + 1) % 3;
-  int ky = (kx + 1) % 3;
-  if (dir[kz] < 0.0) {  // keep the winding of the projected triangle
-    int swap = kx;
-    kx = ky;
-    ky = swap;
-  }
   RayFrame frame;
-  frame.axes = ivec3(kx, ky, kz);
-  frame.shear = vec3(dir[kx] / dir[kz], dir[ky] / dir[kz], 1.0 / dir[kz]);
+  frame.kz = (ad.x > ad.y) ? (ad.x > ad.z ? 0 : 2) : (ad.y > ad.z ? 1 : 2);
+  frame.swap_xy = false;
+  frame.swap_xy = permute(frame, dir).z < 0.0;
+  vec3 d = permute(frame, dir);
+  frame.shear = vec3(d.x / d.z, d.y / d.z, 1.0 / d.z);
   return frame;
 }
 
 // Vertex relative to the ray origin, in the ray frame (z not yet scaled by Sz).
 vec3 to_ray_frame(RayFrame frame, vec3 vertex, vec3 origin) {
-  precise vec3 p = vertex - origin;
-  precise float px = p[frame.axes.x] - frame.shear.x * p[frame.axes.z];
-  precise float py = p[frame.axes.y] - frame.shear.y * p[frame.axes.z];
-  return vec3(px, py, p[frame.axes.z]);
+  precise vec3 p = permute(frame, vertex - origin);
+  precise float px = p.x - frame.shear.x * p.z;
+  precise float py = p.y - frame.shear.y * p.z;
+  return vec3(px, py, p.z);
 }
 
 float intersect_triangle(RayFrame frame, vec3 origin, vec3 v0, vec3 v1, vec3 v2, float t_max) {
@@ -131,6 +134,30 @@ float intersect_triangle(RayFrame frame, vec3 origin, vec3 v0, vec3 v1, vec3 v2,
   if (det == 0.0) return t_max;  // ray in the triangle's plane, or a degenerate projection
   float t = frame.shear.z * (u * a.z + v * b.z + w * c.z) / det;
   return (t > 0.0 && t < t_max) ? t : t_max;
+}
+
+// 1 / dir with zero components replaced by 1 / 1e-30 of the same sign: a ray parallel to a slab
+// then gets a huge but finite slab interval, never the NaN of 0 * inf (GLSL's min and max are
+// undefined on NaN). The interval is still right: it spans everything when the origin lies
+// between the slab's planes and starts beyond any hit otherwise.
+vec3 safe_inverse(vec3 dir) {
+  const float tiny = 1e-30;
+  return 1.0 / mix(dir, mix(vec3(tiny), vec3(-tiny), lessThan(dir, vec3(0.0))), lessThan(abs(dir), vec3(tiny)));
+}
+
+// Slab test, conservative under rounding: the far distance is enlarged by 1 + 2 gamma(3),
+// gamma(n) = n u / (1 - n u), u = 2^-24, which covers the error of the three operations behind
+// each slab distance (Ize, "Robust BVH Ray Traversal", JCGT 2(2), 2013). A ray that meets the box
+// is never rejected, so culling by box can not open holes in a mesh.
+bool ray_hits_box(vec3 lower, vec3 upper, vec3 origin, vec3 inv_dir, float t_max) {
+  vec3 t0 = (lower - origin) * inv_dir;
+  vec3 t1 = (upper - origin) * inv_dir;
+  vec3 t_near = min(t0, t1);
+  vec3 t_far = max(t0, t1);
+  float enter = max(max(t_near.x, t_near.y), max(t_near.z, 0.0));
+  const float gamma3 = 1.7881396e-7;  // 3 * 2^-24 / (1 - 3 * 2^-24), rounded up
+  float leave = min(min(t_far.x, t_far.y), t_far.z) * (1.0 + 2.0 * gamma3);
+  return enter <= leave && enter < t_max;
 }
 
 #endif  // VKRAY_INTERSECT_GLSL

@@ -11,7 +11,7 @@ layout(local_size_x = VKRAY_WORKGROUP_X, local_size_y = VKRAY_WORKGROUP_Y) in;
 // A count of 0 removes that primitive loop entirely once the pipeline is specialized.
 layout(constant_id = VKRAY_SPEC_SPHERE_COUNT) const uint SPHERE_COUNT = 0;
 layout(constant_id = VKRAY_SPEC_PLANE_COUNT) const uint PLANE_COUNT = 0;
-layout(constant_id = VKRAY_SPEC_TRIANGLE_COUNT) const uint TRIANGLE_COUNT = 0;
+layout(constant_id = VKRAY_SPEC_MESH_COUNT) const uint MESH_COUNT = 0;
 layout(constant_id = VKRAY_SPEC_WRITE_DEPTH) const bool WRITE_DEPTH = true;
 layout(constant_id = VKRAY_SPEC_WRITE_NORMAL) const bool WRITE_NORMAL = true;
 layout(constant_id = VKRAY_SPEC_WRITE_UV) const bool WRITE_UV = false;
@@ -21,9 +21,10 @@ layout(push_constant) uniform PushConstants { RayGenParams params; };
 layout(std430, binding = VKRAY_BINDING_SPHERES) readonly buffer Spheres { GpuSphere spheres[]; };
 layout(std430, binding = VKRAY_BINDING_PLANES) readonly buffer Planes { GpuPlane planes[]; };
 layout(std430, binding = VKRAY_BINDING_TRIANGLES) readonly buffer Triangles { GpuTriangle triangles[]; };
+layout(std430, binding = VKRAY_BINDING_MESHES) readonly buffer Meshes { GpuMesh meshes[]; };
 layout(std430, binding = VKRAY_BINDING_DEPTH) writeonly buffer DepthOut { float depth_out[]; };
 layout(std430, binding = VKRAY_BINDING_NORMAL) writeonly buffer NormalOut { float normal_out[]; };
-layout(std430, binding = VKRAY_BINDING_UV) writeonly buffer UvOut { vec2 uv_out[]; };
+layout(std430, binding = VKRAY_BINDING_UV) writeonly buffer UvOut { float uv_out[]; };
 
 void main() {
   uint width = params.image.x;
@@ -31,14 +32,20 @@ void main() {
   uvec2 tile_pixel = gl_GlobalInvocationID.xy;
   if (tile_pixel.x >= width || tile_pixel.y >= params.image.w) return;
   uint row = params.image.z + tile_pixel.y;
+  // Outputs are planar (all x, then all y, ...) with one plane per buffer tile, so neighbouring
+  // invocations store to neighbouring addresses.
   uint out_index = tile_pixel.y * width + tile_pixel.x;
+  uint plane_size = params.image.x * params.image.w;
 
   // UV of the pixel centre: origin at the image centre, the shorter side spans [-1, 1]. The
   // numerators are small integers, exact in float; each coordinate takes a single rounding.
   float shorter = float(min(width, height));
   vec2 uv = vec2(float(2 * tile_pixel.x + 1) - float(width),
                  float(height) - float(2 * row + 1)) / shorter;
-  if (WRITE_UV) uv_out[out_index] = uv;
+  if (WRITE_UV) {
+    uv_out[out_index] = uv.x;
+    uv_out[plane_size + out_index] = uv.y;
+  }
   if (!WRITE_DEPTH && !WRITE_NORMAL) return;
 
   vec3 origin = params.origin.xyz;
@@ -65,14 +72,19 @@ void main() {
       normal = plane.xyz;
     }
   }
-  if (TRIANGLE_COUNT > 0) {
+  if (MESH_COUNT > 0) {
     RayFrame frame = make_ray_frame(dir);
-    for (uint i = 0; i < TRIANGLE_COUNT; ++i) {
-      float t = intersect_triangle(frame, origin, triangles[i].v0.xyz, triangles[i].v1.xyz,
-                                   triangles[i].v2.xyz, t_best);
-      if (t < t_best) {
-        t_best = t;
-        normal = triangles[i].normal.xyz;
+    vec3 inv_dir = safe_inverse(dir);
+    for (uint m = 0; m < MESH_COUNT; ++m) {
+      if (!ray_hits_box(meshes[m].lower.xyz, meshes[m].upper.xyz, origin, inv_dir, t_best)) continue;
+      uint end = meshes[m].triangles.x + meshes[m].triangles.y;
+      for (uint i = meshes[m].triangles.x; i < end; ++i) {
+        float t = intersect_triangle(frame, origin, triangles[i].v0.xyz, triangles[i].v1.xyz,
+                                     triangles[i].v2.xyz, t_best);
+        if (t < t_best) {
+          t_best = t;
+          normal = triangles[i].normal.xyz;
+        }
       }
     }
   }
@@ -82,8 +94,8 @@ void main() {
     // Unit length again (the sphere normal carries rounding) and turned to face the ray.
     if (t_best < no_hit) normal = normalize(normal);
     if (dot(normal, dir) > 0.0) normal = -normal;
-    normal_out[3 * out_index + 0] = normal.x;
-    normal_out[3 * out_index + 1] = normal.y;
-    normal_out[3 * out_index + 2] = normal.z;
+    normal_out[out_index] = normal.x;
+    normal_out[plane_size + out_index] = normal.y;
+    normal_out[2 * plane_size + out_index] = normal.z;
   }
 }

@@ -231,13 +231,13 @@ TEST(GpuRenderer, UvMappingAndUnitDisk) {
         const size_t p = size_t{j} * width + i;
         for (int c = 0; c < 2; ++c) {
           const double ulp = std::max(std::abs(exact[c]), 0x1p-126) * 0x1p-23;
-          ASSERT_NEAR(frame.uv[2 * p + c], exact[c], 3 * ulp) << i << "," << j << " of " << width << "x" << height;
+          ASSERT_NEAR(frame.uv_at(p)[c], exact[c], 3 * ulp) << i << "," << j << " of " << width << "x" << height;
         }
       }
     }
     auto in_disk = [&](uint32_t i, uint32_t j) {
       const size_t p = size_t{j} * width + i;
-      return frame.uv[2 * p] * frame.uv[2 * p] + frame.uv[2 * p + 1] * frame.uv[2 * p + 1] <= 1.0f;
+      return glm::dot(frame.uv_at(p), frame.uv_at(p)) <= 1.0f;
     };
     if (width > 1 && height > 1) {
       if (width >= height) {  // touches top and bottom rows in the middle column, not the side columns

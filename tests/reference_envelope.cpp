@@ -109,8 +109,7 @@ EnvelopeReport check_against_reference(const Scene& scene, const Frame& frame) {
     if (!stable) ++report.boundary_pixels;
     const bool gpu_hit = frame.hit(p);
     const float gpu_depth = has_depth ? frame.depth[p] : 0.0f;
-    const glm::dvec3 gpu_normal = has_normal ? glm::dvec3(frame.normal[3 * p], frame.normal[3 * p + 1], frame.normal[3 * p + 2])
-                                             : glm::dvec3(0.0);
+    const glm::dvec3 gpu_normal = has_normal ? glm::dvec3(frame.normal_at(p)) : glm::dvec3(0.0);
 
     std::string failure;
     const bool any_miss = std::any_of(std::begin(s.hits), std::end(s.hits), [](const ReferenceHit& h) { return h.kind == PrimitiveKind::none; });

@@ -32,7 +32,7 @@ const vk::raii::Pipeline& RaycastPipeline::pipeline(AovSet aovs, double& created
   // Specialization data in the order of the VKRAY_SPEC_* ids; booleans are 32-bit in SPIR-V.
   const std::array<uint32_t, 6> values = {counts_.spheres,
                                           counts_.planes,
-                                          counts_.triangles,
+                                          counts_.meshes,
                                           aovs.has(Aov::depth) ? 1u : 0u,
                                           aovs.has(Aov::normal) ? 1u : 0u,
                                           aovs.has(Aov::uv) ? 1u : 0u};

@@ -14,7 +14,7 @@ namespace vkray {
 struct PrimitiveCounts {
   uint32_t spheres = 0;
   uint32_t planes = 0;
-  uint32_t triangles = 0;
+  uint32_t meshes = 0;
 };
 
 class RaycastPipeline {
