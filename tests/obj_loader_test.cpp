@@ -1,0 +1,365 @@
+// OBJ loader: polygon triangulation, index forms, merging of groups, and one-line InputErrors that
+// name the file and the line for every malformed input.
+#include "engine/obj_loader.hpp"
+
+#include <gtest/gtest.h>
+#include <glm/geometric.hpp>
+
+#include <algorithm>
+#include <array>
+#include <filesystem>
+#include <fstream>
+#include <set>
+#include <string>
+
+namespace {
+
+using vkray::InputError;
+using vkray::Mesh;
+
+// The InputError message of `load`, or "" when it throws nothing. Any other exception type fails.
+template <class F>
+std::string error_of(F&& load) {
+  try {
+    load();
+  } catch (const InputError& error) {
+    return error.what();
+  }
+  return {};
+}
+
+std::string text_error(const std::string& text, const std::string& name = "t.obj") {
+  return error_of([&] { vkray::load_obj_text(text, name); });
+}
+
+// Every error is one line that starts with the file name.
+void expect_error(const std::string& message, const std::string& prefix, const std::string& detail) {
+  ASSERT_FALSE(message.empty()) << "no InputError raised (expected '" << prefix << "... " << detail << "')";
+  EXPECT_EQ(message.rfind(prefix, 0), 0u) << message;
+  EXPECT_NE(message.find(detail), std::string::npos) << message;
+  EXPECT_EQ(message.find('\n'), std::string::npos) << "message is not one line: " << message;
+}
+
+double triangle_area(const Mesh& mesh, const std::array<uint32_t, 3>& t) {
+  return 0.5 * glm::length(glm::cross(mesh.positions[t[1]] - mesh.positions[t[0]], mesh.positions[t[2]] - mesh.positions[t[0]]));
+}
+
+double total_area(const Mesh& mesh) {
+  double area = 0.0;
+  for (const auto& t : mesh.triangles) area += triangle_area(mesh, t);
+  return area;
+}
+
+void expect_valid_triangles(const Mesh& mesh) {
+  for (const auto& t : mesh.triangles) {
+    for (uint32_t index : t) EXPECT_LT(index, mesh.positions.size());
+    EXPECT_NE(t[0], t[1]);
+    EXPECT_NE(t[1], t[2]);
+    EXPECT_NE(t[0], t[2]);
+  }
+}
+
+const std::string tri_vertices = "v 0 0 0\nv 1 0 0\nv 0 1 0\n";
+
+class ObjFileTest : public testing::Test {
+ protected:
+  void SetUp() override {
+    const auto* info = testing::UnitTest::GetInstance()->current_test_info();
+    dir_ = std::filesystem::temp_directory_path() / ("vkray-obj-" + std::string(info->name()));
+    std::filesystem::remove_all(dir_);
+    std::filesystem::create_directories(dir_);
+  }
+  void TearDown() override { std::filesystem::remove_all(dir_); }
+
+  std::filesystem::path write(const std::string& name, const std::string& contents) const {
+    const auto path = dir_ / name;
+    std::ofstream(path, std::ios::binary) << contents;
+    return path;
+  }
+
+  std::filesystem::path dir_;
+};
+
+TEST(ObjText, SingleTriangle) {
+  const Mesh mesh = vkray::load_obj_text(tri_vertices + "f 1 2 3\n", "t.obj");
+  ASSERT_EQ(mesh.positions.size(), 3u);
+  EXPECT_EQ(mesh.positions[1], glm::dvec3(1, 0, 0));
+  EXPECT_EQ(mesh.positions[2], glm::dvec3(0, 1, 0));
+  ASSERT_EQ(mesh.triangles.size(), 1u);
+  EXPECT_EQ(mesh.triangles[0], (std::array<uint32_t, 3>{0, 1, 2}));
+}
+
+TEST(ObjText, CoordinatesKeepFullPrecision) {
+  const Mesh mesh = vkray::load_obj_text("v 0.1 -2.5e3 1234567.125\nv 1 0 0\nv 0 1 0\nf 1 2 3\n", "t.obj");
+  ASSERT_EQ(mesh.positions.size(), 3u);
+  EXPECT_EQ(mesh.positions[0], glm::dvec3(0.1, -2.5e3, 1234567.125));
+}
+
+TEST(ObjText, QuadBecomesTwoTriangles) {
+  const Mesh mesh = vkray::load_obj_text("v 0 0 0\nv 2 0 0\nv 2 1 0\nv 0 1 0\nf 1 2 3 4\n", "t.obj");
+  ASSERT_EQ(mesh.positions.size(), 4u);
+  ASSERT_EQ(mesh.triangles.size(), 2u);
+  expect_valid_triangles(mesh);
+  std::set<uint32_t> used;
+  for (const auto& t : mesh.triangles) used.insert(t.begin(), t.end());
+  EXPECT_EQ(used, (std::set<uint32_t>{0, 1, 2, 3}));
+  EXPECT_NEAR(total_area(mesh), 2.0, 1e-12);
+}
+
+TEST(ObjText, PentagonBecomesThreeTriangles) {
+  // A convex pentagon in the z = 1 plane: a 2x2 square with a roof of height 1 (area 4 + 1).
+  const Mesh mesh = vkray::load_obj_text("v 0 0 1\nv 2 0 1\nv 2 2 1\nv 1 3 1\nv 0 2 1\nf 1 2 3 4 5\n", "t.obj");
+  ASSERT_EQ(mesh.positions.size(), 5u);
+  ASSERT_EQ(mesh.triangles.size(), 3u);
+  expect_valid_triangles(mesh);
+  EXPECT_NEAR(total_area(mesh), 5.0, 1e-12);
+}
+
+TEST(ObjText, HexagonBecomesFourTriangles) {
+  const Mesh mesh = vkray::load_obj_text("v 1 0 0\nv 2 0 0\nv 3 1 0\nv 2 2 0\nv 1 2 0\nv 0 1 0\nf 1 2 3 4 5 6\n", "t.obj");
+  ASSERT_EQ(mesh.triangles.size(), 4u);
+  expect_valid_triangles(mesh);
+  EXPECT_NEAR(total_area(mesh), 4.0, 1e-12);
+}
+
+TEST(ObjText, NegativeIndicesCountBackFromTheNewestVertex) {
+  const Mesh mesh = vkray::load_obj_text(tri_vertices + "f -3 -2 -1\nv 1 1 0\nf -3 -2 -1\nf -1 1 -3\n", "t.obj");
+  ASSERT_EQ(mesh.positions.size(), 4u);
+  ASSERT_EQ(mesh.triangles.size(), 3u);
+  EXPECT_EQ(mesh.triangles[0], (std::array<uint32_t, 3>{0, 1, 2}));
+  EXPECT_EQ(mesh.triangles[1], (std::array<uint32_t, 3>{1, 2, 3}));
+  EXPECT_EQ(mesh.triangles[2], (std::array<uint32_t, 3>{3, 0, 1}));
+}
+
+TEST(ObjText, VertexTexcoordNormalReferences) {
+  const Mesh mesh = vkray::load_obj_text(tri_vertices + "vt 0 0\nvt 1 0\nvt 0 1\nvn 0 0 1\nf 1/1/1 2/2/1 3/3/1\n", "t.obj");
+  ASSERT_EQ(mesh.positions.size(), 3u);
+  ASSERT_EQ(mesh.triangles.size(), 1u);
+  EXPECT_EQ(mesh.triangles[0], (std::array<uint32_t, 3>{0, 1, 2}));
+}
+
+TEST(ObjText, VertexNormalReferences) {
+  const Mesh mesh = vkray::load_obj_text(tri_vertices + "vn 0 0 1\nf 3//1 1//1 2//1\n", "t.obj");
+  ASSERT_EQ(mesh.triangles.size(), 1u);
+  EXPECT_EQ(mesh.triangles[0], (std::array<uint32_t, 3>{2, 0, 1}));
+}
+
+TEST(ObjText, VertexTexcoordReferences) {
+  const Mesh mesh = vkray::load_obj_text(tri_vertices + "vt 0 0\nvt 1 0\nf 2/1 3/2 1/-1\n", "t.obj");
+  ASSERT_EQ(mesh.triangles.size(), 1u);
+  EXPECT_EQ(mesh.triangles[0], (std::array<uint32_t, 3>{1, 2, 0}));
+}
+
+TEST(ObjText, GroupsAndObjectsMergeIntoOneMesh) {
+  const std::string text =
+      "o first\n" + tri_vertices + "f 1 2 3\n"
+      "g part\nusemtl red\ns 1\nv 1 1 0\nf 2 4 3\n"
+      "o second\ng a b\nv 5 5 5\nv 6 5 5\nv 5 6 5\nf -3 -2 -1\n";
+  const Mesh mesh = vkray::load_obj_text(text, "t.obj");
+  ASSERT_EQ(mesh.positions.size(), 7u);
+  EXPECT_EQ(mesh.positions[6], glm::dvec3(5, 6, 5));
+  ASSERT_EQ(mesh.triangles.size(), 3u);
+  EXPECT_EQ(mesh.triangles[0], (std::array<uint32_t, 3>{0, 1, 2}));
+  EXPECT_EQ(mesh.triangles[1], (std::array<uint32_t, 3>{1, 3, 2}));
+  EXPECT_EQ(mesh.triangles[2], (std::array<uint32_t, 3>{4, 5, 6}));
+}
+
+TEST(ObjText, ExtraVertexComponentsAreIgnored) {
+  // "v x y z w" and the common "v x y z r g b" vertex colours.
+  const Mesh mesh = vkray::load_obj_text("v 1 2 3 0.5\nv 4 5 6 1 0 0\nv 7 8 9 0 1 0\nf 1 2 3\n", "t.obj");
+  ASSERT_EQ(mesh.positions.size(), 3u);
+  EXPECT_EQ(mesh.positions[0], glm::dvec3(1, 2, 3));
+  EXPECT_EQ(mesh.positions[1], glm::dvec3(4, 5, 6));
+  EXPECT_EQ(mesh.positions[2], glm::dvec3(7, 8, 9));
+}
+
+TEST(ObjText, LeadingPlusSign) {
+  const Mesh mesh = vkray::load_obj_text("v +0.5 0 +2\nv 1 0 0\nv 0 1 0\nf +1 2 3\n", "t.obj");
+  ASSERT_EQ(mesh.positions.size(), 3u);
+  EXPECT_EQ(mesh.positions[0], glm::dvec3(0.5, 0, 2));
+  ASSERT_EQ(mesh.triangles.size(), 1u);
+  EXPECT_EQ(mesh.triangles[0], (std::array<uint32_t, 3>{0, 1, 2}));
+  expect_error(text_error("v +-1 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"), "t.obj:1: ", "'+-1' is not a number");
+}
+
+TEST(ObjText, CommentsAndBlankLines) {
+  const std::string text = "# header\n\n   \n\t\nv 0 0 0 # origin\n# v 9 9 9\nv 1 0 0\n\nv 0 1 0\n#\nf 1 2 3\n\n";
+  const Mesh mesh = vkray::load_obj_text(text, "t.obj");
+  ASSERT_EQ(mesh.positions.size(), 3u);
+  ASSERT_EQ(mesh.triangles.size(), 1u);
+  EXPECT_EQ(mesh.triangles[0], (std::array<uint32_t, 3>{0, 1, 2}));
+}
+
+TEST(ObjText, CommentAfterFaceOnSameLine) {
+  const Mesh mesh = vkray::load_obj_text(tri_vertices + "f 1 2 3 # the only face\n", "t.obj");
+  ASSERT_EQ(mesh.triangles.size(), 1u);
+  EXPECT_EQ(mesh.triangles[0], (std::array<uint32_t, 3>{0, 1, 2}));
+}
+
+TEST(ObjText, CommentAfterStatementsWithCrlf) {
+  const Mesh mesh = vkray::load_obj_text("v 0 0 0 #a\r\nv 1 0 0\r\nv 0 1 0\r\nf 1 2 3 #b\r\nf 3 2 1#c", "t.obj");
+  ASSERT_EQ(mesh.triangles.size(), 2u);
+  EXPECT_EQ(mesh.triangles[1], (std::array<uint32_t, 3>{2, 1, 0}));
+}
+
+TEST(ObjText, CrlfLineEndings) {
+  const Mesh mesh = vkray::load_obj_text("v 0 0 0\r\nv 1 0 0\r\nv 1 1 0\r\nv 0 1 0\r\nf 1 2 3 4\r\n", "t.obj");
+  ASSERT_EQ(mesh.positions.size(), 4u);
+  EXPECT_EQ(mesh.positions[2], glm::dvec3(1, 1, 0));
+  ASSERT_EQ(mesh.triangles.size(), 2u);
+  EXPECT_NEAR(total_area(mesh), 1.0, 1e-12);
+}
+
+TEST(ObjText, TabsBetweenTokens) {
+  const Mesh mesh = vkray::load_obj_text("v\t0\t0\t0\nv 1  0 0\nv  0 1 0\nf\t1\t2  3\n", "t.obj");
+  ASSERT_EQ(mesh.triangles.size(), 1u);
+  EXPECT_EQ(mesh.positions[1], glm::dvec3(1, 0, 0));
+}
+
+TEST(ObjText, LastLineCompleteWithoutTrailingNewlineLoads) {
+  const Mesh mesh = vkray::load_obj_text(tri_vertices + "f 1 2 3", "t.obj");
+  ASSERT_EQ(mesh.triangles.size(), 1u);
+  EXPECT_EQ(mesh.triangles[0], (std::array<uint32_t, 3>{0, 1, 2}));
+}
+
+TEST(ObjErrors, VertexWithTwoCoordinates) {
+  expect_error(text_error("v 0 0 0\nv 1 0\nv 0 1 0\nf 1 2 3\n"), "t.obj:2: ", "'v' needs 3 coordinates, got 2");
+}
+
+TEST(ObjErrors, VertexWithNan) {
+  expect_error(text_error("v 0 0 0\nv 1 0 0\nv 0 nan 0\nf 1 2 3\n"), "t.obj:3: ", "'nan' is not finite");
+}
+
+TEST(ObjErrors, VertexWithInf) {
+  expect_error(text_error("v 0 0 0\nv inf 0 0\nv 0 1 0\nf 1 2 3\n"), "t.obj:2: ", "'inf' is not finite");
+  expect_error(text_error("v 0 0 0\nv 1 0 0\nv 0 1 -infinity\nf 1 2 3\n"), "t.obj:3: ", "'-infinity' is not finite");
+}
+
+TEST(ObjErrors, VertexWithOverflowingNumber) {
+  expect_error(text_error("v 0 0 0\nv 1e999 0 0\nv 0 1 0\nf 1 2 3\n"), "t.obj:2: ", "1e999");
+}
+
+TEST(ObjErrors, VertexWithGarbage) {
+  expect_error(text_error("v 0 0 0\nv 1 0 zero\nv 0 1 0\nf 1 2 3\n"), "t.obj:2: ", "'zero' is not a number");
+}
+
+TEST(ObjErrors, NormalWithTwoCoordinates) {
+  expect_error(text_error(tri_vertices + "vn 0 1\nf 1//1 2//1 3//1\n"), "t.obj:4: ", "'vn' needs 3 coordinates, got 2");
+}
+
+TEST(ObjErrors, FaceIndexZero) {
+  expect_error(text_error(tri_vertices + "f 0 1 2\n"), "t.obj:4: ", "vertex index 0 (OBJ indices start at 1)");
+}
+
+TEST(ObjErrors, FaceIndexOutOfRange) {
+  expect_error(text_error(tri_vertices + "f 1 2 4\n"), "t.obj:4: ", "vertex index 4 is out of range (3 defined so far)");
+}
+
+TEST(ObjErrors, FaceIndexRefersToVertexDefinedLater) {
+  expect_error(text_error("v 0 0 0\nv 1 0 0\nf 1 2 3\nv 0 1 0\n"), "t.obj:3: ", "vertex index 3 is out of range (2 defined so far)");
+}
+
+TEST(ObjErrors, NegativeFaceIndexOutOfRange) {
+  expect_error(text_error(tri_vertices + "f -1 -2 -4\n"), "t.obj:4: ", "vertex index -4 is out of range (3 defined so far)");
+}
+
+TEST(ObjErrors, HugeNegativeFaceIndex) {
+  // The most negative 64-bit integer: negating it overflows, so a check written as -index > n
+  // would let it through.
+  expect_error(text_error(tri_vertices + "f 1 2 -9223372036854775808\n"), "t.obj:4: ", "is out of range (3 defined so far)");
+  expect_error(text_error(tri_vertices + "f 1 2 99999999999999999999\n"), "t.obj:4: ", "is not an integer vertex index");
+}
+
+TEST(ObjErrors, TexcoordAndNormalIndexOutOfRange) {
+  expect_error(text_error(tri_vertices + "vt 0 0\nf 1/1 2/2 3/1\n"), "t.obj:5: ", "texture index 2 is out of range (1 defined so far)");
+  expect_error(text_error(tri_vertices + "vn 0 0 1\nf 1//1 2//1 3//0\n"), "t.obj:5: ", "normal index 0 (OBJ indices start at 1)");
+}
+
+TEST(ObjErrors, FaceWithTwoVertices) {
+  expect_error(text_error(tri_vertices + "f 1 2\n"), "t.obj:4: ", "a face needs at least 3 vertices, got 2");
+}
+
+TEST(ObjErrors, MixedReferenceFormsInOneFace) {
+  expect_error(text_error(tri_vertices + "vt 0 0\nvn 0 0 1\nf 1/1/1 2//1 3/1/1\n"), "t.obj:6: ",
+               "face vertex '2//1' has a different form than '1/1/1'");
+  expect_error(text_error(tri_vertices + "vt 0 0\nf 1 2/1 3\n"), "t.obj:5: ", "face vertex '2/1' has a different form than '1'");
+}
+
+TEST(ObjErrors, MalformedFaceVertex) {
+  expect_error(text_error(tri_vertices + "f 1 2 3/\n"), "t.obj:4: ", "malformed face vertex '3/'");
+  expect_error(text_error(tri_vertices + "f 1 2 x\n"), "t.obj:4: ", "'x' is not an integer vertex index");
+}
+
+TEST(ObjErrors, FileCutOffMidLine) {
+  const std::string message = text_error(tri_vertices + "f 1 2 3\nf 3 2");
+  expect_error(message, "t.obj:5: ", "a face needs at least 3 vertices, got 2");
+  EXPECT_NE(message.find("cut off"), std::string::npos) << message;
+  EXPECT_NE(message.find("ends without a newline"), std::string::npos) << message;
+}
+
+TEST(ObjErrors, FileCutOffInsideFaceVertex) {
+  // As in crytek-sponza-truncated.obj: the last vertex lost its normal index.
+  const std::string message = text_error(tri_vertices + "vt 0 0\nvn 0 0 1\nf 1/1/1 2/1/1 3/1");
+  expect_error(message, "t.obj:6: ", "has a different form");
+  EXPECT_NE(message.find("cut off"), std::string::npos) << message;
+}
+
+TEST(ObjErrors, ErrorOnCompleteLineDoesNotClaimCutOff) {
+  const std::string message = text_error(tri_vertices + "f 1 2\nf 1 2 3\n");
+  expect_error(message, "t.obj:4: ", "got 2");
+  EXPECT_EQ(message.find("cut off"), std::string::npos) << message;
+}
+
+TEST(ObjErrors, LineNumbersCountCrlfLines) {
+  expect_error(text_error("v 0 0 0\r\n\r\nv 1 0 0\r\nv 0 1\r\nf 1 2 3\r\n"), "t.obj:4: ", "'v' needs 3 coordinates, got 2");
+}
+
+TEST(ObjErrors, EmptyFile) {
+  expect_error(text_error(""), "t.obj: ", "no vertices");
+  expect_error(text_error("# only a comment\n\n"), "t.obj: ", "no vertices");
+}
+
+TEST(ObjErrors, NoFaces) {
+  expect_error(text_error(tri_vertices), "t.obj: ", "no faces ('f' lines) found");
+  expect_error(text_error(tri_vertices + "l 1 2\np 3\n"), "t.obj: ", "no faces");
+}
+
+TEST(ObjErrors, NameInMessageIsTheGivenName) {
+  expect_error(text_error("v 1 0\n", "models/thing.obj"), "models/thing.obj:1: ", "needs 3 coordinates");
+}
+
+TEST_F(ObjFileTest, LoadsFile) {
+  const auto path = write("quad.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n");
+  const Mesh mesh = vkray::load_obj_file(path);
+  EXPECT_EQ(mesh.positions.size(), 4u);
+  EXPECT_EQ(mesh.triangles.size(), 2u);
+}
+
+TEST_F(ObjFileTest, ErrorNamesThePathAndLine) {
+  const auto path = write("bad.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 5\n");
+  expect_error(error_of([&] { vkray::load_obj_file(path); }), path.string() + ":4: ", "vertex index 5 is out of range");
+}
+
+TEST_F(ObjFileTest, TruncatedFile) {
+  const auto path = write("cut.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nf 1 2");
+  const std::string message = error_of([&] { vkray::load_obj_file(path); });
+  expect_error(message, path.string() + ":5: ", "cut off");
+}
+
+TEST_F(ObjFileTest, MissingFile) {
+  const auto path = dir_ / "nope.obj";
+  expect_error(error_of([&] { vkray::load_obj_file(path); }), path.string() + ": ", "no such OBJ file");
+}
+
+TEST_F(ObjFileTest, DirectoryIsNotAnObjFile) {
+  const auto path = dir_ / "folder.obj";
+  std::filesystem::create_directory(path);
+  expect_error(error_of([&] { vkray::load_obj_file(path); }), path.string() + ": ", "is not a regular file");
+}
+
+TEST_F(ObjFileTest, EmptyFile) {
+  const auto path = write("empty.obj", "");
+  expect_error(error_of([&] { vkray::load_obj_file(path); }), path.string() + ": ", "no vertices");
+}
+
+}  // namespace
