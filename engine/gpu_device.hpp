@@ -30,6 +30,9 @@ struct GpuDeviceInfo {
   uint32_t subgroup_size = 0;
   double timestamp_period_ns = 0.0;  // 0: the compute queue has no timestamps
   bool shader_float64 = false;
+  // Loop iterations a shader invocation may run before the driver silently stops it: llvmpipe
+  // (lavapipe) caps them at 65535 in total; 0 for no known limit.
+  uint64_t max_loop_iterations = 0;
 };
 
 // Every Vulkan device, in enumeration order. Throws GpuError when Vulkan itself is unavailable.

@@ -54,10 +54,17 @@ GpuScene make_gpu_scene(const Scene& scene) {
       gpu.triangles.push_back(triangle);
     }
     if (gpu.triangles.size() > first) {
+      while ((gpu.triangles.size() - first) % VKRAY_TRIANGLE_BATCH != 0) gpu.triangles.push_back({});
       gpu.meshes.push_back({lower, upper, glm::uvec4(first, gpu.triangles.size() - first, 0, 0)});
     }
   }
   return gpu;
+}
+
+uint64_t loop_iterations_per_ray(const GpuScene& scene) {
+  uint64_t iterations = scene.spheres.size() + scene.planes.size() + scene.meshes.size();
+  for (const auto& mesh : scene.meshes) iterations += mesh.triangles.y / VKRAY_TRIANGLE_BATCH;
+  return iterations;
 }
 
 gpu::RayGenParams make_ray_gen_params(const CameraBasis& camera, const glm::dvec3& anchor, uint32_t width,

@@ -16,9 +16,13 @@ struct GpuScene {
   glm::dvec3 anchor{0.0};
   std::vector<gpu::GpuSphere> spheres;
   std::vector<gpu::GpuPlane> planes;
-  std::vector<gpu::GpuTriangle> triangles;  // zero-area triangles left out: no ray can hit them
+  // Zero-area triangles left out (no ray can hit them); each mesh padded to whole batches.
+  std::vector<gpu::GpuTriangle> triangles;
   std::vector<gpu::GpuMesh> meshes;         // non-empty meshes only, with their float32 bounds
 };
+
+// Loop iterations one shader invocation runs in the worst case (every mesh box hit).
+uint64_t loop_iterations_per_ray(const GpuScene& scene);
 
 // The anchor is the centre of the bounding box of the finite primitives (spheres, meshes).
 GpuScene make_gpu_scene(const Scene& scene);

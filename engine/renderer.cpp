@@ -116,6 +116,12 @@ Renderer::Renderer(GpuDevice& device, const Scene& scene, RendererOptions option
     const auto start = Clock::now();
     Impl& r = *impl_;
     const GpuScene gpu_scene = make_gpu_scene(scene);
+    const uint64_t loop_limit = r.context.info.max_loop_iterations;
+    if (loop_limit > 0 && loop_iterations_per_ray(gpu_scene) + 16 > loop_limit) {
+      throw GpuError("this scene needs up to " + std::to_string(loop_iterations_per_ray(gpu_scene)) +
+                     " shader loop iterations per pixel, but " + r.context.info.name + " stops a shader after " +
+                     std::to_string(loop_limit) + " and would silently drop geometry; use another device (--device)");
+    }
     r.anchor = gpu_scene.anchor;
     r.placeholder = create_storage_buffer(r.context, 16);
     r.spheres = upload_if_any(r.context, gpu_scene.spheres);

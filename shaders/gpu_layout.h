@@ -65,12 +65,19 @@ struct GpuTriangle {
 };
 VKRAY_CHECK_SIZE(GpuTriangle, 64);
 
+// Each mesh's triangles are padded with all-zero triangles (never hit: their determinant is 0) to a
+// multiple of this batch, which the shader tests in one loop iteration with a constant trip count
+// the compiler unrolls. Besides saving loop overhead this matters on lavapipe: llvmpipe ends a
+// shader invocation's loops after 65535 iterations in total (its guard against endless loops),
+// silently skipping what is left; see GpuDeviceInfo::max_loop_iterations.
+#define VKRAY_TRIANGLE_BATCH 8
+
 // A mesh's bounding box (relative to the anchor; w unused) and its range of triangles: rays that
 // miss the box skip all of them.
 struct GpuMesh {
   vec4 lower;
   vec4 upper;
-  uvec4 triangles;  // x: first triangle, y: triangle count
+  uvec4 triangles;  // x: first triangle, y: triangle count (a multiple of VKRAY_TRIANGLE_BATCH)
 };
 VKRAY_CHECK_SIZE(GpuMesh, 48);
 

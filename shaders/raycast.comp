@@ -8,6 +8,7 @@
 
 layout(local_size_x = VKRAY_WORKGROUP_X, local_size_y = VKRAY_WORKGROUP_Y) in;
 
+
 // A count of 0 removes that primitive loop entirely once the pipeline is specialized.
 layout(constant_id = VKRAY_SPEC_SPHERE_COUNT) const uint SPHERE_COUNT = 0;
 layout(constant_id = VKRAY_SPEC_PLANE_COUNT) const uint PLANE_COUNT = 0;
@@ -77,13 +78,17 @@ void main() {
     vec3 inv_dir = safe_inverse(dir);
     for (uint m = 0; m < MESH_COUNT; ++m) {
       if (!ray_hits_box(meshes[m].lower.xyz, meshes[m].upper.xyz, origin, inv_dir, t_best)) continue;
+      // Triangles come in padded batches (see VKRAY_TRIANGLE_BATCH): one loop iteration each.
       uint end = meshes[m].triangles.x + meshes[m].triangles.y;
-      for (uint i = meshes[m].triangles.x; i < end; ++i) {
-        float t = intersect_triangle(frame, origin, triangles[i].v0.xyz, triangles[i].v1.xyz,
-                                     triangles[i].v2.xyz, t_best);
-        if (t < t_best) {
-          t_best = t;
-          normal = triangles[i].normal.xyz;
+      for (uint batch = meshes[m].triangles.x; batch < end; batch += VKRAY_TRIANGLE_BATCH) {
+        for (uint k = 0; k < VKRAY_TRIANGLE_BATCH; ++k) {
+          uint i = batch + k;
+          float t = intersect_triangle(frame, origin, triangles[i].v0.xyz, triangles[i].v1.xyz,
+                                       triangles[i].v2.xyz, t_best);
+          if (t < t_best) {
+            t_best = t;
+            normal = triangles[i].normal.xyz;
+          }
         }
       }
     }

@@ -3,6 +3,7 @@
 #include "engine/obj_loader.hpp"
 #include "engine/renderer.hpp"
 #include "engine/scene_loader.hpp"
+#include "shaders/gpu_layout.h"
 #include "tests/reference_envelope.hpp"
 
 #include <glm/geometric.hpp>
@@ -181,6 +182,28 @@ TEST(GpuReference, ObjMeshWithQuadsAndNegativeIndices) {
   expect_matches_reference(sized(scene, 72, 56));
 }
 
+// lavapipe stops a shader invocation after 65535 loop iterations in total; a scene that would need
+// more must be refused with a clear error, never rendered with geometry silently missing.
+TEST(GpuRenderer, SceneBeyondTheDriversLoopLimitIsRefused) {
+  const uint64_t limit = device().info().max_loop_iterations;
+  if (limit == 0) GTEST_SKIP() << device().info().name << " has no known loop limit";
+  Scene scene;
+  scene.camera = {{0, 0, 2}, {0, 0, 0}, {0, 1, 0}, 90};
+  const int cells = static_cast<int>(std::sqrt(double(limit) * VKRAY_TRIANGLE_BATCH / 2)) + 8;
+  scene.meshes.push_back(quad_grid({-4, -4, 0}, {8, 0, 0}, {0, 8, 0}, cells));
+  try {
+    Renderer renderer(device(), scene);
+    FAIL() << "a scene of " << scene.triangle_count() << " triangles was accepted";
+  } catch (const GpuError& error) {
+    EXPECT_NE(std::string(error.what()).find("loop iterations"), std::string::npos) << error.what();
+  }
+  // Just below the limit it renders, with every pixel of the grid hit.
+  const int fitting = static_cast<int>(std::sqrt(double(limit - 64) * VKRAY_TRIANGLE_BATCH / 2)) - 1;
+  scene.meshes[0] = quad_grid({-4, -4, 0}, {8, 0, 0}, {0, 8, 0}, fitting);
+  const Frame frame = render(sized(scene, 16, 16));
+  for (size_t p = 0; p < frame.pixel_count(); ++p) ASSERT_TRUE(frame.hit(p)) << "pixel " << p;
+}
+
 TEST(GpuRenderer, TilingGivesIdenticalImages) {
   const Scene scene = sized(default_scene(), 64, 48);
   const AovSet all{Aov::depth, Aov::normal, Aov::uv};
@@ -253,21 +276,49 @@ TEST(GpuRenderer, UvMappingAndUnitDisk) {
   }
 }
 
-// The real meshes of ../shared/models, small enough for the brute-force reference, against it.
+const std::filesystem::path models_dir = VKRAY_MODELS_DIR;
+
+// A mesh from ../shared/models seen from above the front, filling most of the image.
+Scene framed_model(const char* name, uint32_t width, uint32_t height) {
+  Scene scene;
+  scene.meshes.push_back(load_obj_file(models_dir / name));
+  glm::dvec3 lower(INFINITY), upper(-INFINITY);
+  for (const auto& p : scene.meshes[0].positions) lower = glm::min(lower, p), upper = glm::max(upper, p);
+  const glm::dvec3 centre = 0.5 * (lower + upper);
+  const double radius = 0.5 * glm::length(upper - lower);
+  scene.camera = {centre + radius * glm::dvec3(0.9, 1.1, 2.6), centre, {0, 1, 0}, 45};
+  return sized(scene, width, height);
+}
+
+// Real meshes with their defects (quads, n-gons, degenerate triangles, non-manifold edges, a flat
+// mesh), at a size where the brute-force reference is quick.
 TEST(GpuReference, SharedModels) {
-  const std::filesystem::path models = VKRAY_MODELS_DIR;
-  if (!std::filesystem::is_directory(models)) GTEST_SKIP() << "shared models folder " << models << " is absent";
+  if (!std::filesystem::is_directory(models_dir)) GTEST_SKIP() << "shared models folder " << models_dir << " is absent";
   for (const char* name : {"suzanne.obj", "cruiser.obj", "f-16.obj", "obj-spec-cube-negative-indices.obj", "alligator.obj"}) {
     SCOPED_TRACE(name);
-    Scene scene;
-    scene.meshes.push_back(load_obj_file(models / name));
-    glm::dvec3 lower(INFINITY), upper(-INFINITY);
-    for (const auto& p : scene.meshes[0].positions) lower = glm::min(lower, p), upper = glm::max(upper, p);
-    const glm::dvec3 centre = 0.5 * (lower + upper);
-    const double radius = 0.5 * glm::length(upper - lower);
-    scene.camera = {centre + radius * glm::dvec3(0.9, 1.1, 2.6), centre, {0, 1, 0}, 45};
-    expect_matches_reference(sized(scene, 80, 60));
+    expect_matches_reference(framed_model(name, 80, 60));
   }
+}
+
+// Every mesh of ../shared/models (but the truncated one) renders and matches the reference, in a
+// thumbnail so the brute-force reference over up to 124k triangles stays within seconds.
+TEST(GpuReference, EverySharedModelRenders) {
+  if (!std::filesystem::is_directory(models_dir)) GTEST_SKIP() << "shared models folder " << models_dir << " is absent";
+  size_t models = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(models_dir)) {
+    const std::string name = entry.path().filename().string();
+    if (entry.path().extension() != ".obj" || name.find("truncated") != std::string::npos) continue;
+    SCOPED_TRACE(name);
+    const Scene scene = framed_model(name.c_str(), 24, 18);
+    const Frame frame = render(scene);
+    size_t hits = 0;
+    for (size_t p = 0; p < frame.pixel_count(); ++p) hits += frame.hit(p);
+    EXPECT_GT(hits, 0u) << "the framed model is in view";
+    const test::EnvelopeReport report = test::check_against_reference(scene, frame);
+    EXPECT_EQ(report.failures, 0u) << report.describe();
+    ++models;
+  }
+  EXPECT_GE(models, 20u);
 }
 
 }  // namespace

@@ -59,6 +59,9 @@ GpuDeviceInfo describe(const vk::raii::PhysicalDevice& physical_device) {
   info.type = type_name(properties.deviceType);
   const auto& driver = chain.get<vk::PhysicalDeviceDriverProperties>();
   info.driver = std::string(driver.driverName.data()) + " " + driver.driverInfo.data();
+  // LP_MAX_TGSI_LOOP_ITERATIONS in Mesa's gallivm: one counter per shader invocation, shared by
+  // every loop.
+  if (driver.driverID == vk::DriverId::eMesaLlvmpipe) info.max_loop_iterations = 65535;
   info.api_version = std::to_string(VK_API_VERSION_MAJOR(properties.apiVersion)) + "." +
                      std::to_string(VK_API_VERSION_MINOR(properties.apiVersion)) + "." +
                      std::to_string(VK_API_VERSION_PATCH(properties.apiVersion));
