@@ -5,6 +5,8 @@
 #include "engine/renderer.hpp"
 #include "engine/scene_loader.hpp"
 
+#include <algorithm>
+#include <cctype>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
@@ -57,13 +59,31 @@ class Stopwatch {
 
 void print_timing(const char* what, double ms) { std::printf("  %-22s %10.3f ms\n", what, ms); }
 
+// Usage errors that parsing cannot see. The output is always OpenEXR: the image writer picks the
+// format from the extension, so another one would silently write a different (8-bit, lossy) format,
+// or the preview would overwrite it. --check on uv alone would count every hit as a mismatch.
+void check_render_options(const RenderOptions& options, const AovSet& aovs) {
+  std::string extension = std::filesystem::path(options.output).extension().string();
+  std::transform(extension.begin(), extension.end(), extension.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  if (extension != ".exr") throw InputError("-o/--output: '" + options.output + "' must end in .exr (OpenEXR)");
+  if (options.preview && !options.no_preview &&
+      std::filesystem::path(*options.preview).lexically_normal() == std::filesystem::path(options.output).lexically_normal()) {
+    throw InputError("--preview: '" + *options.preview + "' is the OpenEXR output; give another file");
+  }
+  if (options.check && !options.reference && !aovs.needs_rays()) {
+    throw InputError("--check compares depth and normal with the reference; add one of them to --aov");
+  }
+}
+
 int run_render(const RenderOptions& options) {
   Stopwatch stopwatch;
+  const AovSet aovs = parse_aov_list(options.aovs);
+  check_render_options(options, aovs);
   Scene scene = options.scene_path.empty() ? default_scene() : load_scene_file(options.scene_path);
   if (options.width) scene.width = *options.width;
   if (options.height) scene.height = *options.height;
   check_image_size(scene.width, scene.height);
-  const AovSet aovs = parse_aov_list(options.aovs);
   const double load_ms = stopwatch.lap_ms();
 
   Frame frame;

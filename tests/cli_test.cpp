@@ -1,0 +1,737 @@
+// End-to-end tests of the `vkray` command: each test runs the built binary (VKRAY_BINARY) in a
+// temporary folder of its own through the shell, with stdout and stderr redirected into files, and
+// reads the OpenEXR and PNG files it writes back with OpenImageIO. Expected values come from the
+// output contract (channel names, UV formula, camera model) and closed-form scenes, never from the
+// engine's own code.
+#include <OpenImageIO/imageio.h>
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <initializer_list>
+#include <limits>
+#include <map>
+#include <numbers>
+#include <regex>
+#include <set>
+#include <sstream>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#ifndef VKRAY_BINARY
+#error "VKRAY_BINARY comes from CMake"
+#endif
+
+namespace {
+
+namespace fs = std::filesystem;
+
+// ---------------------------------------------------------------------------------------------
+// Running vkray
+
+struct RunResult {
+  std::string args;    // for messages
+  int exit_code = -1;  // the process's exit status; 128 + signal when it was killed
+  std::string out;
+  std::string err;
+};
+
+std::string shell_quote(std::string_view text) {
+  std::string quoted = "'";
+  for (char c : text) quoted += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return quoted + "'";
+}
+
+std::string read_text(const fs::path& path) {
+  std::ifstream file(path, std::ios::binary);
+  std::ostringstream contents;
+  contents << file.rdbuf();
+  return contents.str();
+}
+
+void write_text(const fs::path& path, std::string_view text) {
+  std::ofstream file(path, std::ios::binary);
+  file << text;
+}
+
+size_t count_lines(const std::string& text) { return static_cast<size_t>(std::count(text.begin(), text.end(), '\n')); }
+
+bool starts_with(const std::string& text, std::string_view prefix) { return text.rfind(prefix, 0) == 0; }
+
+bool has_line_starting_with(const std::string& text, std::string_view prefix) {
+  std::istringstream lines(text);
+  for (std::string line; std::getline(lines, line);) {
+    if (starts_with(line, prefix)) return true;
+  }
+  return false;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Reading images back
+
+struct Image {
+  std::string format;  // OpenImageIO's format name: "openexr", "png"
+  int width = 0;
+  int height = 0;
+  std::set<std::string> channel_names;
+  std::map<std::string, std::vector<float>> channels;  // by name, row-major from the top row
+
+  float at(const std::string& channel, int i, int j) const {
+    return channels.at(channel)[static_cast<size_t>(j) * static_cast<size_t>(width) + static_cast<size_t>(i)];
+  }
+};
+
+// Reads every channel as float; with `require_float`, fails unless all of them are stored as float32.
+void read_image(const fs::path& path, Image& image, bool require_float = false) {
+  ASSERT_TRUE(fs::is_regular_file(path)) << path << " was not written";
+  auto input = OIIO::ImageInput::open(path.string());
+  ASSERT_TRUE(input) << path << ": " << OIIO::geterror();
+  const OIIO::ImageSpec& spec = input->spec();
+  image.format = input->format_name();
+  image.width = spec.width;
+  image.height = spec.height;
+  EXPECT_EQ(spec.x, 0);
+  EXPECT_EQ(spec.y, 0);
+  if (require_float) {
+    EXPECT_EQ(spec.format, OIIO::TypeDesc::FLOAT) << path << " is " << spec.format.c_str();
+    for (const auto& format : spec.channelformats) EXPECT_EQ(format, OIIO::TypeDesc::FLOAT) << path;
+  }
+  const size_t pixel_count = static_cast<size_t>(spec.width) * static_cast<size_t>(spec.height);
+  const size_t channel_count = static_cast<size_t>(spec.nchannels);
+  std::vector<float> pixels(pixel_count * channel_count);
+  ASSERT_TRUE(input->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, pixels.data()))
+      << path << ": " << input->geterror();
+  for (size_t c = 0; c < channel_count; ++c) {
+    const std::string& name = spec.channelnames[c];
+    image.channel_names.insert(name);
+    std::vector<float>& values = image.channels[name];
+    values.resize(pixel_count);
+    for (size_t p = 0; p < pixel_count; ++p) values[p] = pixels[p * channel_count + c];
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// The contract's image plane and camera model, written out independently of the engine
+
+using Vec3 = std::array<double, 3>;
+
+Vec3 operator-(const Vec3& a, const Vec3& b) { return {a[0] - b[0], a[1] - b[1], a[2] - b[2]}; }
+Vec3 operator+(const Vec3& a, const Vec3& b) { return {a[0] + b[0], a[1] + b[1], a[2] + b[2]}; }
+Vec3 operator*(double s, const Vec3& a) { return {s * a[0], s * a[1], s * a[2]}; }
+double dot(const Vec3& a, const Vec3& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+Vec3 cross(const Vec3& a, const Vec3& b) {
+  return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
+}
+Vec3 normalize(const Vec3& a) { return (1.0 / std::sqrt(dot(a, a))) * a; }
+
+// Pixel (i, j), j from the top row: x = (2(i+0.5) - W)/min(W,H), y = (H - 2(j+0.5))/min(W,H).
+std::array<double, 2> pixel_uv(int i, int j, int width, int height) {
+  const double shorter = std::min(width, height);
+  return {(2.0 * (i + 0.5) - width) / shorter, (height - 2.0 * (j + 0.5)) / shorter};
+}
+
+struct PinholeCamera {
+  Vec3 from, to, up;
+  double fovy_degrees;
+
+  // The course camera: forward = normalize(from - to), right = normalize(up x forward),
+  // up' = forward x right, image plane at d = sy / tan(fovy/2) with sy = H / min(W, H).
+  Vec3 direction(int i, int j, int width, int height) const {
+    const Vec3 forward = normalize(from - to);
+    const Vec3 right = normalize(cross(up, forward));
+    const Vec3 true_up = cross(forward, right);
+    const double sy = static_cast<double>(height) / std::min(width, height);
+    const double d = sy / std::tan(fovy_degrees * std::numbers::pi / 360.0);
+    const auto uv = pixel_uv(i, j, width, height);
+    return normalize(uv[0] * right + uv[1] * true_up - d * forward);
+  }
+};
+
+double relative_error(double value, double expected) { return std::abs(value - expected) / std::abs(expected); }
+
+constexpr float infinity = std::numeric_limits<float>::infinity();
+
+// The per-pixel invariants of the depth and normal outputs and A that hold for any scene: A is 0 or
+// 1; a hit has finite Z > 0 and a unit normal, a miss Z = +inf and N = 0. Reports the first few
+// offending pixels.
+void expect_hit_invariants(const Image& exr) {
+  const bool has_depth = exr.channel_names.count("Z") != 0, has_normal = exr.channel_names.count("N.X") != 0;
+  ASSERT_TRUE(exr.channel_names.count("A")) << "depth or normal come with A";
+  int failures = 0;
+  for (int j = 0; j < exr.height; ++j) {
+    for (int i = 0; i < exr.width; ++i) {
+      std::ostringstream problem;
+      const float a = exr.at("A", i, j);
+      if (a != 0.0f && a != 1.0f) problem << " A = " << a << " is neither 0 nor 1;";
+      const bool hit = a == 1.0f;
+      if (has_depth) {
+        const float z = exr.at("Z", i, j);
+        if (hit && !(std::isfinite(z) && z > 0.0f)) problem << " a hit with Z = " << z << ";";
+        if (!hit && z != infinity) problem << " a miss with Z = " << z << " (expected +inf);";
+      }
+      if (has_normal) {
+        const Vec3 n{exr.at("N.X", i, j), exr.at("N.Y", i, j), exr.at("N.Z", i, j)};
+        const double length = std::sqrt(dot(n, n));
+        if (hit && !(std::abs(length - 1.0) <= 1e-5)) problem << " a hit with |N| = " << length << ";";
+        if (!hit && length != 0.0) problem << " a miss with N = " << n[0] << ", " << n[1] << ", " << n[2] << ";";
+      }
+      if (!problem.str().empty() && ++failures <= 10) {
+        ADD_FAILURE() << "pixel (" << i << ", " << j << "):" << problem.str();
+      }
+    }
+  }
+  EXPECT_EQ(failures, 0) << "pixels breaking the hit/miss invariants";
+}
+
+std::set<std::string> names(std::initializer_list<const char*> list) { return {list.begin(), list.end()}; }
+
+// ---------------------------------------------------------------------------------------------
+// Fixture: a temporary folder per test, where vkray runs
+
+class CliTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    const auto* test = ::testing::UnitTest::GetInstance()->current_test_info();
+    dir_ = fs::temp_directory_path() /
+           ("vkray_cli_" + std::string(test->name()) + "_" + std::to_string(static_cast<long>(getpid())));
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+
+  // Kept after a failure so the files can be looked at.
+  void TearDown() override {
+    if (!HasFailure()) {
+      std::error_code ignored;
+      fs::remove_all(dir_, ignored);
+    }
+  }
+
+  // Runs vkray with `args` in the test's folder; a hung run is killed after 120 s (exit 124).
+  RunResult vkray(std::initializer_list<std::string> args) const {
+    std::string command = "cd " + shell_quote(dir_.string()) + " && exec timeout 120 " + shell_quote(VKRAY_BINARY);
+    for (const auto& arg : args) command += " " + shell_quote(arg);
+    const fs::path out = dir_ / "stdout.txt", err = dir_ / "stderr.txt";
+    command += " >" + shell_quote(out.string()) + " 2>" + shell_quote(err.string()) + " </dev/null";
+    const int status = std::system(command.c_str());
+    RunResult result;
+    for (const auto& arg : args) result.args += (result.args.empty() ? "" : " ") + shell_quote(arg);
+    if (status != -1 && WIFEXITED(status)) result.exit_code = WEXITSTATUS(status);
+    if (status != -1 && WIFSIGNALED(status)) result.exit_code = 128 + WTERMSIG(status);
+    result.out = read_text(out);
+    result.err = read_text(err);
+    fs::remove(out);
+    fs::remove(err);
+    return result;
+  }
+
+  fs::path path(const std::string& name) const { return dir_ / name; }
+  void write(const std::string& name, std::string_view text) const { write_text(dir_ / name, text); }
+
+  // A usage, input or runtime error: the exit code, one line on stderr that starts with "vkray: ",
+  // nothing on stdout and no image written.
+  void expect_error(const RunResult& run, int exit_code, std::initializer_list<std::string> mentions) const {
+    SCOPED_TRACE("vkray " + run.args);
+    EXPECT_EQ(run.exit_code, exit_code) << "stderr: " << run.err;
+    EXPECT_EQ(count_lines(run.err), 1u) << "stderr must be one line, got: " << run.err;
+    EXPECT_TRUE(!run.err.empty() && run.err.back() == '\n') << run.err;
+    EXPECT_TRUE(starts_with(run.err, "vkray: ")) << run.err;
+    for (const auto& text : mentions) EXPECT_NE(run.err.find(text), std::string::npos) << "'" << text << "' not in: " << run.err;
+    EXPECT_EQ(run.out, "");
+    for (const auto& entry : fs::directory_iterator(dir_)) {
+      const auto extension = entry.path().extension();
+      EXPECT_TRUE(extension != ".exr" && extension != ".png") << entry.path() << " written despite the error";
+    }
+  }
+
+  fs::path dir_;
+};
+
+// A camera on +z looking at a unit sphere at the origin; 33 is odd, so the centre pixel's ray is
+// exactly the -z axis and hits at distance 4 with normal +z.
+constexpr const char* sphere_scene = R"({
+  "camera": {"from": [0, 0, 5], "to": [0, 0, 0], "up": [0, 1, 0], "fovy": 30},
+  "image": {"width": 33, "height": 33},
+  "spheres": [{"center": [0, 0, 0], "radius": 1}]
+})";
+
+// Checks every pixel of a render of sphere_scene against the closed-form ray/sphere intersection:
+// from O = (0,0,5) along unit D, t = -b - sqrt(b^2 - 24) with b = O.D, normal (O + tD) / 1. Pixels
+// whose rays graze the silhouette (|b^2 - 24| < 0.05) are left out: float32 cannot classify them.
+void expect_sphere_closed_form(const Image& exr) {
+  ASSERT_EQ(exr.width, 33);
+  ASSERT_EQ(exr.height, 33);
+  // The centre pixel, to float precision.
+  EXPECT_NEAR(exr.at("Z", 16, 16), 4.0, 4.0 * 1e-6);
+  EXPECT_NEAR(exr.at("N.X", 16, 16), 0.0, 1e-6);
+  EXPECT_NEAR(exr.at("N.Y", 16, 16), 0.0, 1e-6);
+  EXPECT_NEAR(exr.at("N.Z", 16, 16), 1.0, 1e-6);
+  EXPECT_EQ(exr.at("A", 16, 16), 1.0f);
+
+  const PinholeCamera camera{{0, 0, 5}, {0, 0, 0}, {0, 1, 0}, 30.0};
+  const Vec3 origin{0, 0, 5};
+  int hits = 0, misses = 0;
+  for (int j = 0; j < 33; ++j) {
+    for (int i = 0; i < 33; ++i) {
+      SCOPED_TRACE("pixel (" + std::to_string(i) + ", " + std::to_string(j) + ")");
+      const Vec3 d = camera.direction(i, j, 33, 33);
+      const double b = dot(origin, d), discriminant = b * b - 24.0;
+      if (std::abs(discriminant) < 0.05) continue;
+      if (discriminant < 0.0) {
+        ++misses;
+        EXPECT_EQ(exr.at("A", i, j), 0.0f);
+        EXPECT_EQ(exr.at("Z", i, j), infinity);
+        continue;
+      }
+      ++hits;
+      const double t = -b - std::sqrt(discriminant);
+      const Vec3 n = origin + t * d;
+      ASSERT_EQ(exr.at("A", i, j), 1.0f);
+      EXPECT_LT(relative_error(exr.at("Z", i, j), t), 1e-5) << "Z = " << exr.at("Z", i, j) << ", expected " << t;
+      EXPECT_NEAR(exr.at("N.X", i, j), n[0], 1e-4);
+      EXPECT_NEAR(exr.at("N.Y", i, j), n[1], 1e-4);
+      EXPECT_NEAR(exr.at("N.Z", i, j), n[2], 1e-4);
+    }
+  }
+  // The sphere's silhouette has a radius of about 12.5 pixels: ~490 hit, ~560 miss.
+  EXPECT_GT(hits, 400);
+  EXPECT_GT(misses, 450);
+}
+
+// ---------------------------------------------------------------------------------------------
+// 1. The default scene
+
+TEST_F(CliTest, DefaultSceneWritesContractChannels) {
+  const RunResult run = vkray({"render", "--width", "64", "--height", "48", "-o", "out.exr"});
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_TRUE(starts_with(run.out, "vkray: wrote out.exr and out.png (64x48, depth,normal) on ")) << run.out;
+  EXPECT_EQ(count_lines(run.out), 1u) << run.out;
+
+  Image exr;
+  ASSERT_NO_FATAL_FAILURE(read_image(path("out.exr"), exr, true));
+  EXPECT_EQ(exr.format, "openexr");
+  EXPECT_EQ(exr.channel_names, names({"Z", "N.X", "N.Y", "N.Z", "A"}));
+  ASSERT_EQ(exr.width, 64);
+  ASSERT_EQ(exr.height, 48);
+  ASSERT_EQ(exr.channel_names.size(), 5u);
+  expect_hit_invariants(exr);
+
+  // Top row: the camera looks 10 degrees down with a 45 degree field of view, so the top row sees
+  // sky above every object.
+  for (int i = 0; i < 64; ++i) {
+    EXPECT_EQ(exr.at("A", i, 0), 0.0f) << "top row, pixel " << i;
+    EXPECT_EQ(exr.at("Z", i, 0), infinity) << "top row, pixel " << i;
+  }
+  // Bottom row: the ground plane y = 0 in front of every object, seen from y = 1.8, so the depth
+  // is 1.8 / -dir.y along the contract's camera ray and the normal is +y.
+  const PinholeCamera camera{{0.0, 1.8, 6.0}, {0.0, 0.7, 0.0}, {0, 1, 0}, 45.0};
+  for (int i = 0; i < 64; ++i) {
+    SCOPED_TRACE("bottom row, pixel " + std::to_string(i));
+    ASSERT_EQ(exr.at("A", i, 47), 1.0f);
+    const double expected = 1.8 / -camera.direction(i, 47, 64, 48)[1];
+    EXPECT_LT(relative_error(exr.at("Z", i, 47), expected), 1e-5) << exr.at("Z", i, 47) << " vs " << expected;
+    EXPECT_NEAR(exr.at("N.X", i, 47), 0.0, 1e-6);
+    EXPECT_NEAR(exr.at("N.Y", i, 47), 1.0, 1e-6);
+    EXPECT_NEAR(exr.at("N.Z", i, 47), 0.0, 1e-6);
+  }
+
+  Image png;
+  ASSERT_NO_FATAL_FAILURE(read_image(path("out.png"), png));
+  EXPECT_EQ(png.format, "png");
+  EXPECT_EQ(png.width, 2 * 64) << "one panel per output";
+  EXPECT_EQ(png.height, 48);
+}
+
+// The built-in scene has its own size (800x600) when no --width/--height is given, and the
+// default output is render.exr in the working folder.
+TEST_F(CliTest, DefaultOutputNameAndSceneSize) {
+  const RunResult run = vkray({"render", "--no-preview"});
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_TRUE(starts_with(run.out, "vkray: wrote render.exr (800x600, depth,normal) on ")) << run.out;
+  Image exr;
+  ASSERT_NO_FATAL_FAILURE(read_image(path("render.exr"), exr, true));
+  EXPECT_EQ(exr.width, 800);
+  EXPECT_EQ(exr.height, 600);
+  EXPECT_FALSE(fs::exists(path("render.png"))) << "--no-preview wrote a preview";
+}
+
+// ---------------------------------------------------------------------------------------------
+// 2. Scenes with closed-form answers
+
+TEST_F(CliTest, SphereSceneMatchesClosedForm) {
+  write("sphere.json", sphere_scene);
+  const RunResult run = vkray({"render", "sphere.json", "-o", "sphere.exr"});
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_NE(run.out.find("(33x33, depth,normal)"), std::string::npos) << "the scene's image size: " << run.out;
+  Image exr;
+  ASSERT_NO_FATAL_FAILURE(read_image(path("sphere.exr"), exr, true));
+  EXPECT_EQ(exr.channel_names, names({"Z", "N.X", "N.Y", "N.Z", "A"}));
+  expect_hit_invariants(exr);
+  expect_sphere_closed_form(exr);
+}
+
+// The double-precision CPU reference (--reference) writes the same contract.
+TEST_F(CliTest, ReferenceRendererMatchesClosedForm) {
+  write("sphere.json", sphere_scene);
+  const RunResult run = vkray({"render", "sphere.json", "--reference", "--no-preview", "-o", "sphere.exr"});
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_EQ(run.out, "vkray: wrote sphere.exr (33x33, depth,normal) on CPU reference (double precision)\n");
+  EXPECT_FALSE(fs::exists(path("sphere.png")));
+  Image exr;
+  ASSERT_NO_FATAL_FAILURE(read_image(path("sphere.exr"), exr, true));
+  EXPECT_EQ(exr.channel_names, names({"Z", "N.X", "N.Y", "N.Z", "A"}));
+  expect_hit_invariants(exr);
+  expect_sphere_closed_form(exr);
+}
+
+// A camera at height h looking straight down at the plane y = 0: every ray hits, at distance
+// h * sqrt(x^2 + y^2 + d^2) / d for image-plane point (x, y), d = sy / tan(fovy / 2). The image is
+// portrait (sy = 1.5), and the plane's normal is given pointing away from the camera, unnormalised:
+// the output normal must still be the unit normal facing the ray, +y.
+TEST_F(CliTest, PlaneSceneDepthMatchesClosedFormEverywhere) {
+  write("plane.json", R"({
+    "camera": {"from": [0, 2.5, 0], "to": [0, 0, 0], "up": [0, 0, -1], "fovy": 60},
+    "planes": [{"point": [0, 0, 0], "normal": [0, -3, 0]}]
+  })");
+  const int width = 24, height = 36;
+  const RunResult run = vkray({"render", "plane.json", "--width", "24", "--height", "36", "-o", "plane.exr"});
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  Image exr;
+  ASSERT_NO_FATAL_FAILURE(read_image(path("plane.exr"), exr, true));
+  ASSERT_EQ(exr.width, width);
+  ASSERT_EQ(exr.height, height);
+  const double h = 2.5, sy = 36.0 / 24.0, d = sy / std::tan(30.0 * std::numbers::pi / 180.0);
+  int failures = 0;
+  for (int j = 0; j < height; ++j) {
+    for (int i = 0; i < width; ++i) {
+      const auto [x, y] = pixel_uv(i, j, width, height);
+      const double expected = h * std::sqrt(x * x + y * y + d * d) / d;
+      const float z = exr.at("Z", i, j);
+      const bool ok = exr.at("A", i, j) == 1.0f && relative_error(z, expected) < 1e-5 &&
+                      std::abs(exr.at("N.X", i, j)) < 1e-6f && std::abs(exr.at("N.Y", i, j) - 1.0f) < 1e-6f &&
+                      std::abs(exr.at("N.Z", i, j)) < 1e-6f;
+      if (!ok && ++failures <= 10) {
+        ADD_FAILURE() << "pixel (" << i << ", " << j << "): A = " << exr.at("A", i, j) << ", Z = " << z << " (expected "
+                      << expected << "), N = " << exr.at("N.X", i, j) << ", " << exr.at("N.Y", i, j) << ", "
+                      << exr.at("N.Z", i, j) << " (expected 0, 1, 0)";
+      }
+    }
+  }
+  EXPECT_EQ(failures, 0);
+}
+
+// ---------------------------------------------------------------------------------------------
+// 3. and 4. Choosing outputs with --aov
+
+TEST_F(CliTest, UvOnlyMatchesImagePlaneFormula) {
+  for (const auto& [width, height] : {std::pair{40, 20}, std::pair{20, 40}, std::pair{7, 7}}) {
+    SCOPED_TRACE(std::to_string(width) + "x" + std::to_string(height));
+    const std::string size = std::to_string(width) + "x" + std::to_string(height);
+    const RunResult run = vkray({"render", "--aov", "uv", "--width", std::to_string(width), "--height",
+                                 std::to_string(height), "-o", "uv" + size + ".exr"});
+    ASSERT_EQ(run.exit_code, 0) << run.err;
+    EXPECT_NE(run.out.find("(" + size + ", uv)"), std::string::npos) << run.out;
+    Image exr;
+    ASSERT_NO_FATAL_FAILURE(read_image(path("uv" + size + ".exr"), exr, true));
+    EXPECT_EQ(exr.channel_names, names({"U", "V"})) << "uv alone has no A";
+    ASSERT_EQ(exr.width, width);
+    ASSERT_EQ(exr.height, height);
+    ASSERT_EQ(exr.channel_names.size(), 2u);
+    int failures = 0;
+    for (int j = 0; j < height; ++j) {
+      for (int i = 0; i < width; ++i) {
+        const auto [x, y] = pixel_uv(i, j, width, height);
+        if ((std::abs(exr.at("U", i, j) - x) > 1e-6 || std::abs(exr.at("V", i, j) - y) > 1e-6) && ++failures <= 10) {
+          ADD_FAILURE() << "pixel (" << i << ", " << j << "): UV = " << exr.at("U", i, j) << ", " << exr.at("V", i, j)
+                        << ", expected " << x << ", " << y;
+        }
+      }
+    }
+    // The shorter side spans [-1, 1]: the outermost pixel centres sit half a pixel inside it.
+    const int shorter = std::min(width, height);
+    const std::string across = width <= height ? "U" : "V";
+    const auto [lowest, highest] = std::minmax_element(exr.channels[across].begin(), exr.channels[across].end());
+    EXPECT_NEAR(*highest, 1.0 - 1.0 / shorter, 1e-6);
+    EXPECT_NEAR(*lowest, -(1.0 - 1.0 / shorter), 1e-6);
+
+    Image png;
+    ASSERT_NO_FATAL_FAILURE(read_image(path("uv" + size + ".png"), png));
+    EXPECT_EQ(png.width, width);
+    EXPECT_EQ(png.height, height);
+  }
+}
+
+// --aov depth and --aov normal alone write only their channels (and A), with the same values as a
+// render of both; all three outputs give three preview panels.
+TEST_F(CliTest, AovSelectsChannels) {
+  RunResult run = vkray({"render", "--width", "40", "--height", "30", "-o", "both.exr"});
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  Image both;
+  ASSERT_NO_FATAL_FAILURE(read_image(path("both.exr"), both, true));
+
+  run = vkray({"render", "--aov", "depth", "--width", "40", "--height", "30", "-o", "depth.exr"});
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_NE(run.out.find("(40x30, depth)"), std::string::npos) << run.out;
+  Image depth;
+  ASSERT_NO_FATAL_FAILURE(read_image(path("depth.exr"), depth, true));
+  EXPECT_EQ(depth.channel_names, names({"Z", "A"}));
+  expect_hit_invariants(depth);
+
+  run = vkray({"render", "--aov", "normal", "--width", "40", "--height", "30", "-o", "normal.exr"});
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_NE(run.out.find("(40x30, normal)"), std::string::npos) << run.out;
+  Image normal;
+  ASSERT_NO_FATAL_FAILURE(read_image(path("normal.exr"), normal, true));
+  EXPECT_EQ(normal.channel_names, names({"N.X", "N.Y", "N.Z", "A"}));
+  expect_hit_invariants(normal);
+
+  ASSERT_EQ(depth.width, 40);
+  ASSERT_EQ(normal.width, 40);
+  ASSERT_EQ(depth.height, 30);
+  ASSERT_EQ(normal.height, 30);
+  int failures = 0;
+  for (int j = 0; j < 30; ++j) {
+    for (int i = 0; i < 40; ++i) {
+      const float z = both.at("Z", i, j), z_alone = depth.at("Z", i, j);
+      const bool same = both.at("A", i, j) == depth.at("A", i, j) && both.at("A", i, j) == normal.at("A", i, j) &&
+                        (z == z_alone || relative_error(z_alone, z) < 1e-6) &&
+                        std::abs(both.at("N.X", i, j) - normal.at("N.X", i, j)) < 1e-6f &&
+                        std::abs(both.at("N.Y", i, j) - normal.at("N.Y", i, j)) < 1e-6f &&
+                        std::abs(both.at("N.Z", i, j) - normal.at("N.Z", i, j)) < 1e-6f;
+      if (!same && ++failures <= 10) ADD_FAILURE() << "pixel (" << i << ", " << j << ") differs between renders";
+    }
+  }
+  for (const char* name : {"depth.png", "normal.png"}) {
+    Image png;
+    ASSERT_NO_FATAL_FAILURE(read_image(path(name), png));
+    EXPECT_EQ(png.width, 40) << name;
+  }
+
+  run = vkray({"render", "--aov", "uv,normal,depth", "--width", "40", "--height", "30", "-o", "all.exr", "--preview",
+               "panels.png"});
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_TRUE(starts_with(run.out, "vkray: wrote all.exr and panels.png (40x30, depth,normal,uv) on ")) << run.out;
+  Image all;
+  ASSERT_NO_FATAL_FAILURE(read_image(path("all.exr"), all, true));
+  EXPECT_EQ(all.channel_names, names({"Z", "N.X", "N.Y", "N.Z", "U", "V", "A"}));
+  expect_hit_invariants(all);
+  EXPECT_FALSE(fs::exists(path("all.png"))) << "--preview names the preview";
+  Image png;
+  ASSERT_NO_FATAL_FAILURE(read_image(path("panels.png"), png));
+  EXPECT_EQ(png.width, 3 * 40);
+  EXPECT_EQ(png.height, 30);
+}
+
+// ---------------------------------------------------------------------------------------------
+// 5. Errors: exit 2 for usage and input, 1 for runtime failures, always one line on stderr
+
+TEST_F(CliTest, OutputInMissingFolderExitsOne) {
+  const std::string output = (dir_ / "no-such-folder" / "out.exr").string();
+  const RunResult run = vkray({"render", "--width", "8", "--height", "8", "-o", output});
+  expect_error(run, 1, {output});
+  EXPECT_FALSE(fs::exists(dir_ / "no-such-folder"));
+}
+
+TEST_F(CliTest, UnwritablePreviewExitsOne) {
+  const std::string preview = (dir_ / "no-such-folder" / "out.png").string();
+  const RunResult run = vkray({"render", "--width", "8", "--height", "8", "-o", "out.exr", "--preview", preview});
+  EXPECT_EQ(run.exit_code, 1) << run.err;
+  EXPECT_EQ(count_lines(run.err), 1u) << run.err;
+  EXPECT_NE(run.err.find(preview), std::string::npos) << run.err;
+}
+
+TEST_F(CliTest, InvalidSceneValueExitsTwoNamingFileAndJsonPath) {
+  write("bad.json", R"({
+    "camera": {"from": [0, 0, 5], "to": [0, 0, 0], "fovy": 30},
+    "spheres": [{"center": [0, 0, 0], "radius": -1}]
+  })");
+  const RunResult run = vkray({"render", "bad.json", "-o", "out.exr"});
+  expect_error(run, 2, {"bad.json: spheres[0].radius: "});
+
+  write("typo.json", R"({"camera": {"from": [0, 0, 5], "to": [0, 0, 0], "fovy": 30}, "sphere": []})");
+  expect_error(vkray({"render", "typo.json", "-o", "out.exr"}), 2, {"typo.json: sphere: ", "spheres"});
+}
+
+TEST_F(CliTest, InvalidJsonExitsTwoNamingFileAndLine) {
+  write("broken.json", "{\n  \"camera\": {\"from\": [0, 0, 5], \"to\": [0, 0, 0], \"fovy\": 30},\n  \"spheres\": [,]\n}\n");
+  expect_error(vkray({"render", "broken.json", "-o", "out.exr"}), 2, {"broken.json:3:", "invalid JSON"});
+}
+
+TEST_F(CliTest, MissingSceneFileExitsTwo) {
+  expect_error(vkray({"render", "no-such-scene.json", "-o", "out.exr"}), 2, {"no-such-scene.json"});
+}
+
+TEST_F(CliTest, TruncatedObjExitsTwoNamingObjAndLine) {
+  write("cut.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2");  // the last face cut off mid-line
+  write("cut.json", R"({
+    "camera": {"from": [0, 0, 5], "to": [0, 0, 0], "fovy": 30},
+    "meshes": [{"obj": "cut.obj"}]
+  })");
+  expect_error(vkray({"render", "cut.json", "-o", "out.exr"}), 2, {"cut.json", "meshes[0].obj", "cut.obj:4:"});
+}
+
+TEST_F(CliTest, UnknownDeviceExitsOne) {
+  expect_error(vkray({"render", "--width", "8", "--height", "8", "--device", "no-such-device", "-o", "out.exr"}), 1,
+               {"no-such-device"});
+  expect_error(vkray({"info", "--device", "no-such-device"}), 1, {"no-such-device"});
+}
+
+TEST_F(CliTest, BadImageSizeExitsTwo) {
+  expect_error(vkray({"render", "--width", "0", "-o", "out.exr"}), 2, {"0x600"});
+  expect_error(vkray({"render", "--height", "0", "-o", "out.exr"}), 2, {"800x0"});
+  expect_error(vkray({"render", "--width", "65537", "--height", "1", "-o", "out.exr"}), 2, {"65537x1"});
+  expect_error(vkray({"render", "--width", "-1", "-o", "out.exr"}), 2, {"--width"});
+  expect_error(vkray({"render", "--width", "ten", "-o", "out.exr"}), 2, {"--width"});
+}
+
+TEST_F(CliTest, BadAovExitsTwo) {
+  expect_error(vkray({"render", "--aov", "bogus", "-o", "out.exr"}), 2, {"bogus", "depth, normal, uv"});
+  expect_error(vkray({"render", "--aov", "depth,", "-o", "out.exr"}), 2, {"--aov"});
+  expect_error(vkray({"render", "--aov", "", "-o", "out.exr"}), 2, {"--aov"});
+}
+
+TEST_F(CliTest, UsageErrorsExitTwo) {
+  expect_error(vkray({}), 2, {"subcommand"});
+  expect_error(vkray({"bogus"}), 2, {});
+  expect_error(vkray({"--bogus"}), 2, {});
+  expect_error(vkray({"render", "--bogus"}), 2, {"--bogus"});
+  expect_error(vkray({"render", "a.json", "b.json"}), 2, {"b.json"});
+  expect_error(vkray({"info", "--bogus"}), 2, {"--bogus"});
+}
+
+// The output is OpenEXR whatever its name would make the image writer choose, and the preview never
+// replaces it.
+TEST_F(CliTest, NonExrOutputExitsTwo) {
+  expect_error(vkray({"render", "--aov", "normal", "--width", "8", "--height", "8", "-o", "out.png"}), 2, {"out.png"});
+  expect_error(vkray({"render", "--width", "8", "--height", "8", "-o", "out.tif"}), 2, {"out.tif"});
+  expect_error(vkray({"render", "--width", "8", "--height", "8", "-o", "out"}), 2, {"out"});
+  expect_error(vkray({"render", "--width", "8", "--height", "8", "-o", "out.exr", "--preview", "./out.exr"}), 2,
+               {"--preview"});
+  const RunResult run = vkray({"render", "--width", "8", "--height", "8", "-o", "upper.EXR", "--no-preview"});
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  Image exr;
+  ASSERT_NO_FATAL_FAILURE(read_image(path("upper.EXR"), exr, true));
+  EXPECT_EQ(exr.format, "openexr");
+}
+
+// --check measures hits against the reference, which uv alone does not have.
+TEST_F(CliTest, CheckWithUvOnlyExitsTwo) {
+  expect_error(vkray({"render", "--aov", "uv", "--check", "--width", "8", "--height", "8", "-o", "out.exr"}), 2,
+               {"--check"});
+}
+
+// ---------------------------------------------------------------------------------------------
+// 6. and 7. Help, version and device information
+
+std::string project_version() {
+  const fs::path cmake_lists = fs::path(__FILE__).parent_path().parent_path() / "CMakeLists.txt";
+  const std::string text = read_text(cmake_lists);
+  std::smatch match;
+  if (!std::regex_search(text, match, std::regex(R"(project\(\s*vkray\s+VERSION\s+([0-9.]+))"))) return {};
+  return match[1];
+}
+
+TEST_F(CliTest, HelpAndVersionPrintToStdout) {
+  RunResult run = vkray({"--help"});
+  EXPECT_EQ(run.exit_code, 0);
+  EXPECT_EQ(run.err, "");
+  EXPECT_NE(run.out.find("render"), std::string::npos) << run.out;
+  EXPECT_NE(run.out.find("info"), std::string::npos) << run.out;
+
+  run = vkray({"render", "--help"});
+  EXPECT_EQ(run.exit_code, 0);
+  EXPECT_EQ(run.err, "");
+  for (const char* option : {"--aov", "--width", "--height", "-o,--output", "--preview", "--no-preview", "--device",
+                             "--timings", "--check", "--reference", "depth, normal, uv"}) {
+    EXPECT_NE(run.out.find(option), std::string::npos) << option << " missing from: " << run.out;
+  }
+
+  const std::string version = project_version();
+  ASSERT_FALSE(version.empty()) << "no project(vkray VERSION ...) in the top-level CMakeLists.txt";
+  run = vkray({"--version"});
+  EXPECT_EQ(run.exit_code, 0);
+  EXPECT_EQ(run.err, "");
+  EXPECT_EQ(run.out, "vkray " + version + "\n");
+}
+
+TEST_F(CliTest, InfoMarksTheChosenDevice) {
+  const RunResult run = vkray({"info"});
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_TRUE(has_line_starting_with(run.out, "* [")) << run.out;
+  EXPECT_TRUE(has_line_starting_with(run.out, "vkray uses [")) << run.out;
+  // The device marked "* [k] NAME" is the one "vkray uses [k] NAME" names.
+  std::smatch chosen, uses;
+  ASSERT_TRUE(std::regex_search(run.out, chosen, std::regex(R"((^|\n)\* (\[[0-9]+\] [^\n(]*))")));
+  ASSERT_TRUE(std::regex_search(run.out, uses, std::regex(R"(\nvkray uses (\[[0-9]+\] [^\n]*))")));
+  EXPECT_TRUE(starts_with(uses[1].str(), chosen[2].str())) << run.out;
+}
+
+// ---------------------------------------------------------------------------------------------
+// 8. Extremes and reports
+
+TEST_F(CliTest, OnePixelImage) {
+  const RunResult run = vkray({"render", "--width", "1", "--height", "1", "-o", "one.exr", "--timings"});
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_TRUE(starts_with(run.out, "vkray: wrote one.exr and one.png (1x1, depth,normal) on ")) << run.out;
+  EXPECT_TRUE(has_line_starting_with(run.out, "timings:")) << run.out;
+  EXPECT_TRUE(has_line_starting_with(run.out, "  dispatch (GPU)")) << run.out;
+  Image exr;
+  ASSERT_NO_FATAL_FAILURE(read_image(path("one.exr"), exr, true));
+  EXPECT_EQ(exr.width, 1);
+  EXPECT_EQ(exr.height, 1);
+  EXPECT_EQ(exr.channel_names, names({"Z", "N.X", "N.Y", "N.Z", "A"}));
+  expect_hit_invariants(exr);
+  // The single ray is the view direction, from (0, 1.8, 6) towards (0, 0.7, 0). It meets the
+  // built-in cube (the box [-0.7, 0.7] x [0, 1.4] x [-0.7, 0.7] turned 30 degrees about +y and moved
+  // to (0.4, 0, -1.6)) before the ground: a slab test in the cube's frame gives the distance and face.
+  const Vec3 from{0.0, 1.8, 6.0}, direction = normalize(Vec3{0.0, 0.7, 0.0} - from), centre{0.4, 0.0, -1.6};
+  const double c = std::cos(std::numbers::pi / 6), s = std::sin(std::numbers::pi / 6);
+  auto to_cube = [&](const Vec3& v) { return Vec3{c * v[0] - s * v[2], v[1], s * v[0] + c * v[2]}; };
+  auto from_cube = [&](const Vec3& v) { return Vec3{c * v[0] + s * v[2], v[1], -s * v[0] + c * v[2]}; };
+  const Vec3 origin = to_cube(from - centre), d = to_cube(direction);
+  const Vec3 low{-0.7, 0.0, -0.7}, high{0.7, 1.4, 0.7};
+  double t_enter = -INFINITY, t_exit = INFINITY;
+  Vec3 face{0, 0, 0};
+  for (size_t axis = 0; axis < 3; ++axis) {
+    const double t1 = (low[axis] - origin[axis]) / d[axis], t2 = (high[axis] - origin[axis]) / d[axis];
+    if (std::min(t1, t2) > t_enter) {
+      t_enter = std::min(t1, t2);
+      face = Vec3{0, 0, 0};
+      face[axis] = d[axis] > 0 ? -1.0 : 1.0;
+    }
+    t_exit = std::min(t_exit, std::max(t1, t2));
+  }
+  ASSERT_LT(t_enter, t_exit) << "the test's own geometry: the view ray must meet the cube";
+  ASSERT_LT(t_enter, 1.8 / -direction[1]) << "the test's own geometry: the cube must be in front of the ground";
+  const Vec3 normal = from_cube(face);
+  EXPECT_EQ(exr.at("A", 0, 0), 1.0f);
+  EXPECT_LT(relative_error(exr.at("Z", 0, 0), t_enter), 1e-5) << exr.at("Z", 0, 0) << " vs " << t_enter;
+  EXPECT_NEAR(exr.at("N.X", 0, 0), normal[0], 1e-5);
+  EXPECT_NEAR(exr.at("N.Y", 0, 0), normal[1], 1e-5);
+  EXPECT_NEAR(exr.at("N.Z", 0, 0), normal[2], 1e-5);
+  Image png;
+  ASSERT_NO_FATAL_FAILURE(read_image(path("one.png"), png));
+  EXPECT_EQ(png.width, 2);
+  EXPECT_EQ(png.height, 1);
+}
+
+TEST_F(CliTest, CheckPrintsErrorAgainstReference) {
+  const RunResult run = vkray({"render", "--width", "32", "--height", "24", "--check", "-o", "out.exr"});
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_TRUE(has_line_starting_with(run.out, "error vs. double-precision reference: ")) << run.out;
+  std::smatch match;
+  ASSERT_TRUE(std::regex_search(run.out, match, std::regex(R"(hit/miss mismatches ([0-9]+) of ([0-9]+) )"))) << run.out;
+  EXPECT_EQ(match[2].str(), "768") << "every pixel compared";
+  EXPECT_LE(std::stoi(match[1].str()), 2) << "GPU and reference disagree on hit or miss: " << run.out;
+  Image exr;
+  ASSERT_NO_FATAL_FAILURE(read_image(path("out.exr"), exr, true));
+  EXPECT_EQ(exr.width, 32);
+}
+
+}  // namespace
