@@ -214,8 +214,10 @@ class CliTest : public ::testing::Test {
   }
 
   // Runs vkray with `args` in the test's folder; a hung run is killed after 120 s (exit 124).
-  RunResult vkray(std::initializer_list<std::string> args) const {
-    std::string command = "cd " + shell_quote(dir_.string()) + " && exec timeout 120 " + shell_quote(VKRAY_BINARY);
+  // `environment`: extra NAME=value settings for the run, e.g. to hide every Vulkan driver.
+  RunResult vkray(std::initializer_list<std::string> args, const std::string& environment = "") const {
+    std::string command = "cd " + shell_quote(dir_.string()) + " && exec env " + environment + " timeout 120 " +
+                          shell_quote(VKRAY_BINARY);
     for (const auto& arg : args) command += " " + shell_quote(arg);
     const fs::path out = dir_ / "stdout.txt", err = dir_ / "stderr.txt";
     command += " >" + shell_quote(out.string()) + " 2>" + shell_quote(err.string()) + " </dev/null";
@@ -574,6 +576,18 @@ TEST_F(CliTest, TruncatedObjExitsTwoNamingObjAndLine) {
     "meshes": [{"obj": "cut.obj"}]
   })");
   expect_error(vkray({"render", "cut.json", "-o", "out.exr"}), 2, {"cut.json", "meshes[0].obj", "cut.obj:4:"});
+}
+
+// No Vulkan driver at all (the loader pointed at a driver manifest that does not exist): exit 1
+// with one line that says how to get one.
+TEST_F(CliTest, NoVulkanDriverExitsOneWithTheFix) {
+  for (const char* command : {"render", "info"}) {
+    const RunResult run = vkray({command}, "VK_ICD_FILENAMES=/nonexistent/icd.json VK_DRIVER_FILES=/nonexistent/icd.json");
+    EXPECT_EQ(run.exit_code, 1) << command << ": " << run.err;
+    EXPECT_EQ(std::count(run.err.begin(), run.err.end(), '\n'), 1) << run.err;
+    EXPECT_NE(run.err.find("mesa-vulkan-drivers"), std::string::npos) << run.err;
+    EXPECT_FALSE(fs::exists(path("render.exr")));
+  }
 }
 
 TEST_F(CliTest, UnknownDeviceExitsOne) {
