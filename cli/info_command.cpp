@@ -26,6 +26,7 @@ Action add_info_command(CLI::App& app) {
               << "  max workgroup invocations  " << d.max_workgroup_invocations << '\n'
               << "  max storage buffer range   " << d.max_storage_buffer_range << " bytes ("
               << (d.max_storage_buffer_range >> 20) << " MiB)\n"
+              << "  max allocation size        " << (d.max_allocation_bytes >> 20) << " MiB\n"
               << "  subgroup size              " << d.subgroup_size << '\n'
               << "  timestamps                 "
               << (d.timestamp_period_ns > 0.0 ? std::to_string(d.timestamp_period_ns) + " ns per tick" : "none") << '\n'

@@ -1,5 +1,7 @@
 #include "engine/camera.hpp"
 
+#include "engine/unit_vector.hpp"
+
 #include <glm/geometric.hpp>
 
 #include <algorithm>
@@ -38,11 +40,9 @@ glm::dvec3 least_aligned_axis(const glm::dvec3& direction) {
 CameraBasis make_camera_basis(const Camera& camera, uint32_t width, uint32_t height) {
   CameraBasis basis;
   basis.origin = camera.from;
-  basis.forward = glm::normalize(camera.from - camera.to);
-  glm::dvec3 side = glm::cross(camera.up, basis.forward);
-  if (glm::length(side) <= parallel_sine * glm::length(camera.up)) {
-    side = glm::cross(least_aligned_axis(basis.forward), basis.forward);
-  }
+  basis.forward = unit_vector(camera.from - camera.to);
+  glm::dvec3 side = glm::cross(unit_vector(camera.up), basis.forward);
+  if (glm::length(side) <= parallel_sine) side = glm::cross(least_aligned_axis(basis.forward), basis.forward);
   basis.right = glm::normalize(side);
   basis.up = glm::cross(basis.forward, basis.right);
   const double half_height = static_cast<double>(height) / std::min(width, height);

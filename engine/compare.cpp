@@ -18,12 +18,11 @@ double percentile(std::vector<double>& values, double fraction) {
   return values[std::clamp<size_t>(rank, 1, values.size()) - 1];
 }
 
-// Angle between unit vectors via atan2(|a x b|, a.b), accurate for tiny angles, where acos(a.b) is not.
-double angle_degrees(const glm::dvec3& a, const glm::dvec3& b) {
-  return std::atan2(glm::length(glm::cross(a, b)), glm::dot(a, b)) * 180.0 / std::numbers::pi;
-}
-
 }  // namespace
+
+double angle_between(const glm::dvec3& a, const glm::dvec3& b) {
+  return std::atan2(glm::length(glm::cross(a, b)), glm::dot(a, b));
+}
 
 FrameError measure_error(const Frame& frame, const std::vector<ReferenceHit>& reference) {
   FrameError error;
@@ -40,7 +39,7 @@ FrameError measure_error(const Frame& frame, const std::vector<ReferenceHit>& re
     if (frame.aovs.has(Aov::depth)) depth_errors.push_back(std::abs(frame.depth[p] - reference[p].t) / reference[p].t);
     if (frame.aovs.has(Aov::normal)) {
       const glm::dvec3 normal(frame.normal_at(p));
-      normal_errors.push_back(angle_degrees(normal, reference[p].normal));
+      normal_errors.push_back(angle_between(normal, reference[p].normal) * 180.0 / std::numbers::pi);
     }
   }
   error.depth_max = depth_errors.empty() ? 0.0 : *std::max_element(depth_errors.begin(), depth_errors.end());

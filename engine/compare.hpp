@@ -1,5 +1,5 @@
 // Error of a rendered frame against the double-precision reference: the figures vkray reports next
-// to every timing (render --check, bench) and the tests' summary statistics.
+// to its timings (render --check) and the tests' summary statistics.
 #pragma once
 
 #include "engine/frame.hpp"
@@ -22,6 +22,10 @@ struct FrameError {
   double mismatch_fraction() const { return pixels ? static_cast<double>(hit_mismatches) / static_cast<double>(pixels) : 0.0; }
   std::string summary() const;  // one line
 };
+
+// Angle between unit vectors in radians, via atan2(|a x b|, a.b): accurate for tiny angles, where
+// acos(a.b) is not.
+double angle_between(const glm::dvec3& a, const glm::dvec3& b);
 
 // Compares the depth and normal outputs that `frame` has with the reference hits of the same size.
 FrameError measure_error(const Frame& frame, const std::vector<ReferenceHit>& reference);

@@ -27,6 +27,7 @@ struct GpuDeviceInfo {
   uint32_t max_workgroup_count[3] = {0, 0, 0};
   uint32_t max_workgroup_invocations = 0;
   uint64_t max_storage_buffer_range = 0;
+  uint64_t max_allocation_bytes = 0;
   uint32_t subgroup_size = 0;
   double timestamp_period_ns = 0.0;  // 0: the compute queue has no timestamps
   bool shader_float64 = false;

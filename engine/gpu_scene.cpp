@@ -1,5 +1,7 @@
 #include "engine/gpu_scene.hpp"
 
+#include "engine/unit_vector.hpp"
+
 #include <glm/geometric.hpp>
 
 #include <limits>
@@ -48,7 +50,7 @@ GpuScene make_gpu_scene(const Scene& scene) {
       const glm::dvec3 v2 = mesh.positions[corners[2]] - gpu.anchor;
       const glm::dvec3 cross = glm::cross(v1 - v0, v2 - v0);
       if (cross == glm::dvec3(0.0)) continue;
-      const gpu::GpuTriangle triangle{to_float4(v0), to_float4(v1), to_float4(v2), to_float4(glm::normalize(cross))};
+      const gpu::GpuTriangle triangle{to_float4(v0), to_float4(v1), to_float4(v2), to_float4(unit_vector(cross))};
       // Bounds of the float32 vertices the shader tests, so the box holds them exactly.
       for (const auto& v : {triangle.v0, triangle.v1, triangle.v2}) lower = glm::min(lower, v), upper = glm::max(upper, v);
       gpu.triangles.push_back(triangle);

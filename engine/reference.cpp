@@ -1,5 +1,7 @@
 #include "engine/reference.hpp"
 
+#include "engine/unit_vector.hpp"
+
 #include <glm/geometric.hpp>
 
 #include <algorithm>
@@ -69,7 +71,7 @@ ReferenceScene::ReferenceScene(const Scene& scene) : spheres_(scene.spheres), pl
       const glm::dvec3& v1 = mesh.positions[corners[1]];
       const glm::dvec3& v2 = mesh.positions[corners[2]];
       const glm::dvec3 cross = glm::cross(v1 - v0, v2 - v0);
-      if (cross != glm::dvec3(0.0)) triangles_.push_back({v0, v1, v2, glm::normalize(cross), index});
+      if (cross != glm::dvec3(0.0)) triangles_.push_back({v0, v1, v2, unit_vector(cross), index});
       ++index;
     }
   }

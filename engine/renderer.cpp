@@ -116,8 +116,23 @@ Renderer::Renderer(GpuDevice& device, const Scene& scene, RendererOptions option
     const auto start = Clock::now();
     Impl& r = *impl_;
     const GpuScene gpu_scene = make_gpu_scene(scene);
+    const PrimitiveCounts counts{checked_count(gpu_scene.spheres.size(), "spheres"),
+                                 checked_count(gpu_scene.planes.size(), "planes"),
+                                 checked_count(gpu_scene.meshes.size(), "meshes")};
+    checked_count(gpu_scene.triangles.size(), "triangles");
+    const vk::DeviceSize buffer_limit =
+        std::min<vk::DeviceSize>(r.context.limits.maxStorageBufferRange, r.context.info.max_allocation_bytes);
+    if (gpu_scene.triangles.size() * sizeof(gpu::GpuTriangle) > buffer_limit) {
+      throw GpuError(std::to_string(gpu_scene.triangles.size()) + " triangles take " +
+                     std::to_string(gpu_scene.triangles.size() * sizeof(gpu::GpuTriangle) >> 20) + " MiB, more than " +
+                     r.context.info.name + " can bind as one storage buffer (" + std::to_string(buffer_limit >> 20) +
+                     " MiB)");
+    }
+    // The count above models the loops of raycast.comp; the margin covers the few iterations the
+    // compiler may keep where it fails to unroll a constant-trip loop.
+    constexpr uint64_t loop_margin = 16;
     const uint64_t loop_limit = r.context.info.max_loop_iterations;
-    if (loop_limit > 0 && loop_iterations_per_ray(gpu_scene) + 16 > loop_limit) {
+    if (loop_limit > 0 && loop_iterations_per_ray(gpu_scene) + loop_margin > loop_limit) {
       throw GpuError("this scene needs up to " + std::to_string(loop_iterations_per_ray(gpu_scene)) +
                      " shader loop iterations per pixel, but " + r.context.info.name + " stops a shader after " +
                      std::to_string(loop_limit) + " and would silently drop geometry; use another device (--device)");
@@ -128,10 +143,7 @@ Renderer::Renderer(GpuDevice& device, const Scene& scene, RendererOptions option
     r.planes = upload_if_any(r.context, gpu_scene.planes);
     r.triangles = upload_if_any(r.context, gpu_scene.triangles);
     r.meshes = upload_if_any(r.context, gpu_scene.meshes);
-    checked_count(gpu_scene.triangles.size(), "triangles");
-    r.pipeline.emplace(r.context, PrimitiveCounts{checked_count(gpu_scene.spheres.size(), "spheres"),
-                                                  checked_count(gpu_scene.planes.size(), "planes"),
-                                                  checked_count(gpu_scene.meshes.size(), "meshes")});
+    r.pipeline.emplace(r.context, counts);
     if (r.context.info.timestamp_period_ns > 0.0) {
       r.timestamps = vk::raii::QueryPool(r.context.device, vk::QueryPoolCreateInfo({}, vk::QueryType::eTimestamp, 3));
     }
@@ -148,7 +160,7 @@ Frame Renderer::render(const Camera& camera, uint32_t width, uint32_t height, Ao
   Impl& r = *impl_;
   Frame frame{width, height, aovs, {}, {}, {}};
   frame.allocate();
-  r.timings = RenderTimings{r.timings.upload_ms, 0.0, 0.0, 0.0, 0};
+  r.timings = RenderTimings{r.timings.upload_ms, 0.0, *r.timestamps != vk::QueryPool(), 0.0, 0.0, 0};
   if (aovs.empty()) return frame;
 
   with_vulkan_errors("rendering", [&] {
@@ -175,18 +187,20 @@ Frame Renderer::render(const Camera& camera, uint32_t width, uint32_t height, Ao
         commands.pipelineBarrier(vk::PipelineStageFlagBits::eComputeShader,
                                  vk::PipelineStageFlagBits::eTransfer | vk::PipelineStageFlagBits::eHost, {}, barrier,
                                  {}, {});
+        bool copied = false;
         for (const auto* output : {&r.tile.depth, &r.tile.normal, &r.tile.uv}) {
           if (*output && (*output)->readback) {
             commands.copyBuffer(*(*output)->written.buffer, *(*output)->readback->buffer,
                                 vk::BufferCopy(0, 0, (*output)->written.size));
+            copied = true;
           }
         }
-        if (*r.timestamps) {
+        if (copied) {  // a fence wait alone does not make device writes visible to the host
           const vk::MemoryBarrier to_host(vk::AccessFlagBits::eTransferWrite, vk::AccessFlagBits::eHostRead);
           commands.pipelineBarrier(vk::PipelineStageFlagBits::eTransfer, vk::PipelineStageFlagBits::eHost, {},
                                    to_host, {}, {});
-          commands.writeTimestamp(vk::PipelineStageFlagBits::eBottomOfPipe, *r.timestamps, 2);
         }
+        if (*r.timestamps) commands.writeTimestamp(vk::PipelineStageFlagBits::eBottomOfPipe, *r.timestamps, 2);
       });
 
       if (*r.timestamps) {

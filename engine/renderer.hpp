@@ -13,6 +13,7 @@ namespace vkray {
 struct RenderTimings {
   double upload_ms = 0.0;          // scene conversion and upload (once, in the constructor)
   double pipeline_ms = 0.0;        // pipeline creation (first render with a given set of outputs)
+  bool has_gpu_times = false;      // the device has timestamps; else dispatch_gpu_ms is not measured
   double dispatch_gpu_ms = 0.0;    // GPU time of the ray-casting dispatches (timestamp queries)
   double readback_ms = 0.0;        // copying results back into the Frame
   uint32_t tiles = 0;              // dispatches the image was split into
@@ -20,7 +21,8 @@ struct RenderTimings {
 
 struct RendererOptions {
   // Upper bound on the bytes of one output buffer; the image is split into tiles of rows to stay
-  // under it and under the device's maxStorageBufferRange. 0: the device limit alone.
+  // under it and under the device's maxStorageBufferRange (a tile has at least one row, whatever
+  // the bound). 0: the device limit alone.
   uint64_t max_tile_bytes = 0;
 };
 

@@ -36,6 +36,11 @@ struct Mesh {
   std::vector<std::array<uint32_t, 3>> triangles;  // 0-based, checked against positions
 };
 
+// Largest coordinate or radius magnitude accepted. The shader squares distances in float32 (max
+// ~3.4e38) and splits them with a factor of 4097 for the exact sphere term, so magnitudes must stay
+// well below 1e19; 1e15 leaves room and is far beyond any real scene.
+inline constexpr double max_coordinate = 1e15;
+
 inline constexpr uint32_t default_image_width = 800;
 inline constexpr uint32_t default_image_height = 600;
 // Largest image side and pixel count accepted: beyond these, host memory for the outputs

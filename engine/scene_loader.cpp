@@ -1,6 +1,7 @@
 #include "engine/scene_loader.hpp"
 
 #include "engine/obj_loader.hpp"
+#include "engine/unit_vector.hpp"
 
 #include <glm/geometric.hpp>
 #include <glm/gtc/quaternion.hpp>
@@ -134,6 +135,19 @@ class Node {
     return {items[0].number(), items[1].number(), items[2].number()};
   }
 
+  // A position: a vec3 whose components are coordinates.
+  glm::dvec3 point() const {
+    const auto items = elements();
+    if (items.size() != 3) fail("expected 3 numbers [x, y, z], got " + describe(value_));
+    return {items[0].coordinate(), items[1].coordinate(), items[2].coordinate()};
+  }
+
+  double coordinate() const {
+    const double result = number();
+    if (std::abs(result) > max_coordinate) fail("magnitude above the supported " + describe(Json(max_coordinate)));
+    return result;
+  }
+
   glm::dvec3 nonzero_vec3() const {
     const glm::dvec3 result = vec3();
     if (result == glm::dvec3(0.0)) fail("must not be the zero vector");
@@ -168,8 +182,8 @@ class Node {
 Camera parse_camera(const Node& node) {
   node.expect_object({"from", "to", "up", "fovy"});
   Camera camera;
-  camera.from = node.at("from").vec3();
-  camera.to = node.at("to").vec3();
+  camera.from = node.at("from").point();
+  camera.to = node.at("to").point();
   if (camera.from == camera.to) node.at("to").fail("must differ from camera.from");
   if (node.has("up")) camera.up = node.at("up").nonzero_vec3();
   const Node fovy = node.at("fovy");
@@ -193,14 +207,14 @@ void parse_image(const Node& node, Scene& scene) {
 
 Sphere parse_sphere(const Node& node) {
   node.expect_object({"center", "radius"});
-  Sphere sphere{node.at("center").vec3(), node.at("radius").number()};
+  Sphere sphere{node.at("center").point(), node.at("radius").coordinate()};
   if (!(sphere.radius > 0.0)) node.at("radius").fail("must be > 0, got " + describe(node.at("radius").json()));
   return sphere;
 }
 
 Plane parse_plane(const Node& node) {
   node.expect_object({"point", "normal"});
-  return Plane{node.at("point").vec3(), glm::normalize(node.at("normal").nonzero_vec3())};
+  return Plane{node.at("point").point(), unit_vector(node.at("normal").nonzero_vec3())};
 }
 
 void apply_transform(const Node& node, Mesh& mesh) {
@@ -215,7 +229,7 @@ void apply_transform(const Node& node, Mesh& mesh) {
   if (node.has("rotate")) {
     const Node rotate = node.at("rotate");
     rotate.expect_object({"axis", "degrees"});
-    const glm::dvec3 axis = glm::normalize(rotate.at("axis").nonzero_vec3());
+    const glm::dvec3 axis = unit_vector(rotate.at("axis").nonzero_vec3());
     rotation = glm::angleAxis(rotate.at("degrees").number() * std::numbers::pi / 180.0, axis);
   }
   const glm::dvec3 translation = node.has("translate") ? node.at("translate").vec3() : glm::dvec3(0.0);
@@ -246,6 +260,13 @@ Mesh parse_mesh(const Node& node, const std::filesystem::path& base_dir, const O
     if (mesh.triangles.empty()) node.at("triangles").fail("a mesh needs at least one triangle");
   }
   if (node.has("transform")) apply_transform(node.at("transform"), mesh);
+  for (size_t i = 0; i < mesh.positions.size(); ++i) {
+    const glm::dvec3& p = mesh.positions[i];
+    if (!(std::max({std::abs(p.x), std::abs(p.y), std::abs(p.z)}) <= max_coordinate)) {  // NaN too
+      node.fail("vertex " + std::to_string(i) + " lies beyond the supported coordinate magnitude " +
+                describe(Json(max_coordinate)) + (node.has("transform") ? " after the transform" : ""));
+    }
+  }
   return mesh;
 }
 

@@ -39,6 +39,7 @@ using uvec4 = glm::uvec4;
 #define VKRAY_SPEC_WRITE_DEPTH 3
 #define VKRAY_SPEC_WRITE_NORMAL 4
 #define VKRAY_SPEC_WRITE_UV 5
+#define VKRAY_SPEC_COUNT 6
 
 // All positions on the GPU are relative to the scene's anchor point (see engine/gpu_scene.cpp), so
 // float32 keeps its precision for scenes far from the world origin.

@@ -30,23 +30,26 @@ void two_product(float a, float b, out float p, out float e) {
   e = error;
 }
 
-// |f|^2 - r^2 with a relative error of about 2^-24 however close |f| is to r: products and sums
-// are split into exact value and error terms (Ogita, Rump and Oishi, "Accurate Sum and Dot
+// |f|^2 - r^2 as if computed in twice the float precision, then rounded: products and sums are
+// split into exact value and error terms (Ogita, Rump and Oishi, "Accurate Sum and Dot
 // Product", SIAM J. Sci. Comput. 26(6), 2005, algorithm Dot2). Plain float loses all digits when
 // the camera is near the surface of a sphere much larger than that distance (a planet as ground).
 // Only rays that pass the discriminant test get here, so the cost is one call per hit candidate.
+// Adds a * b to the running sum and its error term (one step of Dot2).
+void dot2_step(float a, float b, inout float sum, inout float error) {
+  float product, product_error, sum_error;
+  two_product(a, b, product, product_error);
+  two_sum(sum, product, sum, sum_error);
+  precise float total_error = error + (sum_error + product_error);
+  error = total_error;
+}
+
 float sphere_c(vec3 f, float radius) {
-  vec4 x = vec4(f, radius);
-  vec4 y = vec4(f, -radius);
   float sum, error;
-  two_product(x[0], y[0], sum, error);
-  for (int k = 1; k < 4; ++k) {
-    float product, product_error, sum_error;
-    two_product(x[k], y[k], product, product_error);
-    two_sum(sum, product, sum, sum_error);
-    precise float total_error = error + (sum_error + product_error);
-    error = total_error;
-  }
+  two_product(f.x, f.x, sum, error);
+  dot2_step(f.y, f.y, sum, error);
+  dot2_step(f.z, f.z, sum, error);
+  dot2_step(radius, -radius, sum, error);
   precise float c = sum + error;
   return c;
 }

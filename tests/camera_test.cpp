@@ -109,5 +109,11 @@ TEST(CameraBasis, LookingStraightDownOrUpFallsBackToAnotherUp) {
   EXPECT_NEAR(std::abs(tilted.up.x), 1.0, 1e-9);
 }
 
+// View directions and up vectors far outside [1e-154, 1e154] in length still give a finite frame.
+TEST(CameraBasis, ExtremeMagnitudes) {
+  expect_orthonormal_right_handed(make_camera_basis({{0, 0, 1e-170}, {0, 0, 0}, {0, 1e-300, 0}, 45}, 8, 8));
+  expect_orthonormal_right_handed(make_camera_basis({{1e14, 0, 0}, {-1e14, 0, 1}, {0, 1e200, 0}, 45}, 8, 8));
+}
+
 }  // namespace
 }  // namespace vkray

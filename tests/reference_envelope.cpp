@@ -1,7 +1,7 @@
 // How far may a float32 GPU pixel be from the double-precision reference?
 //
 // Error model (eps = 2^-24, the float32 unit roundoff):
-// - Direction. The GPU rounds the pixel's uv (1 rounding), the camera basis (1 per component),
+// - Direction. The GPU rounds the pixel's uv (one division, within 2.5 ulp), the camera basis (1 per component),
 //   forms x*right + y*up + forward_scaled (2 products, 2 sums) and normalizes (~3 roundings): its
 //   ray is within an angle of about 8 eps of the exact one. We take eta = 16 eps.
 // - Positions. Camera and geometry are stored relative to the scene anchor and rounded once, and
@@ -39,10 +39,6 @@ namespace {
 
 constexpr double eps = 0x1p-24;
 constexpr double eta = 16 * eps;
-
-double angle(const glm::dvec3& a, const glm::dvec3& b) {
-  return std::atan2(glm::length(glm::cross(a, b)), glm::dot(a, b));
-}
 
 bool same_primitive(const ReferenceHit& a, const ReferenceHit& b) { return a.kind == b.kind && a.index == b.index; }
 
@@ -126,7 +122,7 @@ EnvelopeReport check_against_reference(const Scene& scene, const Frame& frame) {
         if (h.kind == PrimitiveKind::none) continue;
         lo = std::min(lo, h.t), hi = std::max(hi, h.t);
         for (const auto& other : s.hits) {
-          if (other.kind != PrimitiveKind::none) spread = std::max(spread, angle(h.normal, other.normal));
+          if (other.kind != PrimitiveKind::none) spread = std::max(spread, angle_between(h.normal, other.normal));
         }
       }
       const ReferenceHit& main = s.hits[0].kind != PrimitiveKind::none ? s.hits[0] : *std::find_if(std::begin(s.hits), std::end(s.hits), [](const ReferenceHit& h) { return h.kind != PrimitiveKind::none; });
@@ -144,7 +140,7 @@ EnvelopeReport check_against_reference(const Scene& scene, const Frame& frame) {
       const double normal_slack = 16 * eps * (1 + (radius + main.t) / curvature_radius);
       double best = INFINITY;
       for (const auto& h : s.hits) {
-        if (h.kind != PrimitiveKind::none) best = std::min(best, angle(gpu_normal, h.normal));
+        if (h.kind != PrimitiveKind::none) best = std::min(best, angle_between(gpu_normal, h.normal));
       }
       if (has_normal && failure.empty() && !(best <= spread + normal_slack)) {
         char text[200];

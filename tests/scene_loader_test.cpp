@@ -607,3 +607,22 @@ TEST_F(SceneFileTest, ErrorInFileNamesFileAndPath) {
 }
 
 }  // namespace
+
+// Finite but extreme values: directions of any magnitude normalize exactly; positions and radii
+// beyond the supported magnitude (float32 squares would overflow on the GPU) are refused.
+TEST(SceneJson, ExtremeMagnitudes) {
+  const Scene scene = parse(R"({"camera": {"from": [0, 0, 1e-170], "to": [0, 0, 0], "up": [0, 1e-300, 0], "fovy": 45},
+    "planes": [{"point": [0, 0, 0], "normal": [0, 1e200, 0]}, {"point": [0, 0, 0], "normal": [3e-200, 0, 4e-200]}],
+    "meshes": [{"positions": [[0, 0, 0], [1, 0, 0], [0, 1, 0]], "triangles": [[0, 1, 2]],
+                "transform": {"rotate": {"axis": [0, 0, 1e-310], "degrees": 90}}}]})");
+  expect_near(scene.planes[0].normal, {0, 1, 0});
+  expect_near(scene.planes[1].normal, {0.6, 0, 0.8});
+  expect_near(scene.meshes[0].positions[1], {0, 1, 0});
+  expect_error(parse_error(with_camera(R"("spheres": [{"center": [0, 2e15, 0], "radius": 1}])")), "t.json: spheres[0].center[1]: ",
+               "magnitude above the supported");
+  expect_error(parse_error(with_camera(R"("spheres": [{"center": [0, 0, 0], "radius": 1e16}])")), "t.json: spheres[0].radius: ",
+               "magnitude above the supported");
+  expect_error(parse_error(with_camera(R"("meshes": [{"positions": [[0, 0, 0], [1e10, 0, 0], [0, 1, 0]], "triangles": [[0, 1, 2]],
+                                         "transform": {"scale": 1e10}}])")),
+               "t.json: meshes[0]: ", "vertex 1 lies beyond the supported coordinate magnitude");
+}

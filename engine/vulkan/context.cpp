@@ -11,7 +11,9 @@ constexpr const char* no_vulkan_fix =
     "software GPU that always works";
 
 vk::raii::Instance create_instance(const vk::raii::Context& context) {
-  const vk::ApplicationInfo application("vkray", 1, "vkray", 1, VK_API_VERSION_1_1);
+  // 1.2 lets us query VkPhysicalDeviceDriverProperties on devices that have it; a 1.1 device still
+  // works (describe() checks each device's own version).
+  const vk::ApplicationInfo application("vkray", 1, "vkray", 1, VK_API_VERSION_1_2);
   try {
     return vk::raii::Instance(context, vk::InstanceCreateInfo({}, &application));
   } catch (const vk::SystemError& error) {
@@ -51,17 +53,26 @@ uint32_t compute_queue_family(const vk::raii::PhysicalDevice& physical_device) {
 
 GpuDeviceInfo describe(const vk::raii::PhysicalDevice& physical_device) {
   const auto chain = physical_device.getProperties2<vk::PhysicalDeviceProperties2, vk::PhysicalDeviceSubgroupProperties,
-                                                    vk::PhysicalDeviceDriverProperties>();
+                                                    vk::PhysicalDeviceMaintenance3Properties>();
   const auto& properties = chain.get<vk::PhysicalDeviceProperties2>().properties;
   const auto& limits = properties.limits;
   GpuDeviceInfo info;
   info.name = properties.deviceName.data();
   info.type = type_name(properties.deviceType);
-  const auto& driver = chain.get<vk::PhysicalDeviceDriverProperties>();
-  info.driver = std::string(driver.driverName.data()) + " " + driver.driverInfo.data();
+  info.max_allocation_bytes = chain.get<vk::PhysicalDeviceMaintenance3Properties>().maxMemoryAllocationSize;
+  // VkPhysicalDeviceDriverProperties is core in Vulkan 1.2 only.
+  bool llvmpipe = info.name.starts_with("llvmpipe");
+  if (properties.apiVersion >= VK_API_VERSION_1_2) {
+    const auto driver = physical_device.getProperties2<vk::PhysicalDeviceProperties2, vk::PhysicalDeviceDriverProperties>()
+                            .get<vk::PhysicalDeviceDriverProperties>();
+    info.driver = std::string(driver.driverName.data()) + " " + driver.driverInfo.data();
+    llvmpipe = driver.driverID == vk::DriverId::eMesaLlvmpipe;
+  } else {
+    info.driver = "driver version " + std::to_string(properties.driverVersion);
+  }
   // LP_MAX_TGSI_LOOP_ITERATIONS in Mesa's gallivm: one counter per shader invocation, shared by
   // every loop.
-  if (driver.driverID == vk::DriverId::eMesaLlvmpipe) info.max_loop_iterations = 65535;
+  if (llvmpipe) info.max_loop_iterations = 65535;
   info.api_version = std::to_string(VK_API_VERSION_MAJOR(properties.apiVersion)) + "." +
                      std::to_string(VK_API_VERSION_MINOR(properties.apiVersion)) + "." +
                      std::to_string(VK_API_VERSION_PATCH(properties.apiVersion));

@@ -29,13 +29,14 @@ const vk::raii::Pipeline& RaycastPipeline::pipeline(AovSet aovs, double& created
   if (auto found = pipelines_.find(aovs.bits()); found != pipelines_.end()) return found->second;
 
   const auto start = std::chrono::steady_clock::now();
-  // Specialization data in the order of the VKRAY_SPEC_* ids; booleans are 32-bit in SPIR-V.
-  const std::array<uint32_t, 6> values = {counts_.spheres,
-                                          counts_.planes,
-                                          counts_.meshes,
-                                          aovs.has(Aov::depth) ? 1u : 0u,
-                                          aovs.has(Aov::normal) ? 1u : 0u,
-                                          aovs.has(Aov::uv) ? 1u : 0u};
+  // One 32-bit value per VKRAY_SPEC_* id (SPIR-V booleans are 32-bit), stored at the id's index.
+  std::array<uint32_t, VKRAY_SPEC_COUNT> values{};
+  values[VKRAY_SPEC_SPHERE_COUNT] = counts_.spheres;
+  values[VKRAY_SPEC_PLANE_COUNT] = counts_.planes;
+  values[VKRAY_SPEC_MESH_COUNT] = counts_.meshes;
+  values[VKRAY_SPEC_WRITE_DEPTH] = aovs.has(Aov::depth) ? 1u : 0u;
+  values[VKRAY_SPEC_WRITE_NORMAL] = aovs.has(Aov::normal) ? 1u : 0u;
+  values[VKRAY_SPEC_WRITE_UV] = aovs.has(Aov::uv) ? 1u : 0u;
   std::array<vk::SpecializationMapEntry, values.size()> entries;
   for (uint32_t id = 0; id < entries.size(); ++id) entries[id] = vk::SpecializationMapEntry(id, id * 4u, 4u);
   const vk::SpecializationInfo specialization(entries, vk::ArrayProxyNoTemporaries<const uint32_t>(values));
