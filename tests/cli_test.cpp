@@ -3,6 +3,7 @@
 // reads the OpenEXR and PNG files it writes back with OpenImageIO. Expected values come from the
 // output contract (channel names, UV formula, camera model) and closed-form scenes, never from the
 // engine's own code.
+#include "tests/temp_dir_test.hpp"
 #include <OpenImageIO/imageio.h>
 #include <gtest/gtest.h>
 #include <sys/wait.h>
@@ -54,11 +55,6 @@ std::string read_text(const fs::path& path) {
   std::ostringstream contents;
   contents << file.rdbuf();
   return contents.str();
-}
-
-void write_text(const fs::path& path, std::string_view text) {
-  std::ofstream file(path, std::ios::binary);
-  file << text;
 }
 
 size_t count_lines(const std::string& text) { return static_cast<size_t>(std::count(text.begin(), text.end(), '\n')); }
@@ -195,24 +191,8 @@ std::set<std::string> names(std::initializer_list<const char*> list) { return {l
 // ---------------------------------------------------------------------------------------------
 // Fixture: a temporary folder per test, where vkray runs
 
-class CliTest : public ::testing::Test {
+class CliTest : public vkray::test::TempDirTest {
  protected:
-  void SetUp() override {
-    const auto* test = ::testing::UnitTest::GetInstance()->current_test_info();
-    dir_ = fs::temp_directory_path() /
-           ("vkray_cli_" + std::string(test->name()) + "_" + std::to_string(static_cast<long>(getpid())));
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-
-  // Kept after a failure so the files can be looked at.
-  void TearDown() override {
-    if (!HasFailure()) {
-      std::error_code ignored;
-      fs::remove_all(dir_, ignored);
-    }
-  }
-
   // Runs vkray with `args` in the test's folder; a hung run is killed after 120 s (exit 124).
   // `environment`: extra NAME=value settings for the run, e.g. to hide every Vulkan driver.
   RunResult vkray(std::initializer_list<std::string> args, const std::string& environment = "") const {
@@ -234,7 +214,6 @@ class CliTest : public ::testing::Test {
   }
 
   fs::path path(const std::string& name) const { return dir_ / name; }
-  void write(const std::string& name, std::string_view text) const { write_text(dir_ / name, text); }
 
   // A usage, input or runtime error: the exit code, one line on stderr that starts with "vkray: ",
   // nothing on stdout and no image written.
@@ -251,8 +230,6 @@ class CliTest : public ::testing::Test {
       EXPECT_TRUE(extension != ".exr" && extension != ".png") << entry.path() << " written despite the error";
     }
   }
-
-  fs::path dir_;
 };
 
 // A camera on +z looking at a unit sphere at the origin; 33 is odd, so the centre pixel's ray is

@@ -1,5 +1,6 @@
 // OBJ loader: polygon triangulation, index forms, merging of groups, and one-line InputErrors that
 // name the file and the line for every malformed input.
+#include "tests/temp_dir_test.hpp"
 #include "engine/obj_loader.hpp"
 
 #include <gtest/gtest.h>
@@ -61,24 +62,7 @@ void expect_valid_triangles(const Mesh& mesh) {
 
 const std::string tri_vertices = "v 0 0 0\nv 1 0 0\nv 0 1 0\n";
 
-class ObjFileTest : public testing::Test {
- protected:
-  void SetUp() override {
-    const auto* info = testing::UnitTest::GetInstance()->current_test_info();
-    dir_ = std::filesystem::temp_directory_path() / ("vkray-obj-" + std::string(info->name()));
-    std::filesystem::remove_all(dir_);
-    std::filesystem::create_directories(dir_);
-  }
-  void TearDown() override { std::filesystem::remove_all(dir_); }
-
-  std::filesystem::path write(const std::string& name, const std::string& contents) const {
-    const auto path = dir_ / name;
-    std::ofstream(path, std::ios::binary) << contents;
-    return path;
-  }
-
-  std::filesystem::path dir_;
-};
+class ObjFileTest : public vkray::test::TempDirTest {};
 
 TEST(ObjText, SingleTriangle) {
   const Mesh mesh = vkray::load_obj_text(tri_vertices + "f 1 2 3\n", "t.obj");

@@ -1,6 +1,7 @@
 // Scene JSON loader: every bad input gives a one-line InputError that names the file and the JSON
 // path (or line:column for invalid JSON); good inputs load with defaults, normalized plane normals
 // and mesh transforms applied in the order scale -> rotate -> translate.
+#include "tests/temp_dir_test.hpp"
 #include "engine/obj_loader.hpp"
 #include "engine/scene_loader.hpp"
 
@@ -515,25 +516,7 @@ TEST(SceneJson, DefaultScene) {
 
 // ---- Files -----------------------------------------------------------------------------------
 
-class SceneFileTest : public testing::Test {
- protected:
-  void SetUp() override {
-    const auto* info = testing::UnitTest::GetInstance()->current_test_info();
-    dir_ = std::filesystem::temp_directory_path() / ("vkray-scene-" + std::string(info->name()));
-    std::filesystem::remove_all(dir_);
-    std::filesystem::create_directories(dir_);
-  }
-  void TearDown() override { std::filesystem::remove_all(dir_); }
-
-  std::filesystem::path write(const std::filesystem::path& relative, const std::string& contents) const {
-    const auto path = dir_ / relative;
-    std::filesystem::create_directories(path.parent_path());
-    std::ofstream(path, std::ios::binary) << contents;
-    return path;
-  }
-
-  std::filesystem::path dir_;
-};
+class SceneFileTest : public vkray::test::TempDirTest {};
 
 TEST_F(SceneFileTest, RelativeObjPathResolvesAgainstSceneFolder) {
   write("models/tri.obj", triangle_obj);
