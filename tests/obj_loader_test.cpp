@@ -1,5 +1,6 @@
 // OBJ loader: polygon triangulation, index forms, merging of groups, and one-line InputErrors that
 // name the file and the line for every malformed input.
+#include "tests/input_error_test.hpp"
 #include "tests/temp_dir_test.hpp"
 #include "engine/obj_loader.hpp"
 
@@ -15,32 +16,17 @@
 
 namespace {
 
+using vkray::test::error_of;
+using vkray::test::expect_error;
+
 using vkray::InputError;
 using vkray::Mesh;
-
-// The InputError message of `load`, or "" when it throws nothing. Any other exception type fails.
-template <class F>
-std::string error_of(F&& load) {
-  try {
-    load();
-  } catch (const InputError& error) {
-    return error.what();
-  }
-  return {};
-}
 
 std::string text_error(const std::string& text, const std::string& name = "t.obj") {
   return error_of([&] { vkray::load_obj_text(text, name); });
 }
 
 // Every error is one line that starts with the file name.
-void expect_error(const std::string& message, const std::string& prefix, const std::string& detail) {
-  ASSERT_FALSE(message.empty()) << "no InputError raised (expected '" << prefix << "... " << detail << "')";
-  EXPECT_EQ(message.rfind(prefix, 0), 0u) << message;
-  EXPECT_NE(message.find(detail), std::string::npos) << message;
-  EXPECT_EQ(message.find('\n'), std::string::npos) << "message is not one line: " << message;
-}
-
 double triangle_area(const Mesh& mesh, const std::array<uint32_t, 3>& t) {
   return 0.5 * glm::length(glm::cross(mesh.positions[t[1]] - mesh.positions[t[0]], mesh.positions[t[2]] - mesh.positions[t[0]]));
 }

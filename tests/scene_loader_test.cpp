@@ -1,6 +1,7 @@
 // Scene JSON loader: every bad input gives a one-line InputError that names the file and the JSON
 // path (or line:column for invalid JSON); good inputs load with defaults, normalized plane normals
 // and mesh transforms applied in the order scale -> rotate -> translate.
+#include "tests/input_error_test.hpp"
 #include "tests/temp_dir_test.hpp"
 #include "engine/obj_loader.hpp"
 #include "engine/scene_loader.hpp"
@@ -15,6 +16,9 @@
 #include <vector>
 
 namespace {
+
+using vkray::test::error_of;
+using vkray::test::expect_error;
 
 using vkray::InputError;
 using vkray::Scene;
@@ -34,26 +38,8 @@ Scene parse(const std::string& json, const vkray::ObjFileLoader& load_obj = no_o
   return vkray::parse_scene(json, "t.json", "/scenes", load_obj);
 }
 
-template <class F>
-std::string error_of(F&& load) {
-  try {
-    load();
-  } catch (const InputError& error) {
-    return error.what();
-  }
-  return {};
-}
-
 std::string parse_error(const std::string& json, const vkray::ObjFileLoader& load_obj = no_obj) {
   return error_of([&] { parse(json, load_obj); });
-}
-
-// The message is one line, starts with `prefix` (file and place) and contains `detail`.
-void expect_error(const std::string& message, const std::string& prefix, const std::string& detail) {
-  ASSERT_FALSE(message.empty()) << "no InputError raised (expected '" << prefix << "... " << detail << "')";
-  EXPECT_EQ(message.rfind(prefix, 0), 0u) << message;
-  EXPECT_NE(message.find(detail), std::string::npos) << message;
-  EXPECT_EQ(message.find('\n'), std::string::npos) << "message is not one line: " << message;
 }
 
 void expect_near(const glm::dvec3& actual, const glm::dvec3& expected, double tolerance = 1e-12) {
