@@ -17,6 +17,7 @@ int main(int argc, char** argv) {
   app.fallthrough(false);
   const vkray::cli::Action render = vkray::cli::add_render_command(app);
   const vkray::cli::Action info = vkray::cli::add_info_command(app);
+  const vkray::cli::Action bench = vkray::cli::add_bench_command(app);
 
   try {
     app.parse(argc, argv);
@@ -29,7 +30,9 @@ int main(int argc, char** argv) {
   }
 
   try {
-    return app.got_subcommand("render") ? render() : info();
+    if (app.got_subcommand("render")) return render();
+    if (app.got_subcommand("bench")) return bench();
+    return info();
   } catch (const vkray::InputError& error) {
     std::cerr << "vkray: " << error.what() << '\n';
     return 2;

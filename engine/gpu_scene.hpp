@@ -1,6 +1,7 @@
 // Conversion of the double-precision scene into the float32 arrays the shader reads.
 #pragma once
 
+#include "engine/bvh.hpp"
 #include "engine/camera.hpp"
 #include "engine/scene.hpp"
 #include "shaders/gpu_layout.h"
@@ -9,6 +10,20 @@
 
 namespace vkray {
 
+// How the shader finds the nearest triangle; automatic picks brute force for tiny meshes and the
+// BVH otherwise (see choose_triangle_search).
+enum class TriangleSearch : uint32_t {
+  automatic,
+  brute_force = VKRAY_TRIANGLES_BRUTE_FORCE,
+  bvh_per_ray = VKRAY_TRIANGLES_BVH_PER_RAY,
+  bvh_packet = VKRAY_TRIANGLES_BVH_PACKET,
+};
+
+struct GpuSceneOptions {
+  TriangleSearch triangle_search = TriangleSearch::automatic;
+  BvhBuildOptions bvh;
+};
+
 struct GpuScene {
   // Every position on the GPU is stored relative to this point. float32 has ~7 digits: a scene at
   // x = 1e6 stored as is would lose everything below 0.06 units, while positions relative to a
@@ -16,16 +31,33 @@ struct GpuScene {
   glm::dvec3 anchor{0.0};
   std::vector<gpu::GpuSphere> spheres;
   std::vector<gpu::GpuPlane> planes;
-  // Zero-area triangles left out (no ray can hit them); each mesh padded to whole batches.
-  std::vector<gpu::GpuTriangle> triangles;
-  std::vector<gpu::GpuMesh> meshes;         // non-empty meshes only, with their float32 bounds
+  // Triangles of every mesh, zero-area ones left out (no ray can hit them), in the BVH's leaf
+  // order, padded to whole VKRAY_TRIANGLE_BATCHes with (0, 0, 0) triangles: see gpu_layout.h.
+  std::vector<float> positions;          // 3 per vertex
+  std::vector<uint32_t> triangle_indices;  // 3 per triangle slot
+  std::vector<float> triangle_normals;   // 3 per triangle slot
+  uint32_t triangle_count = 0;           // real triangles, without the padding
+  std::vector<gpu::GpuBvhNode> bvh_nodes;  // empty unless the search uses the tree
+  uint32_t bvh_depth = 0;
+  TriangleSearch triangle_search = TriangleSearch::brute_force;  // never automatic here
+  double bvh_build_ms = 0.0;
+
+  uint32_t triangle_slots() const { return static_cast<uint32_t>(triangle_indices.size() / 3); }
+  // Bytes of device memory the triangles and their tree take.
+  size_t triangle_bytes() const {
+    return positions.size() * sizeof(float) + triangle_indices.size() * sizeof(uint32_t) +
+           triangle_normals.size() * sizeof(float) + bvh_nodes.size() * sizeof(gpu::GpuBvhNode);
+  }
 };
 
-// Loop iterations one shader invocation runs in the worst case (every mesh box hit).
-uint64_t loop_iterations_per_ray(const GpuScene& scene);
+// The centre of the bounding box of the finite primitives (spheres, meshes); the camera for a
+// scene of planes alone.
+glm::dvec3 scene_anchor(const Scene& scene);
 
-// The anchor is the centre of the bounding box of the finite primitives (spheres, meshes).
-GpuScene make_gpu_scene(const Scene& scene);
+// Brute force for meshes of at most this many triangles, the tree beyond: see gpu_scene.cpp.
+TriangleSearch choose_triangle_search(size_t triangle_count);
+
+GpuScene make_gpu_scene(const Scene& scene, const GpuSceneOptions& options = {});
 
 // Push constants for one tile of rows of a width x height image.
 gpu::RayGenParams make_ray_gen_params(const CameraBasis& camera, const glm::dvec3& anchor, uint32_t width,

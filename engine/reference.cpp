@@ -65,19 +65,94 @@ double intersect_triangle(const glm::dvec3& v0, const glm::dvec3& v1, const glm:
 
 ReferenceScene::ReferenceScene(const Scene& scene) : spheres_(scene.spheres), planes_(scene.planes) {
   uint32_t index = 0;
+  std::vector<Triangle> triangles;
+  std::vector<Box> boxes;
   for (const auto& mesh : scene.meshes) {
     for (const auto& corners : mesh.triangles) {
       const glm::dvec3& v0 = mesh.positions[corners[0]];
       const glm::dvec3& v1 = mesh.positions[corners[1]];
       const glm::dvec3& v2 = mesh.positions[corners[2]];
       const glm::dvec3 cross = glm::cross(v1 - v0, v2 - v0);
-      if (cross != glm::dvec3(0.0)) triangles_.push_back({v0, v1, v2, unit_vector(cross), index});
+      if (cross != glm::dvec3(0.0)) {
+        triangles.push_back({v0, v1, v2, unit_vector(cross), index});
+        boxes.push_back({glm::min(v0, glm::min(v1, v2)), glm::max(v0, glm::max(v1, v2))});
+      }
       ++index;
     }
   }
+  if (triangles.empty()) return;
+  const Bvh bvh = build_bvh(boxes);
+  triangles_.reserve(triangles.size());
+  for (uint32_t i : bvh.primitive_order) triangles_.push_back(triangles[i]);
+  nodes_ = bvh.nodes;
+  child_boxes_ = child_bounds<Box>(bvh, [&](uint32_t slot) { return boxes[bvh.primitive_order[slot]]; });
 }
 
-ReferenceHit ReferenceScene::trace(const glm::dvec3& origin, const glm::dvec3& dir) const {
+void ReferenceScene::test_triangle(const Triangle& triangle, const glm::dvec3& origin, const glm::dvec3& dir,
+                                   ReferenceHit& hit) const {
+  // Asking for hits up to the next double after the best distance lets an exact tie through, to be
+  // settled by index.
+  const double t_max = std::nextafter(hit.t, no_hit);
+  const double t = intersect_triangle(triangle.v0, triangle.v1, triangle.v2, origin, dir, t_max);
+  if (t < hit.t || (t == hit.t && t < t_max && hit.kind == PrimitiveKind::triangle && triangle.index < hit.index)) {
+    hit = {t, triangle.normal, PrimitiveKind::triangle, triangle.index};
+  }
+}
+
+namespace {
+
+// Where the ray enters `box`, or +inf when it misses it or enters beyond t_max. Conservative like
+// the shader's test (shaders/intersect.glsl) with gamma(3) of double: a box holding a hit is never
+// culled. Zero direction components get a huge finite inverse, so no 0 * inf makes a NaN.
+double enter_box(const Box& box, const glm::dvec3& origin, const glm::dvec3& inv_dir, double t_max) {
+  double near = 0.0;
+  double far = no_hit;
+  for (int axis = 0; axis < 3; ++axis) {
+    const double t0 = (box.lower[axis] - origin[axis]) * inv_dir[axis];
+    const double t1 = (box.upper[axis] - origin[axis]) * inv_dir[axis];
+    near = std::max(near, std::min(t0, t1));
+    far = std::min(far, std::max(t0, t1));
+  }
+  constexpr double gamma3 = 3.0 * 0x1p-53 / (1.0 - 3.0 * 0x1p-53);
+  return near <= far * (1.0 + 2.0 * gamma3) && near <= t_max ? near : no_hit;
+}
+
+}  // namespace
+
+void ReferenceScene::nearest_triangle_in_tree(const glm::dvec3& origin, const glm::dvec3& dir, ReferenceHit& hit) const {
+  glm::dvec3 inv_dir;
+  for (int axis = 0; axis < 3; ++axis) {
+    constexpr double tiny = 1e-300;
+    inv_dir[axis] = 1.0 / (std::abs(dir[axis]) < tiny ? std::copysign(tiny, dir[axis]) : dir[axis]);
+  }
+  std::array<uint32_t, VKRAY_BVH_MAX_DEPTH + 1> stack;
+  size_t stack_size = 0;
+  uint32_t current = 0;
+  while (true) {
+    if (!is_leaf(current)) {
+      // <= t_max rather than <: a triangle at exactly the best distance may still win the tie.
+      const double enter0 = enter_box(child_boxes_[current][0], origin, inv_dir, hit.t);
+      const double enter1 = enter_box(child_boxes_[current][1], origin, inv_dir, hit.t);
+      const auto& children = nodes_[current];
+      if (enter0 < no_hit && enter1 < no_hit) {
+        const bool second_first = enter1 < enter0;
+        stack[stack_size++] = children[second_first ? 0 : 1];
+        current = children[second_first ? 1 : 0];
+        continue;
+      }
+      if (enter0 < no_hit || enter1 < no_hit) {
+        current = children[enter0 < no_hit ? 0 : 1];
+        continue;
+      }
+    } else {
+      for (uint32_t k = 0; k < leaf_count(current); ++k) test_triangle(triangles_[leaf_first(current) + k], origin, dir, hit);
+    }
+    if (stack_size == 0) return;
+    current = stack[--stack_size];
+  }
+}
+
+ReferenceHit ReferenceScene::trace_with(const glm::dvec3& origin, const glm::dvec3& dir, bool brute_force) const {
   ReferenceHit hit;
   for (uint32_t i = 0; i < spheres_.size(); ++i) {
     const glm::dvec3 f = origin - spheres_[i].center;
@@ -88,15 +163,24 @@ ReferenceHit ReferenceScene::trace(const glm::dvec3& origin, const glm::dvec3& d
     const double t = intersect_plane(planes_[i].normal, planes_[i].point, origin, dir, hit.t);
     if (t < hit.t) hit = {t, planes_[i].normal, PrimitiveKind::plane, i};
   }
-  for (const auto& triangle : triangles_) {
-    const double t = intersect_triangle(triangle.v0, triangle.v1, triangle.v2, origin, dir, hit.t);
-    if (t < hit.t) hit = {t, triangle.normal, PrimitiveKind::triangle, triangle.index};
+  if (brute_force) {
+    for (const auto& triangle : triangles_) test_triangle(triangle, origin, dir, hit);
+  } else if (!nodes_.empty()) {
+    nearest_triangle_in_tree(origin, dir, hit);
   }
   if (hit.kind != PrimitiveKind::none) {
     hit.normal = glm::normalize(hit.normal);
     if (glm::dot(hit.normal, dir) > 0.0) hit.normal = -hit.normal;
   }
   return hit;
+}
+
+ReferenceHit ReferenceScene::trace(const glm::dvec3& origin, const glm::dvec3& dir) const {
+  return trace_with(origin, dir, false);
+}
+
+ReferenceHit ReferenceScene::trace_brute_force(const glm::dvec3& origin, const glm::dvec3& dir) const {
+  return trace_with(origin, dir, true);
 }
 
 std::vector<ReferenceHit> render_reference_hits(const ReferenceScene& scene, const CameraBasis& camera,
@@ -116,6 +200,13 @@ std::vector<ReferenceHit> render_reference_hits(const ReferenceScene& scene, con
   return hits;
 }
 
+void store_reference_hit(Frame& frame, size_t pixel, const ReferenceHit& hit) {
+  if (frame.aovs.has(Aov::depth)) frame.depth[pixel] = static_cast<float>(hit.t);
+  if (frame.aovs.has(Aov::normal)) {
+    for (size_t c = 0; c < 3; ++c) frame.normal[c * frame.pixel_count() + pixel] = static_cast<float>(hit.normal[int(c)]);
+  }
+}
+
 Frame reference_frame(const std::vector<ReferenceHit>& hits, uint32_t width, uint32_t height, AovSet aovs) {
   Frame frame{width, height, aovs, {}, {}, {}};
   frame.allocate();
@@ -123,10 +214,7 @@ Frame reference_frame(const std::vector<ReferenceHit>& hits, uint32_t width, uin
   for (uint32_t j = 0; j < height; ++j) {
     for (uint32_t i = 0; i < width; ++i) {
       const size_t p = size_t{j} * width + i;
-      if (aovs.has(Aov::depth)) frame.depth[p] = static_cast<float>(hits[p].t);
-      if (aovs.has(Aov::normal)) {
-        for (size_t c = 0; c < 3; ++c) frame.normal[c * pixels + p] = static_cast<float>(hits[p].normal[int(c)]);
-      }
+      store_reference_hit(frame, p, hits[p]);
       if (aovs.has(Aov::uv)) {
         const glm::dvec2 uv = pixel_uv(i, j, width, height);
         frame.uv[p] = static_cast<float>(uv.x);

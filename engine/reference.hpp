@@ -1,8 +1,10 @@
 // CPU reference ray caster in double precision: the ground truth the GPU output is measured
-// against. Brute force over every primitive (exact, no acceleration structure yet), parallel over
-// image rows.
+// against. Triangles are found through a BVH built by the same builder as the GPU's, traversed in
+// double with box tests that never cull a hit; brute force over every triangle stays available so
+// tests can check the tree against it. Parallel over image rows.
 #pragma once
 
+#include "engine/bvh.hpp"
 #include "engine/camera.hpp"
 #include "engine/frame.hpp"
 #include "engine/scene.hpp"
@@ -36,21 +38,35 @@ struct ReferenceHit {
 class ReferenceScene {
  public:
   explicit ReferenceScene(const Scene& scene);
+  // The nearest hit. Among triangles at exactly the same distance the lowest index wins, so the
+  // tree and brute force agree on the triangle, not only on the distance.
   ReferenceHit trace(const glm::dvec3& origin, const glm::dvec3& dir) const;
+  // The same with every triangle tested: the check on the tree.
+  ReferenceHit trace_brute_force(const glm::dvec3& origin, const glm::dvec3& dir) const;
 
  private:
   struct Triangle {
     glm::dvec3 v0, v1, v2, normal;
     uint32_t index;
   };
+  void test_triangle(const Triangle& triangle, const glm::dvec3& origin, const glm::dvec3& dir, ReferenceHit& hit) const;
+  void nearest_triangle_in_tree(const glm::dvec3& origin, const glm::dvec3& dir, ReferenceHit& hit) const;
+  ReferenceHit trace_with(const glm::dvec3& origin, const glm::dvec3& dir, bool brute_force) const;
+
   std::vector<Sphere> spheres_;
   std::vector<Plane> planes_;
-  std::vector<Triangle> triangles_;  // zero-area triangles left out: no ray can hit them
+  std::vector<Triangle> triangles_;  // zero-area triangles left out (no ray can hit them), in leaf order
+  std::vector<std::array<uint32_t, 2>> nodes_;    // the BVH's child references (engine/bvh.hpp)
+  std::vector<std::array<Box, 2>> child_boxes_;   // their boxes, exact in double
 };
 
 // Every pixel's hit for the scene's camera at width x height.
 std::vector<ReferenceHit> render_reference_hits(const ReferenceScene& scene, const CameraBasis& camera,
                                                 uint32_t width, uint32_t height);
+
+// Pixel `pixel` of `frame`'s outputs (depth and normal; uv is the camera's) from a reference hit,
+// rounded to float only here.
+void store_reference_hit(Frame& frame, size_t pixel, const ReferenceHit& hit);
 
 // The same outputs the GPU writes, from reference hits (rounded to float only at the end).
 Frame reference_frame(const std::vector<ReferenceHit>& hits, uint32_t width, uint32_t height, AovSet aovs);

@@ -2,6 +2,7 @@
 
 #include "engine/camera.hpp"
 #include "engine/gpu_scene.hpp"
+#include "engine/reference.hpp"
 #include "engine/vulkan/buffer.hpp"
 #include "engine/vulkan/raycast_pipeline.hpp"
 
@@ -49,7 +50,17 @@ struct TileOutputs {
   uint32_t rows = 0;
   uint32_t aov_bits = 0;
   std::optional<OutputBuffer> depth, normal, uv;
+  std::optional<OutputBuffer> overflow;  // only where a loop budget applies
 };
+
+// Loop iterations of raycast.comp outside the tree walk, and a margin for the few iterations the
+// compiler may keep where it fails to unroll a constant-trip loop.
+uint64_t fixed_loop_iterations(const GpuScene& scene) {
+  constexpr uint64_t loop_margin = 16;
+  uint64_t iterations = scene.spheres.size() + scene.planes.size() + loop_margin;
+  if (scene.triangle_search == TriangleSearch::brute_force) iterations += scene.triangle_slots() / VKRAY_TRIANGLE_BATCH;
+  return iterations;
+}
 
 }  // namespace
 
@@ -61,25 +72,32 @@ struct Renderer::Impl {
   RendererOptions options;
   glm::dvec3 anchor{0.0};
   GpuBuffer placeholder;  // bound wherever the scene lacks a primitive type or an output is off
-  std::optional<GpuBuffer> spheres, planes, triangles, meshes;
+  std::optional<GpuBuffer> spheres, planes, bvh_nodes, triangle_indices, positions, triangle_normals;
+  SceneStats stats;
+  // Where a loop budget applies: the scene, to finish on the CPU the rays that run out of it.
+  std::optional<Scene> scene_for_unfinished;
+  std::optional<ReferenceScene> reference;
   std::optional<RaycastPipeline> pipeline;
   vk::raii::QueryPool timestamps{nullptr};
   TileOutputs tile;
   RenderTimings timings;
 
   OutputBuffer make_output(vk::DeviceSize bytes) {
-    OutputBuffer output{create_storage_buffer(context, bytes, vk::BufferUsageFlagBits::eTransferSrc), std::nullopt};
+    OutputBuffer output{create_storage_buffer(context, bytes,
+                                              vk::BufferUsageFlagBits::eTransferSrc | vk::BufferUsageFlagBits::eTransferDst),
+                        std::nullopt};
     if (!output.written.mapped) output.readback = create_readback_buffer(context, bytes);
     return output;
   }
 
   void prepare_tile(uint32_t width, uint32_t rows, AovSet aovs) {
     if (tile.width == width && tile.rows == rows && tile.aov_bits == aovs.bits()) return;
-    tile = TileOutputs{width, rows, aovs.bits(), {}, {}, {}};
+    tile = TileOutputs{width, rows, aovs.bits(), {}, {}, {}, {}};
     const vk::DeviceSize pixels = vk::DeviceSize{width} * rows;
     if (aovs.has(Aov::depth)) tile.depth = make_output(pixels * depth_bytes);
     if (aovs.has(Aov::normal)) tile.normal = make_output(pixels * normal_bytes);
     if (aovs.has(Aov::uv)) tile.uv = make_output(pixels * uv_bytes);
+    if (stats.loop_budget > 0 && aovs.needs_rays()) tile.overflow = make_output((pixels + 1) * sizeof(uint32_t));
     auto handle = [&](const auto& buffer) { return buffer ? *buffer->buffer : *placeholder.buffer; };
     auto output_handle = [&](const std::optional<OutputBuffer>& output) {
       return output ? *output->written.buffer : *placeholder.buffer;
@@ -87,12 +105,34 @@ struct Renderer::Impl {
     std::array<vk::Buffer, VKRAY_BINDING_COUNT> bindings;
     bindings[VKRAY_BINDING_SPHERES] = handle(spheres);
     bindings[VKRAY_BINDING_PLANES] = handle(planes);
-    bindings[VKRAY_BINDING_TRIANGLES] = handle(triangles);
-    bindings[VKRAY_BINDING_MESHES] = handle(meshes);
+    bindings[VKRAY_BINDING_BVH_NODES] = handle(bvh_nodes);
+    bindings[VKRAY_BINDING_TRIANGLE_INDICES] = handle(triangle_indices);
+    bindings[VKRAY_BINDING_POSITIONS] = handle(positions);
+    bindings[VKRAY_BINDING_TRIANGLE_NORMALS] = handle(triangle_normals);
+    bindings[VKRAY_BINDING_OVERFLOW] = output_handle(tile.overflow);
     bindings[VKRAY_BINDING_DEPTH] = output_handle(tile.depth);
     bindings[VKRAY_BINDING_NORMAL] = output_handle(tile.normal);
     bindings[VKRAY_BINDING_UV] = output_handle(tile.uv);
     pipeline->bind_buffers(bindings);
+  }
+
+  // Rays listed in the overflow buffer ran out of the loop budget with part of the tree not yet
+  // visited: they are traced again, exactly, by the double-precision reference. Rare: a primary ray
+  // visits tens to hundreds of nodes, the budget is ~65000 on lavapipe.
+  void finish_unfinished_rays(Frame& frame, const CameraBasis& basis, uint32_t first_row) {
+    const auto* overflow = static_cast<const uint32_t*>(tile.overflow->host());
+    const uint32_t count = overflow[0];
+    if (count == 0) return;
+    const auto start = Clock::now();
+    if (!reference) reference.emplace(*scene_for_unfinished);
+    for (uint32_t k = 0; k < count; ++k) {
+      const uint32_t i = overflow[1 + k] % frame.width;
+      const uint32_t j = first_row + overflow[1 + k] / frame.width;
+      store_reference_hit(frame, size_t{j} * frame.width + i,
+                          reference->trace(basis.origin, basis.direction(pixel_uv(i, j, frame.width, frame.height))));
+    }
+    timings.unfinished_rays += count;
+    timings.cpu_finish_ms += elapsed_ms(start);
   }
 
   // Rows per dispatch: every output buffer within the device's storage-buffer range (and the
@@ -104,7 +144,10 @@ struct Renderer::Impl {
     if (aovs.has(Aov::uv)) largest = std::max(largest, uv_bytes);
     vk::DeviceSize limit = context.limits.maxStorageBufferRange;
     if (options.max_tile_bytes > 0) limit = std::min<vk::DeviceSize>(limit, options.max_tile_bytes);
-    const vk::DeviceSize by_bytes = std::max<vk::DeviceSize>(1, limit / (vk::DeviceSize{width} * largest));
+    vk::DeviceSize by_bytes = std::max<vk::DeviceSize>(1, limit / (vk::DeviceSize{width} * largest));
+    if (stats.loop_budget > 0) {  // the overflow list: a count, then 4 bytes a pixel
+      by_bytes = std::min(by_bytes, std::max<vk::DeviceSize>(1, (limit - sizeof(uint32_t)) / (vk::DeviceSize{width} * 4)));
+    }
     const vk::DeviceSize by_groups = vk::DeviceSize{context.limits.maxComputeWorkGroupCount[1]} * VKRAY_WORKGROUP_Y;
     return static_cast<uint32_t>(std::min<vk::DeviceSize>({height, by_bytes, by_groups}));
   }
@@ -115,38 +158,58 @@ Renderer::Renderer(GpuDevice& device, const Scene& scene, RendererOptions option
   with_vulkan_errors("uploading the scene", [&] {
     const auto start = Clock::now();
     Impl& r = *impl_;
-    const GpuScene gpu_scene = make_gpu_scene(scene);
-    const PrimitiveCounts counts{checked_count(gpu_scene.spheres.size(), "spheres"),
-                                 checked_count(gpu_scene.planes.size(), "planes"),
-                                 checked_count(gpu_scene.meshes.size(), "meshes")};
-    checked_count(gpu_scene.triangles.size(), "triangles");
+    const GpuScene gpu_scene = make_gpu_scene(scene, options.scene);
     const vk::DeviceSize buffer_limit =
         std::min<vk::DeviceSize>(r.context.limits.maxStorageBufferRange, r.context.info.max_allocation_bytes);
-    if (gpu_scene.triangles.size() * sizeof(gpu::GpuTriangle) > buffer_limit) {
-      throw GpuError(std::to_string(gpu_scene.triangles.size()) + " triangles take " +
-                     std::to_string(gpu_scene.triangles.size() * sizeof(gpu::GpuTriangle) >> 20) + " MiB, more than " +
-                     r.context.info.name + " can bind as one storage buffer (" + std::to_string(buffer_limit >> 20) +
-                     " MiB)");
-    }
-    // The count above models the loops of raycast.comp; the margin covers the few iterations the
-    // compiler may keep where it fails to unroll a constant-trip loop.
-    constexpr uint64_t loop_margin = 16;
+    auto upload = [&]<typename T>(const std::vector<T>& items, const char* what) -> std::optional<GpuBuffer> {
+      const vk::DeviceSize bytes = items.size() * sizeof(T);
+      if (bytes > buffer_limit) {
+        throw GpuError("the scene's " + std::string(what) + " take " + std::to_string(bytes >> 20) + " MiB, more than " +
+                       r.context.info.name + " can bind as one storage buffer (" + std::to_string(buffer_limit >> 20) +
+                       " MiB)");
+      }
+      return upload_if_any(r.context, items);
+    };
+    r.spheres = upload(gpu_scene.spheres, "spheres");
+    r.planes = upload(gpu_scene.planes, "planes");
+    r.bvh_nodes = upload(gpu_scene.bvh_nodes, "BVH nodes");
+    r.triangle_indices = upload(gpu_scene.triangle_indices, "triangle indices");
+    r.positions = upload(gpu_scene.positions, "vertex positions");
+    r.triangle_normals = upload(gpu_scene.triangle_normals, "triangle normals");
+    r.stats = SceneStats{gpu_scene.triangle_count, gpu_scene.triangle_bytes(),
+                         static_cast<uint32_t>(gpu_scene.bvh_nodes.size()), gpu_scene.bvh_depth,
+                         gpu_scene.triangle_search, 0};
+
+    // A tree walk has no static bound on its iterations; where the device caps them, the walk gets
+    // what the other loops leave and rays that need more are finished on the CPU.
     const uint64_t loop_limit = r.context.info.max_loop_iterations;
-    if (loop_limit > 0 && loop_iterations_per_ray(gpu_scene) + loop_margin > loop_limit) {
-      throw GpuError("this scene needs up to " + std::to_string(loop_iterations_per_ray(gpu_scene)) +
-                     " shader loop iterations per pixel, but " + r.context.info.name + " stops a shader after " +
-                     std::to_string(loop_limit) + " and would silently drop geometry; use another device (--device)");
+    const uint64_t fixed_iterations = fixed_loop_iterations(gpu_scene);
+    if (loop_limit > 0 && fixed_iterations >= loop_limit) {
+      throw GpuError("this scene needs " + std::to_string(fixed_iterations) + " shader loop iterations per pixel, but " +
+                     r.context.info.name + " stops a shader after " + std::to_string(loop_limit) +
+                     " and would silently drop geometry; use another device (--device)");
     }
+    const bool walks_tree = !gpu_scene.bvh_nodes.empty();
+    if (walks_tree && (loop_limit > 0 || options.loop_budget > 0)) {
+      uint64_t budget = loop_limit > 0 ? loop_limit - fixed_iterations : UINT32_MAX;
+      if (options.loop_budget > 0) budget = std::min<uint64_t>(budget, options.loop_budget);
+      r.stats.loop_budget = static_cast<uint32_t>(budget);
+      r.scene_for_unfinished = scene;
+    }
+
     r.anchor = gpu_scene.anchor;
     r.placeholder = create_storage_buffer(r.context, 16);
-    r.spheres = upload_if_any(r.context, gpu_scene.spheres);
-    r.planes = upload_if_any(r.context, gpu_scene.planes);
-    r.triangles = upload_if_any(r.context, gpu_scene.triangles);
-    r.meshes = upload_if_any(r.context, gpu_scene.meshes);
-    r.pipeline.emplace(r.context, counts);
+    r.pipeline.emplace(r.context, PipelineSpecialization{checked_count(gpu_scene.spheres.size(), "spheres"),
+                                                         checked_count(gpu_scene.planes.size(), "planes"),
+                                                         gpu_scene.triangle_slots(),
+                                                         gpu_scene.triangle_count > 0
+                                                             ? static_cast<uint32_t>(gpu_scene.triangle_search)
+                                                             : uint32_t{VKRAY_TRIANGLES_NONE},
+                                                         r.stats.loop_budget});
     if (r.context.info.timestamp_period_ns > 0.0) {
       r.timestamps = vk::raii::QueryPool(r.context.device, vk::QueryPoolCreateInfo({}, vk::QueryType::eTimestamp, 3));
     }
+    r.timings.bvh_build_ms = gpu_scene.bvh_build_ms;
     r.timings.upload_ms = elapsed_ms(start);
   });
 }
@@ -155,12 +218,15 @@ Renderer::~Renderer() = default;
 
 const RenderTimings& Renderer::timings() const { return impl_->timings; }
 
+const SceneStats& Renderer::scene_stats() const { return impl_->stats; }
+
 Frame Renderer::render(const Camera& camera, uint32_t width, uint32_t height, AovSet aovs) {
   check_image_size(width, height);
   Impl& r = *impl_;
   Frame frame{width, height, aovs, {}, {}, {}};
   frame.allocate();
-  r.timings = RenderTimings{r.timings.upload_ms, 0.0, *r.timestamps != vk::QueryPool(), 0.0, 0.0, 0};
+  r.timings = RenderTimings{r.timings.upload_ms, r.timings.bvh_build_ms, 0.0, *r.timestamps != vk::QueryPool(),
+                            0.0, 0.0, 0, 0, 0.0};
   if (aovs.empty()) return frame;
 
   with_vulkan_errors("rendering", [&] {
@@ -177,6 +243,13 @@ Frame Renderer::render(const Camera& camera, uint32_t width, uint32_t height, Ao
           commands.resetQueryPool(*r.timestamps, 0, 3);
           commands.writeTimestamp(vk::PipelineStageFlagBits::eTopOfPipe, *r.timestamps, 0);
         }
+        if (r.tile.overflow) {
+          commands.fillBuffer(*r.tile.overflow->written.buffer, 0, sizeof(uint32_t), 0u);
+          const vk::MemoryBarrier cleared(vk::AccessFlagBits::eTransferWrite,
+                                          vk::AccessFlagBits::eShaderRead | vk::AccessFlagBits::eShaderWrite);
+          commands.pipelineBarrier(vk::PipelineStageFlagBits::eTransfer, vk::PipelineStageFlagBits::eComputeShader, {},
+                                   cleared, {}, {});
+        }
         r.pipeline->bind(commands, pipeline, params);
         commands.dispatch((width + VKRAY_WORKGROUP_X - 1) / VKRAY_WORKGROUP_X,
                           (rows + VKRAY_WORKGROUP_Y - 1) / VKRAY_WORKGROUP_Y, 1);
@@ -188,7 +261,7 @@ Frame Renderer::render(const Camera& camera, uint32_t width, uint32_t height, Ao
                                  vk::PipelineStageFlagBits::eTransfer | vk::PipelineStageFlagBits::eHost, {}, barrier,
                                  {}, {});
         bool copied = false;
-        for (const auto* output : {&r.tile.depth, &r.tile.normal, &r.tile.uv}) {
+        for (const auto* output : {&r.tile.depth, &r.tile.normal, &r.tile.uv, &r.tile.overflow}) {
           if (*output && (*output)->readback) {
             commands.copyBuffer(*(*output)->written.buffer, *(*output)->readback->buffer,
                                 vk::BufferCopy(0, 0, (*output)->written.size));
@@ -227,6 +300,7 @@ Frame Renderer::render(const Camera& camera, uint32_t width, uint32_t height, Ao
       copy_planes(r.tile.normal, frame.normal, 3);
       copy_planes(r.tile.uv, frame.uv, 2);
       r.timings.readback_ms += elapsed_ms(copy_start);
+      if (r.tile.overflow) r.finish_unfinished_rays(frame, basis, first_row);
       ++r.timings.tiles;
     }
   });

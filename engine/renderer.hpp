@@ -4,6 +4,7 @@
 
 #include "engine/frame.hpp"
 #include "engine/gpu_device.hpp"
+#include "engine/gpu_scene.hpp"
 #include "engine/scene.hpp"
 
 #include <memory>
@@ -11,12 +12,25 @@
 namespace vkray {
 
 struct RenderTimings {
-  double upload_ms = 0.0;          // scene conversion and upload (once, in the constructor)
+  double upload_ms = 0.0;          // scene conversion and upload (once, in the constructor), BVH build included
+  double bvh_build_ms = 0.0;       // of which building the BVH
   double pipeline_ms = 0.0;        // pipeline creation (first render with a given set of outputs)
   bool has_gpu_times = false;      // the device has timestamps; else dispatch_gpu_ms is not measured
   double dispatch_gpu_ms = 0.0;    // GPU time of the ray-casting dispatches (timestamp queries)
   double readback_ms = 0.0;        // copying results back into the Frame
   uint32_t tiles = 0;              // dispatches the image was split into
+  uint64_t unfinished_rays = 0;    // rays that ran out of the device's loop budget, finished on the CPU
+  double cpu_finish_ms = 0.0;      // time spent finishing them
+};
+
+// What the constructor put on the device.
+struct SceneStats {
+  uint32_t triangles = 0;          // kept (non-degenerate) triangles
+  size_t triangle_bytes = 0;       // device memory of the triangles and their BVH
+  uint32_t bvh_nodes = 0;
+  uint32_t bvh_depth = 0;
+  TriangleSearch triangle_search = TriangleSearch::brute_force;
+  uint32_t loop_budget = 0;        // iterations a tree walk may take on this device; 0: no limit
 };
 
 struct RendererOptions {
@@ -24,6 +38,10 @@ struct RendererOptions {
   // under it and under the device's maxStorageBufferRange (a tile has at least one row, whatever
   // the bound). 0: the device limit alone.
   uint64_t max_tile_bytes = 0;
+  GpuSceneOptions scene;
+  // Iterations one ray's tree walk may take before the CPU finishes it; 0: as many as the device
+  // allows. Tests lower it to force that path.
+  uint32_t loop_budget = 0;
 };
 
 class Renderer {
@@ -36,8 +54,9 @@ class Renderer {
   // Renders `camera` at width x height; only the outputs in `aovs` are computed and read back.
   Frame render(const Camera& camera, uint32_t width, uint32_t height, AovSet aovs);
 
-  // Timings of the last render (upload_ms is the constructor's).
+  // Timings of the last render (upload_ms and bvh_build_ms are the constructor's).
   const RenderTimings& timings() const;
+  const SceneStats& scene_stats() const;
 
  private:
   struct Impl;

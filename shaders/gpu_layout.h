@@ -20,26 +20,41 @@ using uvec4 = glm::uvec4;
 #define VKRAY_WORKGROUP_X 8
 #define VKRAY_WORKGROUP_Y 8
 
-// Descriptor bindings, all in set 0. Buffers of primitive types the scene lacks are bound to one
-// shared 16-byte placeholder and never read (the specialized count is 0).
+// Descriptor bindings, all in set 0. Buffers the scene or the chosen outputs do not need are bound
+// to one shared 16-byte placeholder and never read (their specialized count or flag is 0).
 #define VKRAY_BINDING_SPHERES 0
 #define VKRAY_BINDING_PLANES 1
-#define VKRAY_BINDING_TRIANGLES 2
+#define VKRAY_BINDING_BVH_NODES 2
 #define VKRAY_BINDING_DEPTH 3
 #define VKRAY_BINDING_NORMAL 4
 #define VKRAY_BINDING_UV 5
-#define VKRAY_BINDING_MESHES 6
-#define VKRAY_BINDING_COUNT 7
+#define VKRAY_BINDING_TRIANGLE_INDICES 6
+#define VKRAY_BINDING_POSITIONS 7
+#define VKRAY_BINDING_TRIANGLE_NORMALS 8
+#define VKRAY_BINDING_OVERFLOW 9
+#define VKRAY_BINDING_COUNT 10
 
-// Specialization constants: primitive counts (0 removes that loop and its buffer reads) and which
-// outputs are written.
+// How the shader finds the nearest triangle (VKRAY_SPEC_TRIANGLE_MODE).
+#define VKRAY_TRIANGLES_NONE 0
+#define VKRAY_TRIANGLES_BRUTE_FORCE 1  // every triangle, in batches; no tree (tiny meshes)
+#define VKRAY_TRIANGLES_BVH_PER_RAY 2  // each ray walks the tree with its own stack
+#define VKRAY_TRIANGLES_BVH_PACKET 3   // a subgroup's rays walk the tree together, one shared stack
+
+// Specialization constants: primitive counts (0 removes that loop and its buffer reads), how
+// triangles are found, which outputs are written, and the loop budget.
 #define VKRAY_SPEC_SPHERE_COUNT 0
 #define VKRAY_SPEC_PLANE_COUNT 1
-#define VKRAY_SPEC_MESH_COUNT 2
+#define VKRAY_SPEC_TRIANGLE_COUNT 2  // triangle slots, a multiple of VKRAY_TRIANGLE_BATCH
 #define VKRAY_SPEC_WRITE_DEPTH 3
 #define VKRAY_SPEC_WRITE_NORMAL 4
 #define VKRAY_SPEC_WRITE_UV 5
-#define VKRAY_SPEC_COUNT 6
+#define VKRAY_SPEC_TRIANGLE_MODE 6
+// Iterations the tree walk of one ray may take; 0: unlimited. llvmpipe (lavapipe) silently ends
+// every loop of a shader invocation after 65535 iterations in total (LP_MAX_TGSI_LOOP_ITERATIONS);
+// a ray that would need more stops at this budget instead, lists its pixel in the overflow
+// buffer, and the host finishes that pixel (see engine/renderer.cpp): no geometry goes missing.
+#define VKRAY_SPEC_LOOP_BUDGET 7
+#define VKRAY_SPEC_COUNT 8
 
 // All positions on the GPU are relative to the scene's anchor point (see engine/gpu_scene.cpp), so
 // float32 keeps its precision for scenes far from the world origin.
@@ -56,31 +71,39 @@ struct GpuPlane {
 };
 VKRAY_CHECK_SIZE(GpuPlane, 16);
 
-// Vertices relative to the anchor (w unused) and the unit geometric normal, computed in double on
-// the host so needle triangles get an accurate normal. 64 bytes: one cache line per triangle.
-struct GpuTriangle {
-  vec4 v0;
-  vec4 v1;
-  vec4 v2;
-  vec4 normal;
-};
-VKRAY_CHECK_SIZE(GpuTriangle, 64);
+// Triangles are indexed (three uints each, into a float[3] per vertex array of positions relative
+// to the anchor) and stored in the order of the BVH's leaves, so a leaf is a contiguous range. Their
+// unit geometric normals (float[3] each, same order) are computed in double on the host, so needle
+// triangles get an accurate normal; the shader reads one only for the winning triangle.
+// Per triangle: 12 bytes of indices + 12 of normal + about 6 of positions (a closed mesh has half
+// as many vertices as triangles) + the tree's nodes.
 
-// Each mesh's triangles are padded with all-zero triangles (never hit: their determinant is 0) to a
-// multiple of this batch, which the shader tests in one loop iteration with a constant trip count
-// the compiler unrolls. Besides saving loop overhead this matters on lavapipe: llvmpipe ends a
-// shader invocation's loops after 65535 iterations in total (its guard against endless loops),
-// silently skipping what is left; see GpuDeviceInfo::max_loop_iterations.
+// The brute-force path tests triangles in batches of this many, padded with (0, 0, 0) triangles
+// (never hit: their determinant is 0), in one loop iteration with a constant trip count the
+// compiler unrolls. This matters on lavapipe, whose loop cap counts iterations.
 #define VKRAY_TRIANGLE_BATCH 8
 
-// A mesh's bounding box (relative to the anchor; w unused) and its range of triangles: rays that
-// miss the box skip all of them.
-struct GpuMesh {
-  vec4 lower;
-  vec4 upper;
-  uvec4 triangles;  // x: first triangle, y: triangle count (a multiple of VKRAY_TRIANGLE_BATCH)
+// BVH: binary, with both children's boxes stored in their parent, so one node fetch gives a ray
+// both slab tests and the nearer child. 64 bytes, one cache line. Per axis: (lower of child 0,
+// lower of child 1, upper of child 0, upper of child 1). Boxes are float32, relative to the anchor,
+// and hold the float32 triangles exactly.
+struct GpuBvhNode {
+  vec4 bounds_x;
+  vec4 bounds_y;
+  vec4 bounds_z;
+  uvec4 children;  // x, y: child references; z, w: 0
 };
-VKRAY_CHECK_SIZE(GpuMesh, 48);
+VKRAY_CHECK_SIZE(GpuBvhNode, 64);
+
+// A child reference is an inner node's index, or, with VKRAY_BVH_LEAF_BIT set, a leaf: its first
+// triangle in the low bits above VKRAY_BVH_LEAF_COUNT_BITS and its triangle count minus one below.
+#define VKRAY_BVH_LEAF_BIT 0x80000000u
+#define VKRAY_BVH_LEAF_COUNT_BITS 2
+#define VKRAY_BVH_MAX_LEAF_SIZE 4                 // 1 << VKRAY_BVH_LEAF_COUNT_BITS
+#define VKRAY_BVH_MAX_PRIMITIVES 0x1fffffffu      // what the 29 bits of a leaf's first index hold
+// The builder stops splitting at this depth; it bounds the traversal stack. A SAH tree over n
+// primitives is about 2 log2(n) deep (~45 for 4M triangles); beyond 64 the builder makes leaves.
+#define VKRAY_BVH_MAX_DEPTH 64
 
 // Per-dispatch camera and image parameters (push constants). The camera basis is computed in
 // double on the host; the shader only evaluates direction = x*right + y*up + forward_scaled.

@@ -148,19 +148,22 @@ vec3 safe_inverse(vec3 dir) {
   return 1.0 / mix(dir, mix(vec3(tiny), vec3(-tiny), lessThan(dir, vec3(0.0))), lessThan(abs(dir), vec3(tiny)));
 }
 
-// Slab test, conservative under rounding: the far distance is enlarged by 1 + 2 gamma(3),
+// Slab tests of a ray against two boxes at once (a BVH node's children; see GpuBvhNode for the
+// layout), conservative under rounding: the far distance is enlarged by 1 + 2 gamma(3),
 // gamma(n) = n u / (1 - n u), u = 2^-24, which covers the error of the three operations behind
-// each slab distance (Ize, "Robust BVH Ray Traversal", JCGT 2(2), 2013). A ray that meets the box
-// is never rejected, so culling by box can not open holes in a mesh.
-bool ray_hits_box(vec3 lower, vec3 upper, vec3 origin, vec3 inv_dir, float t_max) {
-  vec3 t0 = (lower - origin) * inv_dir;
-  vec3 t1 = (upper - origin) * inv_dir;
-  vec3 t_near = min(t0, t1);
-  vec3 t_far = max(t0, t1);
-  float enter = max(max(t_near.x, t_near.y), max(t_near.z, 0.0));
+// each slab distance (Ize, "Robust BVH Ray Traversal", JCGT 2(2), 2013). A ray that meets a box is
+// never rejected, so culling by box can not open holes in a mesh. `enter` is where the ray enters
+// each box (0 when it starts inside); a box is hit when it is entered before t_max.
+bvec2 ray_hits_boxes(vec4 bounds_x, vec4 bounds_y, vec4 bounds_z, vec3 origin, vec3 inv_dir, float t_max,
+                     out vec2 enter) {
+  vec4 tx = (bounds_x - origin.x) * inv_dir.x;
+  vec4 ty = (bounds_y - origin.y) * inv_dir.y;
+  vec4 tz = (bounds_z - origin.z) * inv_dir.z;
+  vec2 near = max(max(min(tx.xy, tx.zw), min(ty.xy, ty.zw)), max(min(tz.xy, tz.zw), vec2(0.0)));
   const float gamma3 = 1.7881396e-7;  // 3 * 2^-24 / (1 - 3 * 2^-24), rounded up
-  float leave = min(min(t_far.x, t_far.y), t_far.z) * (1.0 + 2.0 * gamma3);
-  return enter <= leave && enter < t_max;
+  vec2 far = min(min(max(tx.xy, tx.zw), max(ty.xy, ty.zw)), max(tz.xy, tz.zw)) * (1.0 + 2.0 * gamma3);
+  enter = near;
+  return bvec2(near.x <= far.x && near.x < t_max, near.y <= far.y && near.y < t_max);
 }
 
 #endif  // VKRAY_INTERSECT_GLSL

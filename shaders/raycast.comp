@@ -5,6 +5,7 @@
 
 #include "gpu_layout.h"
 #include "intersect.glsl"
+#include "triangles.glsl"
 
 layout(local_size_x = VKRAY_WORKGROUP_X, local_size_y = VKRAY_WORKGROUP_Y) in;
 
@@ -12,7 +13,6 @@ layout(local_size_x = VKRAY_WORKGROUP_X, local_size_y = VKRAY_WORKGROUP_Y) in;
 // A count of 0 removes that primitive loop entirely once the pipeline is specialized.
 layout(constant_id = VKRAY_SPEC_SPHERE_COUNT) const uint SPHERE_COUNT = 0;
 layout(constant_id = VKRAY_SPEC_PLANE_COUNT) const uint PLANE_COUNT = 0;
-layout(constant_id = VKRAY_SPEC_MESH_COUNT) const uint MESH_COUNT = 0;
 layout(constant_id = VKRAY_SPEC_WRITE_DEPTH) const bool WRITE_DEPTH = true;
 layout(constant_id = VKRAY_SPEC_WRITE_NORMAL) const bool WRITE_NORMAL = true;
 layout(constant_id = VKRAY_SPEC_WRITE_UV) const bool WRITE_UV = false;
@@ -21,11 +21,11 @@ layout(push_constant) uniform PushConstants { RayGenParams params; };
 
 layout(std430, binding = VKRAY_BINDING_SPHERES) readonly buffer Spheres { GpuSphere spheres[]; };
 layout(std430, binding = VKRAY_BINDING_PLANES) readonly buffer Planes { GpuPlane planes[]; };
-layout(std430, binding = VKRAY_BINDING_TRIANGLES) readonly buffer Triangles { GpuTriangle triangles[]; };
-layout(std430, binding = VKRAY_BINDING_MESHES) readonly buffer Meshes { GpuMesh meshes[]; };
 layout(std430, binding = VKRAY_BINDING_DEPTH) writeonly buffer DepthOut { float depth_out[]; };
 layout(std430, binding = VKRAY_BINDING_NORMAL) writeonly buffer NormalOut { float normal_out[]; };
 layout(std430, binding = VKRAY_BINDING_UV) writeonly buffer UvOut { float uv_out[]; };
+// Rays that ran out of LOOP_BUDGET: their count, then their pixels' indices within the tile.
+layout(std430, binding = VKRAY_BINDING_OVERFLOW) buffer Overflow { uint overflow_count; uint overflow_pixels[]; };
 
 void main() {
   uint width = params.image.x;
@@ -74,25 +74,13 @@ void main() {
       normal = plane.xyz;
     }
   }
-  if (MESH_COUNT > 0) {
-    RayFrame frame = make_ray_frame(dir);
-    vec3 inv_dir = safe_inverse(dir);
-    for (uint m = 0; m < MESH_COUNT; ++m) {
-      if (!ray_hits_box(meshes[m].lower.xyz, meshes[m].upper.xyz, origin, inv_dir, t_best)) continue;
-      // Triangles come in padded batches (see VKRAY_TRIANGLE_BATCH): one loop iteration each.
-      uint end = meshes[m].triangles.x + meshes[m].triangles.y;
-      for (uint batch = meshes[m].triangles.x; batch < end; batch += VKRAY_TRIANGLE_BATCH) {
-        for (uint k = 0; k < VKRAY_TRIANGLE_BATCH; ++k) {
-          uint i = batch + k;
-          float t = intersect_triangle(frame, origin, triangles[i].v0.xyz, triangles[i].v1.xyz,
-                                       triangles[i].v2.xyz, t_best);
-          if (t < t_best) {
-            t_best = t;
-            normal = triangles[i].normal.xyz;
-          }
-        }
-      }
+  if (TRIANGLE_MODE != VKRAY_TRIANGLES_NONE) {
+    TriangleHit hit = nearest_triangle(origin, dir, t_best);
+    if (hit.slot != no_triangle) {
+      t_best = hit.t;
+      normal = triangle_normal(hit.slot);
     }
+    if (hit.unfinished) overflow_pixels[atomicAdd(overflow_count, 1u)] = out_index;
   }
 
   if (WRITE_DEPTH) depth_out[out_index] = t_best;

@@ -71,7 +71,7 @@ EnvelopeReport check_against_reference(const Scene& scene, const Frame& frame) {
   const uint32_t width = frame.width, height = frame.height;
   const ReferenceScene reference(scene);
   const CameraBasis camera = make_camera_basis(scene.camera, width, height);
-  const double radius = scene_radius(scene, make_gpu_scene(scene).anchor);
+  const double radius = scene_radius(scene, scene_anchor(scene));
 
   std::vector<PixelSamples> samples(frame.pixel_count());
   const unsigned workers = std::max(1u, std::thread::hardware_concurrency());

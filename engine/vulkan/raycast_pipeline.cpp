@@ -6,7 +6,8 @@
 
 namespace vkray {
 
-RaycastPipeline::RaycastPipeline(VulkanContext& context, PrimitiveCounts counts) : context_(context), counts_(counts) {
+RaycastPipeline::RaycastPipeline(VulkanContext& context, PipelineSpecialization specialization)
+    : context_(context), specialization_(specialization) {
   std::array<vk::DescriptorSetLayoutBinding, VKRAY_BINDING_COUNT> bindings;
   for (uint32_t i = 0; i < bindings.size(); ++i) {
     bindings[i] = vk::DescriptorSetLayoutBinding(i, vk::DescriptorType::eStorageBuffer, 1,
@@ -31,9 +32,11 @@ const vk::raii::Pipeline& RaycastPipeline::pipeline(AovSet aovs, double& created
   const auto start = std::chrono::steady_clock::now();
   // One 32-bit value per VKRAY_SPEC_* id (SPIR-V booleans are 32-bit), stored at the id's index.
   std::array<uint32_t, VKRAY_SPEC_COUNT> values{};
-  values[VKRAY_SPEC_SPHERE_COUNT] = counts_.spheres;
-  values[VKRAY_SPEC_PLANE_COUNT] = counts_.planes;
-  values[VKRAY_SPEC_MESH_COUNT] = counts_.meshes;
+  values[VKRAY_SPEC_SPHERE_COUNT] = specialization_.spheres;
+  values[VKRAY_SPEC_PLANE_COUNT] = specialization_.planes;
+  values[VKRAY_SPEC_TRIANGLE_COUNT] = specialization_.triangle_slots;
+  values[VKRAY_SPEC_TRIANGLE_MODE] = specialization_.triangle_mode;
+  values[VKRAY_SPEC_LOOP_BUDGET] = specialization_.loop_budget;
   values[VKRAY_SPEC_WRITE_DEPTH] = aovs.has(Aov::depth) ? 1u : 0u;
   values[VKRAY_SPEC_WRITE_NORMAL] = aovs.has(Aov::normal) ? 1u : 0u;
   values[VKRAY_SPEC_WRITE_UV] = aovs.has(Aov::uv) ? 1u : 0u;

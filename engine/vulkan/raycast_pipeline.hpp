@@ -1,5 +1,5 @@
 // The compute pipeline of shaders/raycast.comp: its descriptor set, push constants, and one
-// pipeline per set of requested outputs, specialized on the scene's primitive counts.
+// pipeline per set of requested outputs, specialized on the scene (PipelineSpecialization).
 #pragma once
 
 #include "engine/frame.hpp"
@@ -11,15 +11,18 @@
 
 namespace vkray {
 
-struct PrimitiveCounts {
+// What the pipelines are specialized on besides the outputs (see VKRAY_SPEC_* in gpu_layout.h).
+struct PipelineSpecialization {
   uint32_t spheres = 0;
   uint32_t planes = 0;
-  uint32_t meshes = 0;
+  uint32_t triangle_slots = 0;
+  uint32_t triangle_mode = VKRAY_TRIANGLES_NONE;
+  uint32_t loop_budget = 0;
 };
 
 class RaycastPipeline {
  public:
-  RaycastPipeline(VulkanContext& context, PrimitiveCounts counts);
+  RaycastPipeline(VulkanContext& context, PipelineSpecialization specialization);
 
   // The pipeline for this set of outputs, created on first request. `created_ms` receives the
   // creation time, 0 when it was already there.
@@ -33,7 +36,7 @@ class RaycastPipeline {
 
  private:
   VulkanContext& context_;
-  PrimitiveCounts counts_;
+  PipelineSpecialization specialization_;
   vk::raii::DescriptorSetLayout set_layout_{nullptr};
   vk::raii::PipelineLayout layout_{nullptr};
   vk::raii::ShaderModule shader_{nullptr};

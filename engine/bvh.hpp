@@ -1,0 +1,85 @@
+// A binary bounding volume hierarchy over primitive boxes, built on the host with the surface area
+// heuristic by Embree's builder (rtcBuildBVH) into vkray's own layout. Only the topology and the
+// primitive order are kept here: each consumer computes the node bounds in its own precision from
+// its own copy of the primitives (float32 for the GPU, double for the reference), so a box always
+// holds exactly the primitives as that consumer tests them.
+#pragma once
+
+#include "shaders/gpu_layout.h"
+
+#include <glm/vec3.hpp>
+
+#include <array>
+#include <cstdint>
+#include <functional>
+#include <vector>
+
+namespace vkray {
+
+struct Box {
+  glm::dvec3 lower;
+  glm::dvec3 upper;
+};
+
+// A child reference as the shader reads it (see VKRAY_BVH_* in shaders/gpu_layout.h): an inner
+// node's index, or a leaf's first primitive (in Bvh::primitive_order) and count.
+inline bool is_leaf(uint32_t child) { return (child & VKRAY_BVH_LEAF_BIT) != 0; }
+inline uint32_t leaf_first(uint32_t child) { return (child & ~VKRAY_BVH_LEAF_BIT) >> VKRAY_BVH_LEAF_COUNT_BITS; }
+inline uint32_t leaf_count(uint32_t child) { return (child & ((1u << VKRAY_BVH_LEAF_COUNT_BITS) - 1u)) + 1u; }
+uint32_t make_leaf(uint32_t first, uint32_t count);
+
+struct BvhBuildOptions {
+  // SAH cost of one node visit relative to one primitive test (Embree's traversalCost /
+  // intersectionCost). Leaves hold at most VKRAY_BVH_MAX_LEAF_SIZE primitives.
+  float traversal_cost = 1.0f;
+  float intersection_cost = 1.0f;
+  uint32_t max_leaf_size = VKRAY_BVH_MAX_LEAF_SIZE;
+  // Called now and then with the fraction done (0..1), from Embree's threads.
+  std::function<void(double)> progress;
+};
+
+struct Bvh {
+  // Node 0 is the root; every node has exactly two children (a tree of one primitive references
+  // its single leaf twice, so the shader needs no special case for a lone leaf).
+  std::vector<std::array<uint32_t, 2>> nodes;
+  // Leaves reference ranges of this array; entries are indices into the builder's input boxes.
+  std::vector<uint32_t> primitive_order;
+  uint32_t depth = 0;  // edges on the longest root-to-leaf path
+
+  // SAH cost of the tree: sum over nodes of area(node) / area(root) * traversal cost plus, for
+  // leaves, area(leaf) / area(root) * primitives * intersection cost, with `box_of_child` giving
+  // each child's box. For comparing builders and settings.
+  double sah_cost(const std::function<Box(uint32_t child)>& box_of_child, const BvhBuildOptions& options) const;
+};
+
+// Builds the tree over `boxes` (at least one; boxes may be flat). Throws GpuError-free
+// std::runtime_error on Embree failures and std::length_error beyond VKRAY_BVH_MAX_PRIMITIVES.
+Bvh build_bvh(const std::vector<Box>& boxes, const BvhBuildOptions& options = {});
+
+// Bounds of every node's two children in one pass from the leaves up, from `primitive_box(index
+// into primitive_order)`; Bounds is any type with lower/upper members of a vector type.
+template <typename BoxType, typename PrimitiveBox>
+std::vector<std::array<BoxType, 2>> child_bounds(const Bvh& bvh, PrimitiveBox primitive_box) {
+  std::vector<std::array<BoxType, 2>> bounds(bvh.nodes.size());
+  auto merge = [](BoxType a, const BoxType& b) {
+    for (int axis = 0; axis < 3; ++axis) {
+      a.lower[axis] = a.lower[axis] < b.lower[axis] ? a.lower[axis] : b.lower[axis];
+      a.upper[axis] = a.upper[axis] > b.upper[axis] ? a.upper[axis] : b.upper[axis];
+    }
+    return a;
+  };
+  auto box_of = [&](uint32_t child) {
+    if (!is_leaf(child)) return merge(bounds[child][0], bounds[child][1]);
+    BoxType box = primitive_box(leaf_first(child));
+    for (uint32_t k = 1; k < leaf_count(child); ++k) box = merge(box, primitive_box(leaf_first(child) + k));
+    return box;
+  };
+  // Children always have larger indices than their parent (depth-first order), so a reverse sweep
+  // sees every child before its parent.
+  for (size_t node = bvh.nodes.size(); node-- > 0;) {
+    for (int side = 0; side < 2; ++side) bounds[node][side] = box_of(bvh.nodes[node][side]);
+  }
+  return bounds;
+}
+
+}  // namespace vkray
