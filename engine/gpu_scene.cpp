@@ -26,12 +26,6 @@ struct FloatBox {
   glm::vec3 upper;
 };
 
-// A triangle kept for the GPU: its vertices' indices into GpuScene::positions and its unit normal.
-struct IndexedTriangle {
-  std::array<uint32_t, 3> corners;
-  glm::dvec3 normal;
-};
-
 // Brute force beats the tree up to this many triangles on lavapipe: measured with `vkray render
 // --timings` on meshes of n random triangles at 1920x1080 (see README, "Meshes").
 constexpr size_t brute_force_max_triangles = 16;
@@ -65,29 +59,19 @@ GpuScene make_gpu_scene(const Scene& scene, const GpuSceneOptions& options) {
     gpu.planes.push_back({to_float4(plane.normal, glm::dot(plane.normal, plane.point - gpu.anchor))});
   }
 
-  // Vertices referenced by a kept triangle, relative to the anchor (rounded once, so triangles
-  // sharing a vertex see bit-identical floats: the watertight test needs that).
-  std::vector<IndexedTriangle> triangles;
+  // Triangles relative to the anchor, rounded to float once per vertex in double, so triangles
+  // sharing a vertex see bit-identical floats: the watertight test needs that.
+  std::vector<gpu::GpuTriangle> triangles;
   std::vector<Box> boxes;
   for (const auto& mesh : scene.meshes) {
-    std::vector<uint32_t> vertex_index(mesh.positions.size(), UINT32_MAX);
     for (const auto& corners : mesh.triangles) {
       const glm::dvec3 v0 = mesh.positions[corners[0]] - gpu.anchor;
       const glm::dvec3 v1 = mesh.positions[corners[1]] - gpu.anchor;
       const glm::dvec3 v2 = mesh.positions[corners[2]] - gpu.anchor;
       const glm::dvec3 cross = glm::cross(v1 - v0, v2 - v0);
       if (cross == glm::dvec3(0.0)) continue;
-      IndexedTriangle triangle{{}, unit_vector(cross)};
-      for (int k = 0; k < 3; ++k) {
-        uint32_t& index = vertex_index[corners[k]];
-        if (index == UINT32_MAX) {
-          index = static_cast<uint32_t>(gpu.positions.size() / 3);
-          const glm::vec3 p(mesh.positions[corners[k]] - gpu.anchor);
-          gpu.positions.insert(gpu.positions.end(), {p.x, p.y, p.z});
-        }
-        triangle.corners[k] = index;
-      }
-      triangles.push_back(triangle);
+      const glm::dvec3 normal = unit_vector(cross);
+      triangles.push_back({to_float4(v0, normal.x), to_float4(v1, normal.y), to_float4(v2, normal.z)});
       boxes.push_back({glm::min(v0, glm::min(v1, v2)), glm::max(v0, glm::max(v1, v2))});
     }
   }
@@ -98,21 +82,17 @@ GpuScene make_gpu_scene(const Scene& scene, const GpuSceneOptions& options) {
   }
   gpu.triangle_search = options.triangle_search == TriangleSearch::automatic ? choose_triangle_search(triangles.size())
                                                                               : options.triangle_search;
-
-  std::vector<uint32_t> order(triangles.size());
-  for (uint32_t i = 0; i < order.size(); ++i) order[i] = i;
-  if (gpu.triangle_search != TriangleSearch::brute_force) {
+  if (gpu.triangle_search == TriangleSearch::brute_force) {
+    gpu.triangles = std::move(triangles);
+  } else {
     const auto start = std::chrono::steady_clock::now();
-    Bvh bvh = build_bvh(boxes, options.bvh);
-    order = std::move(bvh.primitive_order);
-    bvh.primitive_order.clear();
+    const Bvh bvh = build_bvh(boxes, options.bvh);
+    gpu.triangles.reserve(triangles.size() + VKRAY_TRIANGLE_BATCH);
+    for (uint32_t i : bvh.primitive_order) gpu.triangles.push_back(triangles[i]);
     // Boxes of the float32 vertices the shader tests, so each box holds its triangles exactly.
-    auto vertex = [&](uint32_t index) {
-      return glm::vec3(gpu.positions[3 * index], gpu.positions[3 * index + 1], gpu.positions[3 * index + 2]);
-    };
     const auto bounds = child_bounds<FloatBox>(bvh, [&](uint32_t slot) {
-      const auto& corners = triangles[order[slot]].corners;
-      const glm::vec3 a = vertex(corners[0]), b = vertex(corners[1]), c = vertex(corners[2]);
+      const gpu::GpuTriangle& t = gpu.triangles[slot];
+      const glm::vec3 a(t.v0_nx), b(t.v1_ny), c(t.v2_nz);
       return FloatBox{glm::min(a, glm::min(b, c)), glm::max(a, glm::max(b, c))};
     });
     gpu.bvh_nodes.resize(bvh.nodes.size());
@@ -129,18 +109,8 @@ GpuScene make_gpu_scene(const Scene& scene, const GpuSceneOptions& options) {
     gpu.bvh_depth = bvh.depth;
     gpu.bvh_build_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   }
-
-  const size_t slots = (triangles.size() + VKRAY_TRIANGLE_BATCH - 1) / VKRAY_TRIANGLE_BATCH * VKRAY_TRIANGLE_BATCH;
-  gpu.triangle_indices.assign(3 * slots, 0u);
-  gpu.triangle_normals.assign(3 * slots, 0.0f);
-  for (size_t slot = 0; slot < order.size(); ++slot) {
-    const IndexedTriangle& triangle = triangles[order[slot]];
-    const glm::vec3 normal(triangle.normal);
-    for (int k = 0; k < 3; ++k) {
-      gpu.triangle_indices[3 * slot + k] = triangle.corners[k];
-      gpu.triangle_normals[3 * slot + k] = normal[k];
-    }
-  }
+  gpu.triangles.resize((gpu.triangles.size() + VKRAY_TRIANGLE_BATCH - 1) / VKRAY_TRIANGLE_BATCH * VKRAY_TRIANGLE_BATCH,
+                       gpu::GpuTriangle{});
   return gpu;
 }
 

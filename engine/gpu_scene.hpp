@@ -32,21 +32,18 @@ struct GpuScene {
   std::vector<gpu::GpuSphere> spheres;
   std::vector<gpu::GpuPlane> planes;
   // Triangles of every mesh, zero-area ones left out (no ray can hit them), in the BVH's leaf
-  // order, padded to whole VKRAY_TRIANGLE_BATCHes with (0, 0, 0) triangles: see gpu_layout.h.
-  std::vector<float> positions;          // 3 per vertex
-  std::vector<uint32_t> triangle_indices;  // 3 per triangle slot
-  std::vector<float> triangle_normals;   // 3 per triangle slot
+  // order, padded to whole VKRAY_TRIANGLE_BATCHes with all-zero triangles: see gpu_layout.h.
+  std::vector<gpu::GpuTriangle> triangles;
   uint32_t triangle_count = 0;           // real triangles, without the padding
   std::vector<gpu::GpuBvhNode> bvh_nodes;  // empty unless the search uses the tree
   uint32_t bvh_depth = 0;
   TriangleSearch triangle_search = TriangleSearch::brute_force;  // never automatic here
   double bvh_build_ms = 0.0;
 
-  uint32_t triangle_slots() const { return static_cast<uint32_t>(triangle_indices.size() / 3); }
+  uint32_t triangle_slots() const { return static_cast<uint32_t>(triangles.size()); }
   // Bytes of device memory the triangles and their tree take.
   size_t triangle_bytes() const {
-    return positions.size() * sizeof(float) + triangle_indices.size() * sizeof(uint32_t) +
-           triangle_normals.size() * sizeof(float) + bvh_nodes.size() * sizeof(gpu::GpuBvhNode);
+    return triangles.size() * sizeof(gpu::GpuTriangle) + bvh_nodes.size() * sizeof(gpu::GpuBvhNode);
   }
 };
 

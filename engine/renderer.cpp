@@ -20,10 +20,21 @@ double elapsed_ms(Clock::time_point start) {
   return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
 }
 
-template <typename T>
-std::optional<GpuBuffer> upload_if_any(VulkanContext& context, const std::vector<T>& items) {
-  if (items.empty()) return std::nullopt;
-  return upload_storage_buffer(context, items.data(), items.size() * sizeof(T));
+// Geometry the shader reads as RGBA32 texels (see gpu_layout.h), with a float view and, where the
+// texels hold indices, a uint view of the same memory.
+struct TexelBuffer {
+  GpuBuffer buffer;
+  vk::raii::BufferView floats{nullptr};
+  vk::raii::BufferView uints{nullptr};
+};
+
+constexpr vk::DeviceSize texel_bytes = 16;
+
+TexelBuffer make_texel_buffer(VulkanContext& context, const void* data, vk::DeviceSize bytes) {
+  TexelBuffer texels{upload_buffer(context, data, bytes, vk::BufferUsageFlagBits::eUniformTexelBuffer)};
+  texels.floats = create_texel_view(context, texels.buffer, vk::Format::eR32G32B32A32Sfloat);
+  texels.uints = create_texel_view(context, texels.buffer, vk::Format::eR32G32B32A32Uint);
+  return texels;
 }
 
 uint32_t checked_count(size_t count, const char* what) {
@@ -71,8 +82,10 @@ struct Renderer::Impl {
   VulkanContext& context;
   RendererOptions options;
   glm::dvec3 anchor{0.0};
-  GpuBuffer placeholder;  // bound wherever the scene lacks a primitive type or an output is off
-  std::optional<GpuBuffer> spheres, planes, bvh_nodes, triangle_indices, positions, triangle_normals;
+  // Bound wherever the scene lacks a primitive type or an output is off.
+  GpuBuffer placeholder;
+  TexelBuffer placeholder_texels;
+  std::optional<TexelBuffer> spheres, planes, triangles, bvh_nodes;
   SceneStats stats;
   // Where a loop budget applies: the scene, to finish on the CPU the rays that run out of it.
   std::optional<Scene> scene_for_unfinished;
@@ -98,22 +111,23 @@ struct Renderer::Impl {
     if (aovs.has(Aov::normal)) tile.normal = make_output(pixels * normal_bytes);
     if (aovs.has(Aov::uv)) tile.uv = make_output(pixels * uv_bytes);
     if (stats.loop_budget > 0 && aovs.needs_rays()) tile.overflow = make_output((pixels + 1) * sizeof(uint32_t));
-    auto handle = [&](const auto& buffer) { return buffer ? *buffer->buffer : *placeholder.buffer; };
-    auto output_handle = [&](const std::optional<OutputBuffer>& output) {
-      return output ? *output->written.buffer : *placeholder.buffer;
+    auto floats = [&](const std::optional<TexelBuffer>& texels) {
+      return *(texels ? texels->floats : placeholder_texels.floats);
     };
-    std::array<vk::Buffer, VKRAY_BINDING_COUNT> bindings;
-    bindings[VKRAY_BINDING_SPHERES] = handle(spheres);
-    bindings[VKRAY_BINDING_PLANES] = handle(planes);
-    bindings[VKRAY_BINDING_BVH_NODES] = handle(bvh_nodes);
-    bindings[VKRAY_BINDING_TRIANGLE_INDICES] = handle(triangle_indices);
-    bindings[VKRAY_BINDING_POSITIONS] = handle(positions);
-    bindings[VKRAY_BINDING_TRIANGLE_NORMALS] = handle(triangle_normals);
-    bindings[VKRAY_BINDING_OVERFLOW] = output_handle(tile.overflow);
-    bindings[VKRAY_BINDING_DEPTH] = output_handle(tile.depth);
-    bindings[VKRAY_BINDING_NORMAL] = output_handle(tile.normal);
-    bindings[VKRAY_BINDING_UV] = output_handle(tile.uv);
-    pipeline->bind_buffers(bindings);
+    auto output = [&](const std::optional<OutputBuffer>& buffer) {
+      return buffer ? *buffer->written.buffer : *placeholder.buffer;
+    };
+    RaycastPipeline::Resources resources{};
+    resources.texel_views[VKRAY_BINDING_SPHERES] = floats(spheres);
+    resources.texel_views[VKRAY_BINDING_PLANES] = floats(planes);
+    resources.texel_views[VKRAY_BINDING_TRIANGLES] = floats(triangles);
+    resources.texel_views[VKRAY_BINDING_BVH_BOUNDS] = floats(bvh_nodes);
+    resources.texel_views[VKRAY_BINDING_BVH_LINKS] = *(bvh_nodes ? bvh_nodes->uints : placeholder_texels.uints);
+    resources.buffers[VKRAY_BINDING_DEPTH] = output(tile.depth);
+    resources.buffers[VKRAY_BINDING_NORMAL] = output(tile.normal);
+    resources.buffers[VKRAY_BINDING_UV] = output(tile.uv);
+    resources.buffers[VKRAY_BINDING_OVERFLOW] = output(tile.overflow);
+    pipeline->bind_resources(resources);
   }
 
   // Rays listed in the overflow buffer ran out of the loop budget with part of the tree not yet
@@ -159,23 +173,23 @@ Renderer::Renderer(GpuDevice& device, const Scene& scene, RendererOptions option
     const auto start = Clock::now();
     Impl& r = *impl_;
     const GpuScene gpu_scene = make_gpu_scene(scene, options.scene);
-    const vk::DeviceSize buffer_limit =
-        std::min<vk::DeviceSize>(r.context.limits.maxStorageBufferRange, r.context.info.max_allocation_bytes);
-    auto upload = [&]<typename T>(const std::vector<T>& items, const char* what) -> std::optional<GpuBuffer> {
+    const vk::DeviceSize buffer_limit = std::min<vk::DeviceSize>(
+        vk::DeviceSize{r.context.limits.maxTexelBufferElements} * texel_bytes, r.context.info.max_allocation_bytes);
+    auto upload = [&]<typename T>(const std::vector<T>& items, const char* what) -> std::optional<TexelBuffer> {
+      static_assert(sizeof(T) % texel_bytes == 0);
+      if (items.empty()) return std::nullopt;
       const vk::DeviceSize bytes = items.size() * sizeof(T);
       if (bytes > buffer_limit) {
         throw GpuError("the scene's " + std::string(what) + " take " + std::to_string(bytes >> 20) + " MiB, more than " +
-                       r.context.info.name + " can bind as one storage buffer (" + std::to_string(buffer_limit >> 20) +
+                       r.context.info.name + " can bind as one texel buffer (" + std::to_string(buffer_limit >> 20) +
                        " MiB)");
       }
-      return upload_if_any(r.context, items);
+      return make_texel_buffer(r.context, items.data(), bytes);
     };
     r.spheres = upload(gpu_scene.spheres, "spheres");
     r.planes = upload(gpu_scene.planes, "planes");
+    r.triangles = upload(gpu_scene.triangles, "triangles");
     r.bvh_nodes = upload(gpu_scene.bvh_nodes, "BVH nodes");
-    r.triangle_indices = upload(gpu_scene.triangle_indices, "triangle indices");
-    r.positions = upload(gpu_scene.positions, "vertex positions");
-    r.triangle_normals = upload(gpu_scene.triangle_normals, "triangle normals");
     r.stats = SceneStats{gpu_scene.triangle_count, gpu_scene.triangle_bytes(),
                          static_cast<uint32_t>(gpu_scene.bvh_nodes.size()), gpu_scene.bvh_depth,
                          gpu_scene.triangle_search, 0};
@@ -198,7 +212,9 @@ Renderer::Renderer(GpuDevice& device, const Scene& scene, RendererOptions option
     }
 
     r.anchor = gpu_scene.anchor;
-    r.placeholder = create_storage_buffer(r.context, 16);
+    r.placeholder = create_storage_buffer(r.context, texel_bytes);
+    const std::array<uint32_t, 4> zero_texel{};
+    r.placeholder_texels = make_texel_buffer(r.context, zero_texel.data(), texel_bytes);
     r.pipeline.emplace(r.context, PipelineSpecialization{checked_count(gpu_scene.spheres.size(), "spheres"),
                                                          checked_count(gpu_scene.planes.size(), "planes"),
                                                          gpu_scene.triangle_slots(),

@@ -20,19 +20,21 @@ using uvec4 = glm::uvec4;
 #define VKRAY_WORKGROUP_X 8
 #define VKRAY_WORKGROUP_Y 8
 
-// Descriptor bindings, all in set 0. Buffers the scene or the chosen outputs do not need are bound
-// to one shared 16-byte placeholder and never read (their specialized count or flag is 0).
-#define VKRAY_BINDING_SPHERES 0
-#define VKRAY_BINDING_PLANES 1
-#define VKRAY_BINDING_BVH_NODES 2
-#define VKRAY_BINDING_DEPTH 3
-#define VKRAY_BINDING_NORMAL 4
-#define VKRAY_BINDING_UV 5
-#define VKRAY_BINDING_TRIANGLE_INDICES 6
-#define VKRAY_BINDING_POSITIONS 7
-#define VKRAY_BINDING_TRIANGLE_NORMALS 8
-#define VKRAY_BINDING_OVERFLOW 9
-#define VKRAY_BINDING_COUNT 10
+// Descriptor bindings, all in set 0. Geometry is read through uniform texel buffers (RGBA32 texels):
+// llvmpipe (lavapipe) turns a storage-buffer load into a loop over the 8 lanes with a branch and a
+// bounds check per lane and component, but a texel fetch into one vectorized gather, several times
+// faster; real GPUs read either at the same speed. Outputs are storage buffers. Bindings the scene
+// or the chosen outputs do not need get a 16-byte placeholder and are never read.
+#define VKRAY_BINDING_SPHERES 0      // texels, RGBA32F: one per sphere
+#define VKRAY_BINDING_PLANES 1       // texels, RGBA32F: one per plane
+#define VKRAY_BINDING_TRIANGLES 2    // texels, RGBA32F: three per triangle slot (GpuTriangle)
+#define VKRAY_BINDING_DEPTH 3        // storage buffer
+#define VKRAY_BINDING_NORMAL 4       // storage buffer
+#define VKRAY_BINDING_UV 5           // storage buffer
+#define VKRAY_BINDING_BVH_BOUNDS 6   // texels, RGBA32F: four per node (GpuBvhNode), boxes in the first three
+#define VKRAY_BINDING_BVH_LINKS 7    // texels, RGBA32UI view of the same buffer: children in the fourth
+#define VKRAY_BINDING_OVERFLOW 8     // storage buffer
+#define VKRAY_BINDING_COUNT 9
 
 // How the shader finds the nearest triangle (VKRAY_SPEC_TRIANGLE_MODE).
 #define VKRAY_TRIANGLES_NONE 0
@@ -71,12 +73,17 @@ struct GpuPlane {
 };
 VKRAY_CHECK_SIZE(GpuPlane, 16);
 
-// Triangles are indexed (three uints each, into a float[3] per vertex array of positions relative
-// to the anchor) and stored in the order of the BVH's leaves, so a leaf is a contiguous range. Their
-// unit geometric normals (float[3] each, same order) are computed in double on the host, so needle
-// triangles get an accurate normal; the shader reads one only for the winning triangle.
-// Per triangle: 12 bytes of indices + 12 of normal + about 6 of positions (a closed mesh has half
-// as many vertices as triangles) + the tree's nodes.
+// A triangle's vertices relative to the anchor in xyz, and its unit geometric normal spread over
+// the three w components. The normal is computed in double on the host, so needle triangles get an
+// accurate one; the shader reads it only for the winning triangle. Triangles are stored in the
+// order of the BVH's leaves, so a leaf is a contiguous range, and pre-gathered rather than indexed:
+// three fetches a triangle instead of four dependent ones.
+struct GpuTriangle {
+  vec4 v0_nx;
+  vec4 v1_ny;
+  vec4 v2_nz;
+};
+VKRAY_CHECK_SIZE(GpuTriangle, 48);
 
 // The brute-force path tests triangles in batches of this many, padded with (0, 0, 0) triangles
 // (never hit: their determinant is 0), in one loop iteration with a constant trip count the

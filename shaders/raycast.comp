@@ -19,8 +19,8 @@ layout(constant_id = VKRAY_SPEC_WRITE_UV) const bool WRITE_UV = false;
 
 layout(push_constant) uniform PushConstants { RayGenParams params; };
 
-layout(std430, binding = VKRAY_BINDING_SPHERES) readonly buffer Spheres { GpuSphere spheres[]; };
-layout(std430, binding = VKRAY_BINDING_PLANES) readonly buffer Planes { GpuPlane planes[]; };
+layout(binding = VKRAY_BINDING_SPHERES) uniform samplerBuffer spheres;  // GpuSphere
+layout(binding = VKRAY_BINDING_PLANES) uniform samplerBuffer planes;    // GpuPlane
 layout(std430, binding = VKRAY_BINDING_DEPTH) writeonly buffer DepthOut { float depth_out[]; };
 layout(std430, binding = VKRAY_BINDING_NORMAL) writeonly buffer NormalOut { float normal_out[]; };
 layout(std430, binding = VKRAY_BINDING_UV) writeonly buffer UvOut { float uv_out[]; };
@@ -58,7 +58,7 @@ void main() {
   vec3 normal = vec3(0.0);
 
   for (uint i = 0; i < SPHERE_COUNT; ++i) {
-    vec4 sphere = spheres[i].center_radius;
+    vec4 sphere = texelFetch(spheres, int(i));
     vec3 f = origin - sphere.xyz;
     float t = intersect_sphere(f, sphere.w, dir, t_best);
     if (t < t_best) {
@@ -67,7 +67,7 @@ void main() {
     }
   }
   for (uint i = 0; i < PLANE_COUNT; ++i) {
-    vec4 plane = planes[i].normal_offset;
+    vec4 plane = texelFetch(planes, int(i));
     float t = intersect_plane(plane, origin, dir, t_best);
     if (t < t_best) {
       t_best = t;

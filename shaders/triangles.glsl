@@ -15,10 +15,9 @@ layout(constant_id = VKRAY_SPEC_TRIANGLE_COUNT) const uint TRIANGLE_SLOTS = 0;
 layout(constant_id = VKRAY_SPEC_TRIANGLE_MODE) const uint TRIANGLE_MODE = VKRAY_TRIANGLES_NONE;
 layout(constant_id = VKRAY_SPEC_LOOP_BUDGET) const uint LOOP_BUDGET = 0;
 
-layout(std430, binding = VKRAY_BINDING_BVH_NODES) readonly buffer BvhNodes { GpuBvhNode bvh_nodes[]; };
-layout(std430, binding = VKRAY_BINDING_TRIANGLE_INDICES) readonly buffer TriangleIndices { uint triangle_indices[]; };
-layout(std430, binding = VKRAY_BINDING_POSITIONS) readonly buffer Positions { float positions[]; };
-layout(std430, binding = VKRAY_BINDING_TRIANGLE_NORMALS) readonly buffer TriangleNormals { float triangle_normals[]; };
+layout(binding = VKRAY_BINDING_TRIANGLES) uniform samplerBuffer triangles;     // GpuTriangle: 3 texels
+layout(binding = VKRAY_BINDING_BVH_BOUNDS) uniform samplerBuffer bvh_bounds;   // GpuBvhNode: 4 texels
+layout(binding = VKRAY_BINDING_BVH_LINKS) uniform usamplerBuffer bvh_links;    // the same, as uints
 
 const uint no_triangle = 0xffffffffu;
 
@@ -28,18 +27,15 @@ struct TriangleHit {
   bool unfinished;  // the walk ran out of LOOP_BUDGET: the host must finish this ray
 };
 
-vec3 vertex_position(uint index) {
-  return vec3(positions[3 * index], positions[3 * index + 1], positions[3 * index + 2]);
-}
-
 vec3 triangle_normal(uint slot) {
-  return vec3(triangle_normals[3 * slot], triangle_normals[3 * slot + 1], triangle_normals[3 * slot + 2]);
+  int texel = 3 * int(slot);
+  return vec3(texelFetch(triangles, texel).w, texelFetch(triangles, texel + 1).w, texelFetch(triangles, texel + 2).w);
 }
 
 void test_triangle(RayFrame frame, vec3 origin, uint slot, inout TriangleHit hit) {
-  float t = intersect_triangle(frame, origin, vertex_position(triangle_indices[3 * slot]),
-                               vertex_position(triangle_indices[3 * slot + 1]),
-                               vertex_position(triangle_indices[3 * slot + 2]), hit.t);
+  int texel = 3 * int(slot);
+  float t = intersect_triangle(frame, origin, texelFetch(triangles, texel).xyz, texelFetch(triangles, texel + 1).xyz,
+                               texelFetch(triangles, texel + 2).xyz, hit.t);
   if (t < hit.t) {
     hit.t = t;
     hit.slot = slot;
@@ -79,17 +75,18 @@ TriangleHit nearest_triangle_per_ray(RayFrame frame, vec3 origin, vec3 inv_dir, 
     }
     ++iterations;
     if ((current & VKRAY_BVH_LEAF_BIT) == 0) {
-      GpuBvhNode node = bvh_nodes[current];
       vec2 enter;
-      bvec2 hits = ray_hits_boxes(node.bounds_x, node.bounds_y, node.bounds_z, origin, inv_dir, hit.t, enter);
+      bvec2 hits = ray_hits_boxes(texelFetch(bvh_bounds, 4 * int(current)), texelFetch(bvh_bounds, 4 * int(current) + 1),
+                                  texelFetch(bvh_bounds, 4 * int(current) + 2), origin, inv_dir, hit.t, enter);
+      uvec2 children = texelFetch(bvh_links, 4 * int(current) + 3).xy;
       if (hits.x && hits.y) {
         bool second_first = enter.y < enter.x;
-        stack[stack_size++] = second_first ? node.children.x : node.children.y;
-        current = second_first ? node.children.y : node.children.x;
+        stack[stack_size++] = second_first ? children.x : children.y;
+        current = second_first ? children.y : children.x;
         continue;
       }
       if (hits.x || hits.y) {
-        current = hits.x ? node.children.x : node.children.y;
+        current = hits.x ? children.x : children.y;
         continue;
       }
     } else {
@@ -118,9 +115,10 @@ TriangleHit nearest_triangle_packet(RayFrame frame, vec3 origin, vec3 inv_dir, f
     }
     ++iterations;
     if ((current & VKRAY_BVH_LEAF_BIT) == 0) {
-      GpuBvhNode node = bvh_nodes[current];
       vec2 enter;
-      bvec2 hits = ray_hits_boxes(node.bounds_x, node.bounds_y, node.bounds_z, origin, inv_dir, hit.t, enter);
+      bvec2 hits = ray_hits_boxes(texelFetch(bvh_bounds, 4 * int(current)), texelFetch(bvh_bounds, 4 * int(current) + 1),
+                                  texelFetch(bvh_bounds, 4 * int(current) + 2), origin, inv_dir, hit.t, enter);
+      uvec2 children = texelFetch(bvh_links, 4 * int(current) + 3).xy;
       bool any_first = subgroupAny(hits.x);
       bool any_second = subgroupAny(hits.y);
       if (any_first && any_second) {
@@ -128,12 +126,12 @@ TriangleHit nearest_triangle_packet(RayFrame frame, vec3 origin, vec3 inv_dir, f
         bool prefers_first = hits.x && !prefers_second;
         bool second_first = subgroupBallotBitCount(subgroupBallot(prefers_second)) >
                             subgroupBallotBitCount(subgroupBallot(prefers_first));
-        stack[stack_size++] = second_first ? node.children.x : node.children.y;
-        current = second_first ? node.children.y : node.children.x;
+        stack[stack_size++] = second_first ? children.x : children.y;
+        current = second_first ? children.y : children.x;
         continue;
       }
       if (any_first || any_second) {
-        current = any_first ? node.children.x : node.children.y;
+        current = any_first ? children.x : children.y;
         continue;
       }
     } else {

@@ -47,8 +47,9 @@ GpuBuffer create_readback_buffer(VulkanContext& context, vk::DeviceSize size) {
                        vk::MemoryPropertyFlagBits::eHostCached);
 }
 
-GpuBuffer upload_storage_buffer(VulkanContext& context, const void* data, size_t bytes) {
-  GpuBuffer target = create_storage_buffer(context, bytes, vk::BufferUsageFlagBits::eTransferDst);
+GpuBuffer upload_buffer(VulkanContext& context, const void* data, size_t bytes, vk::BufferUsageFlags usage) {
+  GpuBuffer target = create_buffer(context, bytes, usage | vk::BufferUsageFlagBits::eTransferDst, {},
+                                   vk::MemoryPropertyFlagBits::eDeviceLocal);
   if (target.mapped) {
     std::memcpy(target.mapped, data, bytes);
     return target;
@@ -59,6 +60,10 @@ GpuBuffer upload_storage_buffer(VulkanContext& context, const void* data, size_t
     commands.copyBuffer(*staging.buffer, *target.buffer, vk::BufferCopy(0, 0, bytes));
   });
   return target;
+}
+
+vk::raii::BufferView create_texel_view(VulkanContext& context, const GpuBuffer& buffer, vk::Format format) {
+  return vk::raii::BufferView(context.device, vk::BufferViewCreateInfo({}, *buffer.buffer, format, 0, VK_WHOLE_SIZE));
 }
 
 }  // namespace vkray

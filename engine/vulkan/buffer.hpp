@@ -20,7 +20,10 @@ GpuBuffer create_storage_buffer(VulkanContext& context, vk::DeviceSize size, vk:
 // A host-visible, coherent buffer (cached where possible) to copy results into for reading.
 GpuBuffer create_readback_buffer(VulkanContext& context, vk::DeviceSize size);
 
-// A device-local storage buffer holding `bytes` of `data` (through a staging buffer if needed).
-GpuBuffer upload_storage_buffer(VulkanContext& context, const void* data, size_t bytes);
+// A device-local buffer for `usage` holding `bytes` of `data` (through a staging buffer if needed).
+GpuBuffer upload_buffer(VulkanContext& context, const void* data, size_t bytes, vk::BufferUsageFlags usage);
+
+// A view of a whole uniform texel buffer as texels of `format`.
+vk::raii::BufferView create_texel_view(VulkanContext& context, const GpuBuffer& buffer, vk::Format format);
 
 }  // namespace vkray

@@ -9,9 +9,10 @@ namespace vkray {
 RaycastPipeline::RaycastPipeline(VulkanContext& context, PipelineSpecialization specialization)
     : context_(context), specialization_(specialization) {
   std::array<vk::DescriptorSetLayoutBinding, VKRAY_BINDING_COUNT> bindings;
+  uint32_t storage_buffers = 0;
   for (uint32_t i = 0; i < bindings.size(); ++i) {
-    bindings[i] = vk::DescriptorSetLayoutBinding(i, vk::DescriptorType::eStorageBuffer, 1,
-                                                 vk::ShaderStageFlagBits::eCompute);
+    bindings[i] = vk::DescriptorSetLayoutBinding(i, binding_type(i), 1, vk::ShaderStageFlagBits::eCompute);
+    storage_buffers += binding_type(i) == vk::DescriptorType::eStorageBuffer ? 1 : 0;
   }
   set_layout_ = vk::raii::DescriptorSetLayout(context.device, vk::DescriptorSetLayoutCreateInfo({}, bindings));
   const vk::PushConstantRange push_range(vk::ShaderStageFlagBits::eCompute, 0, sizeof(gpu::RayGenParams));
@@ -19,9 +20,11 @@ RaycastPipeline::RaycastPipeline(VulkanContext& context, PipelineSpecialization 
   layout_ = vk::raii::PipelineLayout(context.device, vk::PipelineLayoutCreateInfo({}, set_layout, push_range));
   shader_ = vk::raii::ShaderModule(context.device, vk::ShaderModuleCreateInfo({}, sizeof(raycast_comp), raycast_comp));
 
-  const vk::DescriptorPoolSize pool_size(vk::DescriptorType::eStorageBuffer, VKRAY_BINDING_COUNT);
+  const std::array pool_sizes{
+      vk::DescriptorPoolSize(vk::DescriptorType::eStorageBuffer, storage_buffers),
+      vk::DescriptorPoolSize(vk::DescriptorType::eUniformTexelBuffer, VKRAY_BINDING_COUNT - storage_buffers)};
   pool_ = vk::raii::DescriptorPool(
-      context.device, vk::DescriptorPoolCreateInfo(vk::DescriptorPoolCreateFlagBits::eFreeDescriptorSet, 1, pool_size));
+      context.device, vk::DescriptorPoolCreateInfo(vk::DescriptorPoolCreateFlagBits::eFreeDescriptorSet, 1, pool_sizes));
   set_ = std::move(vk::raii::DescriptorSets(context.device, vk::DescriptorSetAllocateInfo(*pool_, set_layout))[0]);
 }
 
@@ -50,12 +53,29 @@ const vk::raii::Pipeline& RaycastPipeline::pipeline(AovSet aovs, double& created
   return entry->second;
 }
 
-void RaycastPipeline::bind_buffers(const std::array<vk::Buffer, VKRAY_BINDING_COUNT>& buffers) {
+vk::DescriptorType RaycastPipeline::binding_type(uint32_t binding) {
+  switch (binding) {
+    case VKRAY_BINDING_DEPTH:
+    case VKRAY_BINDING_NORMAL:
+    case VKRAY_BINDING_UV:
+    case VKRAY_BINDING_OVERFLOW:
+      return vk::DescriptorType::eStorageBuffer;
+    default:
+      return vk::DescriptorType::eUniformTexelBuffer;
+  }
+}
+
+void RaycastPipeline::bind_resources(const Resources& resources) {
   std::array<vk::DescriptorBufferInfo, VKRAY_BINDING_COUNT> infos;
   std::array<vk::WriteDescriptorSet, VKRAY_BINDING_COUNT> writes;
-  for (uint32_t i = 0; i < buffers.size(); ++i) {
-    infos[i] = vk::DescriptorBufferInfo(buffers[i], 0, VK_WHOLE_SIZE);
-    writes[i] = vk::WriteDescriptorSet(*set_, i, 0, vk::DescriptorType::eStorageBuffer, {}, infos[i]);
+  for (uint32_t i = 0; i < VKRAY_BINDING_COUNT; ++i) {
+    writes[i] = vk::WriteDescriptorSet(*set_, i, 0, 1, binding_type(i));
+    if (binding_type(i) == vk::DescriptorType::eStorageBuffer) {
+      infos[i] = vk::DescriptorBufferInfo(resources.buffers[i], 0, VK_WHOLE_SIZE);
+      writes[i].setPBufferInfo(&infos[i]);
+    } else {
+      writes[i].setPTexelBufferView(&resources.texel_views[i]);
+    }
   }
   context_.device.updateDescriptorSets(writes, {});
 }

@@ -28,8 +28,15 @@ class RaycastPipeline {
   // creation time, 0 when it was already there.
   const vk::raii::Pipeline& pipeline(AovSet aovs, double& created_ms);
 
-  // Points every binding (VKRAY_BINDING_*) of the descriptor set at its buffer.
-  void bind_buffers(const std::array<vk::Buffer, VKRAY_BINDING_COUNT>& buffers);
+  // What each binding (VKRAY_BINDING_*) reads or writes: a storage buffer or a texel view.
+  struct Resources {
+    std::array<vk::Buffer, VKRAY_BINDING_COUNT> buffers;
+    std::array<vk::BufferView, VKRAY_BINDING_COUNT> texel_views;
+  };
+  // The descriptor type of each binding (see gpu_layout.h).
+  static vk::DescriptorType binding_type(uint32_t binding);
+  // Points every binding of the descriptor set at its resource.
+  void bind_resources(const Resources& resources);
 
   void bind(const vk::raii::CommandBuffer& commands, const vk::raii::Pipeline& pipeline,
             const gpu::RayGenParams& params) const;
