@@ -47,8 +47,11 @@ glm::dvec3 scene_anchor(const Scene& scene) {
   return 0.5 * (bounds.lower + bounds.upper);
 }
 
+// Per-ray walks: on lavapipe they beat packets (bunny at 1920x1080: ~165 against ~230 ms), since
+// llvmpipe runs subgroup operations as loops over the lanes and a packet visits the union of its
+// rays' nodes. No GPU has measured packets faster yet (see README, "Meshes").
 TriangleSearch choose_triangle_search(size_t triangle_count) {
-  return triangle_count <= brute_force_max_triangles ? TriangleSearch::brute_force : TriangleSearch::bvh_packet;
+  return triangle_count <= brute_force_max_triangles ? TriangleSearch::brute_force : TriangleSearch::bvh_per_ray;
 }
 
 GpuScene make_gpu_scene(const Scene& scene, const GpuSceneOptions& options) {
@@ -109,7 +112,11 @@ GpuScene make_gpu_scene(const Scene& scene, const GpuSceneOptions& options) {
     gpu.bvh_depth = bvh.depth;
     gpu.bvh_build_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   }
-  gpu.triangles.resize((gpu.triangles.size() + VKRAY_TRIANGLE_BATCH - 1) / VKRAY_TRIANGLE_BATCH * VKRAY_TRIANGLE_BATCH,
+  // Whole batches for brute force, and room for a full leaf after the last one: the packet walk
+  // fetches a leaf's four triangle slots whatever its count.
+  const size_t spare = VKRAY_BVH_MAX_LEAF_SIZE - 1;
+  gpu.triangles.resize((gpu.triangles.size() + spare + VKRAY_TRIANGLE_BATCH - 1) / VKRAY_TRIANGLE_BATCH *
+                           VKRAY_TRIANGLE_BATCH,
                        gpu::GpuTriangle{});
   return gpu;
 }

@@ -30,8 +30,16 @@ layout(std430, binding = VKRAY_BINDING_OVERFLOW) buffer Overflow { uint overflow
 void main() {
   uint width = params.image.x;
   uint height = params.image.y;
-  uvec2 tile_pixel = gl_GlobalInvocationID.xy;
-  if (tile_pixel.x >= width || tile_pixel.y >= params.image.w) return;
+  // Invocations cover their 8x8 workgroup in Morton order, so any 8 consecutive ones (a lavapipe
+  // subgroup) form a 4x2 block and any 32 (an NVIDIA warp) an 8x4 block: rays that run together are
+  // as close together as they can be, which is what tree walks in lockstep want.
+  uint local = gl_LocalInvocationIndex;
+  uvec2 morton = uvec2((local & 1u) | ((local >> 1) & 2u) | ((local >> 2) & 4u),
+                       ((local >> 1) & 1u) | ((local >> 2) & 2u) | ((local >> 3) & 4u));
+  uvec2 tile_pixel = gl_WorkGroupID.xy * uvec2(VKRAY_WORKGROUP_X, VKRAY_WORKGROUP_Y) + morton;
+  // Invocations past the image's edge stay alive with a ray that can hit nothing (t_max = 0), so a
+  // subgroup walking the tree together always has all its lanes (see nearest_triangle_packet).
+  bool inside = tile_pixel.x < width && tile_pixel.y < params.image.w;
   uint row = params.image.z + tile_pixel.y;
   // Outputs are planar (all x, then all y, ...) with one plane per buffer tile, so neighbouring
   // invocations store to neighbouring addresses.
@@ -44,7 +52,7 @@ void main() {
   float shorter = float(min(width, height));
   vec2 uv = vec2(float(2 * tile_pixel.x + 1) - float(width),
                  float(height) - float(2 * row + 1)) / shorter;
-  if (WRITE_UV) {
+  if (WRITE_UV && inside) {
     uv_out[out_index] = uv.x;
     uv_out[plane_size + out_index] = uv.y;
   }
@@ -54,7 +62,7 @@ void main() {
   vec3 dir = normalize(uv.x * params.right.xyz + uv.y * params.up.xyz + params.forward_scaled.xyz);
 
   const float no_hit = uintBitsToFloat(0x7f800000u);  // +infinity
-  float t_best = no_hit;
+  float t_best = inside ? no_hit : 0.0;
   vec3 normal = vec3(0.0);
 
   for (uint i = 0; i < SPHERE_COUNT; ++i) {
@@ -80,8 +88,9 @@ void main() {
       t_best = hit.t;
       normal = triangle_normal(hit.slot);
     }
-    if (hit.unfinished) overflow_pixels[atomicAdd(overflow_count, 1u)] = out_index;
+    if (hit.unfinished && inside) overflow_pixels[atomicAdd(overflow_count, 1u)] = out_index;
   }
+  if (!inside) return;
 
   if (WRITE_DEPTH) depth_out[out_index] = t_best;
   if (WRITE_NORMAL) {
