@@ -74,7 +74,7 @@ int run_bench(const BenchOptions& options) {
     for (const auto& variant : variants) {
       const BenchRow row = run_bench_variant(device, scene, variant, options.frames, reference);
       const double bytes_per_triangle =
-          row.stats.triangles ? static_cast<double>(row.stats.triangle_bytes) / row.stats.triangles : 0.0;
+          row.stats.triangles ? static_cast<double>(row.stats.geometry_bytes) / row.stats.triangles : 0.0;
       std::printf("%-24s %-12s %9u %8.1f %9.1f %9.2f %9.2f %8.2f %8zu %7llu %9.2e %9.2e\n", name.c_str(),
                   row.variant.c_str(), row.stats.triangles, bytes_per_triangle, row.bvh_build_ms, row.dispatch_median_ms,
                   row.dispatch_min_ms, row.mrays_per_s, row.error.hit_mismatches,

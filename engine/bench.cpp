@@ -6,9 +6,9 @@
 namespace vkray {
 namespace {
 
-BenchVariant variant(std::string name, TriangleSearch search) {
+BenchVariant variant(std::string name, PrimitiveSearch search) {
   BenchVariant result{std::move(name), {}};
-  result.options.scene.triangle_search = search;
+  result.options.scene.search = search;
   return result;
 }
 
@@ -22,9 +22,9 @@ double median(std::vector<double> values) {
 
 const std::vector<BenchVariant>& bench_variants() {
   static const std::vector<BenchVariant> variants = {
-      variant("brute-force", TriangleSearch::brute_force),
-      variant("bvh-per-ray", TriangleSearch::bvh_per_ray),
-      variant("bvh-packet", TriangleSearch::bvh_packet),
+      variant("brute-force", PrimitiveSearch::brute_force),
+      variant("bvh-per-ray", PrimitiveSearch::bvh_per_ray),
+      variant("bvh-packet", PrimitiveSearch::bvh_packet),
   };
   return variants;
 }

@@ -12,17 +12,6 @@
 namespace vkray {
 namespace {
 
-// Embree's builder works on float boxes. Rounding outward keeps every box valid; the tree's
-// topology is all that is kept, so the rounding only nudges SAH decisions.
-float round_down(double value) {
-  const auto rounded = static_cast<float>(value);
-  return static_cast<double>(rounded) <= value ? rounded : std::nextafter(rounded, -std::numeric_limits<float>::infinity());
-}
-float round_up(double value) {
-  const auto rounded = static_cast<float>(value);
-  return static_cast<double>(rounded) >= value ? rounded : std::nextafter(rounded, std::numeric_limits<float>::infinity());
-}
-
 // The builder's own tree, allocated by Embree's thread-local allocator and freed with the RTCBVH.
 struct BuildNode {
   bool leaf;
@@ -93,6 +82,16 @@ double half_area(const Box& box) {
 
 }  // namespace
 
+float float_below(double value) {
+  const auto rounded = static_cast<float>(value);
+  return static_cast<double>(rounded) <= value ? rounded : std::nextafter(rounded, -std::numeric_limits<float>::infinity());
+}
+
+float float_above(double value) {
+  const auto rounded = static_cast<float>(value);
+  return static_cast<double>(rounded) >= value ? rounded : std::nextafter(rounded, std::numeric_limits<float>::infinity());
+}
+
 uint32_t make_leaf(uint32_t first, uint32_t count) {
   return VKRAY_BVH_LEAF_BIT | (first << VKRAY_BVH_LEAF_COUNT_BITS) | (count - 1u);
 }
@@ -103,11 +102,13 @@ Bvh build_bvh(const std::vector<Box>& boxes, const BvhBuildOptions& options) {
     throw std::length_error(std::to_string(boxes.size()) + " primitives in one BVH; at most " +
                             std::to_string(VKRAY_BVH_MAX_PRIMITIVES) + " fit its leaf references");
   }
+  // Embree's builder works on float boxes. Rounding outward keeps every box valid; the tree's
+  // topology is all that is kept, so the rounding only nudges SAH decisions.
   std::vector<RTCBuildPrimitive> primitives(boxes.size());
   for (size_t i = 0; i < boxes.size(); ++i) {
     const Box& box = boxes[i];
-    primitives[i] = {round_down(box.lower.x), round_down(box.lower.y), round_down(box.lower.z), 0,
-                     round_up(box.upper.x),   round_up(box.upper.y),   round_up(box.upper.z),   static_cast<unsigned>(i)};
+    primitives[i] = {float_below(box.lower.x), float_below(box.lower.y), float_below(box.lower.z), 0,
+                     float_above(box.upper.x),   float_above(box.upper.y),   float_above(box.upper.z),   static_cast<unsigned>(i)};
   }
 
   RTCBVH builder = rtcNewBVH(embree_device());

@@ -21,6 +21,11 @@ struct Box {
   glm::dvec3 upper;
 };
 
+// The float nearest to `value` on its lower (upper) side: rounding box corners outward keeps a
+// float box around what the double box holds.
+float float_below(double value);
+float float_above(double value);
+
 // A child reference as the shader reads it (see VKRAY_BVH_* in shaders/gpu_layout.h): an inner
 // node's index, or a leaf's first primitive (in Bvh::primitive_order) and count.
 inline bool is_leaf(uint32_t child) { return (child & VKRAY_BVH_LEAF_BIT) != 0; }

@@ -26,9 +26,24 @@ struct FloatBox {
   glm::vec3 upper;
 };
 
-// Brute force beats the tree up to this many triangles on lavapipe: measured with `vkray render
-// --timings` on meshes of n random triangles at 1920x1080 (see README, "Meshes").
-constexpr size_t brute_force_max_triangles = 16;
+// The float box of a primitive as the shader tests it: a triangle's float vertices; a sphere's
+// float centre plus or minus its float radius, rounded outward.
+FloatBox primitive_box(const gpu::GpuPrimitive& primitive) {
+  if (primitive.b.w == VKRAY_SPHERE_MARK) {
+    const glm::dvec3 centre(primitive.a);
+    const double radius = primitive.a.w;
+    return {{float_below(centre.x - radius), float_below(centre.y - radius), float_below(centre.z - radius)},
+            {float_above(centre.x + radius), float_above(centre.y + radius), float_above(centre.z + radius)}};
+  }
+  const glm::vec3 a(primitive.a), b(primitive.b), c(primitive.c);
+  return {glm::min(a, glm::min(b, c)), glm::max(a, glm::max(b, c))};
+}
+
+// Brute force beats the tree up to about this many triangles and spheres on lavapipe. Measured
+// with `vkray bench --size 640x480 --variants brute-force,bvh-per-ray` (best of 5 frames):
+// random triangles 4: 7.6 against 11.4 ms, 8: 10.4 / 10.9, 16: 23.0 / 9.8, 32: 25.1 / 18.6;
+// random spheres 8: 9.3 / 11.5, 16: 13.6 / 11.4, 32: 25.7 / 16.9, 10000: 6395 / 48.6.
+constexpr size_t brute_force_max_primitives = 8;
 
 }  // namespace
 
@@ -50,22 +65,21 @@ glm::dvec3 scene_anchor(const Scene& scene) {
 // Per-ray walks: on lavapipe they beat packets (bunny at 1920x1080: ~165 against ~230 ms), since
 // llvmpipe runs subgroup operations as loops over the lanes and a packet visits the union of its
 // rays' nodes. No GPU has measured packets faster yet (see README, "Meshes").
-TriangleSearch choose_triangle_search(size_t triangle_count) {
-  return triangle_count <= brute_force_max_triangles ? TriangleSearch::brute_force : TriangleSearch::bvh_per_ray;
+PrimitiveSearch choose_search(size_t triangle_count, size_t sphere_count) {
+  return triangle_count + sphere_count <= brute_force_max_primitives ? PrimitiveSearch::brute_force
+                                                                     : PrimitiveSearch::bvh_per_ray;
 }
 
 GpuScene make_gpu_scene(const Scene& scene, const GpuSceneOptions& options) {
   GpuScene gpu;
   gpu.anchor = scene_anchor(scene);
-  for (const auto& sphere : scene.spheres) gpu.spheres.push_back({to_float4(sphere.center - gpu.anchor, sphere.radius)});
   for (const auto& plane : scene.planes) {
     gpu.planes.push_back({to_float4(plane.normal, glm::dot(plane.normal, plane.point - gpu.anchor))});
   }
 
-  // Triangles relative to the anchor, rounded to float once per vertex in double, so triangles
-  // sharing a vertex see bit-identical floats: the watertight test needs that.
-  std::vector<gpu::GpuTriangle> triangles;
-  std::vector<Box> boxes;
+  // Triangles relative to the anchor; each vertex is rounded to float from the same double in every
+  // triangle that shares it, so they see bit-identical floats: the watertight test needs that.
+  std::vector<gpu::GpuPrimitive> triangles;
   for (const auto& mesh : scene.meshes) {
     for (const auto& corners : mesh.triangles) {
       const glm::dvec3 v0 = mesh.positions[corners[0]] - gpu.anchor;
@@ -75,49 +89,54 @@ GpuScene make_gpu_scene(const Scene& scene, const GpuSceneOptions& options) {
       if (cross == glm::dvec3(0.0)) continue;
       const glm::dvec3 normal = unit_vector(cross);
       triangles.push_back({to_float4(v0, normal.x), to_float4(v1, normal.y), to_float4(v2, normal.z)});
-      boxes.push_back({glm::min(v0, glm::min(v1, v2)), glm::max(v0, glm::max(v1, v2))});
     }
   }
   gpu.triangle_count = static_cast<uint32_t>(triangles.size());
-  if (triangles.empty()) {
-    gpu.triangle_search = TriangleSearch::brute_force;
+  gpu.search = options.search == PrimitiveSearch::automatic ? choose_search(triangles.size(), scene.spheres.size())
+                                                            : options.search;
+  if (triangles.empty() && scene.spheres.empty()) gpu.search = PrimitiveSearch::brute_force;
+
+  if (gpu.search == PrimitiveSearch::brute_force) {
+    for (const auto& sphere : scene.spheres) gpu.spheres.push_back({to_float4(sphere.center - gpu.anchor, sphere.radius)});
+    gpu.primitives = std::move(triangles);
+    gpu.primitives.resize((gpu.primitives.size() + VKRAY_TRIANGLE_BATCH - 1) / VKRAY_TRIANGLE_BATCH * VKRAY_TRIANGLE_BATCH,
+                          gpu::GpuPrimitive{});
     return gpu;
   }
-  gpu.triangle_search = options.triangle_search == TriangleSearch::automatic ? choose_triangle_search(triangles.size())
-                                                                              : options.triangle_search;
-  if (gpu.triangle_search == TriangleSearch::brute_force) {
-    gpu.triangles = std::move(triangles);
-  } else {
-    const auto start = std::chrono::steady_clock::now();
-    const Bvh bvh = build_bvh(boxes, options.bvh);
-    gpu.triangles.reserve(triangles.size() + VKRAY_TRIANGLE_BATCH);
-    for (uint32_t i : bvh.primitive_order) gpu.triangles.push_back(triangles[i]);
-    // Boxes of the float32 vertices the shader tests, so each box holds its triangles exactly.
-    const auto bounds = child_bounds<FloatBox>(bvh, [&](uint32_t slot) {
-      const gpu::GpuTriangle& t = gpu.triangles[slot];
-      const glm::vec3 a(t.v0_nx), b(t.v1_ny), c(t.v2_nz);
-      return FloatBox{glm::min(a, glm::min(b, c)), glm::max(a, glm::max(b, c))};
-    });
-    gpu.bvh_nodes.resize(bvh.nodes.size());
-    for (size_t n = 0; n < bvh.nodes.size(); ++n) {
-      const FloatBox& first = bounds[n][0];
-      const FloatBox& second = bounds[n][1];
-      gpu.bvh_nodes[n] = {
-          glm::vec4(first.lower.x, second.lower.x, first.upper.x, second.upper.x),
-          glm::vec4(first.lower.y, second.lower.y, first.upper.y, second.upper.y),
-          glm::vec4(first.lower.z, second.lower.z, first.upper.z, second.upper.z),
-          glm::uvec4(bvh.nodes[n][0], bvh.nodes[n][1], 0, 0),
-      };
-    }
-    gpu.bvh_depth = bvh.depth;
-    gpu.bvh_build_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+
+  const auto start = std::chrono::steady_clock::now();
+  std::vector<gpu::GpuPrimitive> unordered = std::move(triangles);
+  for (const auto& sphere : scene.spheres) {
+    const glm::vec4 centre = to_float4(sphere.center - gpu.anchor);
+    unordered.push_back({glm::vec4(glm::vec3(centre), static_cast<float>(sphere.radius)),
+                         glm::vec4(glm::vec3(centre), VKRAY_SPHERE_MARK), glm::vec4(glm::vec3(centre), 0.0f)});
   }
-  // Whole batches for brute force, and room for a full leaf after the last one: the packet walk
-  // fetches a leaf's four triangle slots whatever its count.
-  const size_t spare = VKRAY_BVH_MAX_LEAF_SIZE - 1;
-  gpu.triangles.resize((gpu.triangles.size() + spare + VKRAY_TRIANGLE_BATCH - 1) / VKRAY_TRIANGLE_BATCH *
-                           VKRAY_TRIANGLE_BATCH,
-                       gpu::GpuTriangle{});
+  gpu.tree_has_triangles = gpu.triangle_count > 0;
+  gpu.tree_has_spheres = !scene.spheres.empty();
+  std::vector<Box> boxes;
+  boxes.reserve(unordered.size());
+  for (const auto& primitive : unordered) {
+    const FloatBox box = primitive_box(primitive);
+    boxes.push_back({glm::dvec3(box.lower), glm::dvec3(box.upper)});
+  }
+  const Bvh bvh = build_bvh(boxes, options.bvh);
+  gpu.primitives.reserve(unordered.size() + VKRAY_BVH_MAX_LEAF_SIZE);
+  for (uint32_t i : bvh.primitive_order) gpu.primitives.push_back(unordered[i]);
+  // Boxes of the float32 primitives the shader tests, so each box holds its primitives exactly.
+  const auto bounds = child_bounds<FloatBox>(bvh, [&](uint32_t slot) { return primitive_box(gpu.primitives[slot]); });
+  gpu.bvh_nodes.resize(bvh.nodes.size());
+  for (size_t n = 0; n < bvh.nodes.size(); ++n) {
+    const FloatBox& first = bounds[n][0];
+    const FloatBox& second = bounds[n][1];
+    gpu.bvh_nodes[n] = {
+        glm::vec4(first.lower.x, second.lower.x, first.upper.x, second.upper.x),
+        glm::vec4(first.lower.y, second.lower.y, first.upper.y, second.upper.y),
+        glm::vec4(first.lower.z, second.lower.z, first.upper.z, second.upper.z),
+        glm::uvec4(bvh.nodes[n][0], bvh.nodes[n][1], 0, 0),
+    };
+  }
+  gpu.bvh_depth = bvh.depth;
+  gpu.bvh_build_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   return gpu;
 }
 

@@ -10,17 +10,17 @@
 
 namespace vkray {
 
-// How the shader finds the nearest triangle; automatic picks brute force for tiny meshes and the
-// BVH otherwise (see choose_triangle_search).
-enum class TriangleSearch : uint32_t {
+// How the shader finds the nearest triangle or sphere. automatic: brute force for a handful of
+// them, the BVH per ray beyond (see choose_search). Planes are infinite and always tested one by one.
+enum class PrimitiveSearch : uint32_t {
   automatic,
-  brute_force = VKRAY_TRIANGLES_BRUTE_FORCE,
-  bvh_per_ray = VKRAY_TRIANGLES_BVH_PER_RAY,
-  bvh_packet = VKRAY_TRIANGLES_BVH_PACKET,
+  brute_force,
+  bvh_per_ray,
+  bvh_packet,
 };
 
 struct GpuSceneOptions {
-  TriangleSearch triangle_search = TriangleSearch::automatic;
+  PrimitiveSearch search = PrimitiveSearch::automatic;
   BvhBuildOptions bvh;
 };
 
@@ -29,21 +29,27 @@ struct GpuScene {
   // x = 1e6 stored as is would lose everything below 0.06 units, while positions relative to a
   // point inside the scene keep their precision (the offset is taken in double, then rounded).
   glm::dvec3 anchor{0.0};
-  std::vector<gpu::GpuSphere> spheres;
   std::vector<gpu::GpuPlane> planes;
-  // Triangles of every mesh, zero-area ones left out (no ray can hit them), in the BVH's leaf
-  // order, padded to whole VKRAY_TRIANGLE_BATCHes with all-zero triangles: see gpu_layout.h.
-  std::vector<gpu::GpuTriangle> triangles;
-  uint32_t triangle_count = 0;           // real triangles, without the padding
-  std::vector<gpu::GpuBvhNode> bvh_nodes;  // empty unless the search uses the tree
+  std::vector<gpu::GpuSphere> spheres;  // spheres tested one by one (brute force only)
+  // With the tree: every triangle and sphere in leaf order. Without: the triangles, padded to whole
+  // VKRAY_TRIANGLE_BATCHes with all-zero ones. Zero-area triangles are left out (no ray can hit
+  // them). See GpuPrimitive in gpu_layout.h.
+  std::vector<gpu::GpuPrimitive> primitives;
+  std::vector<gpu::GpuBvhNode> bvh_nodes;  // empty without the tree
   uint32_t bvh_depth = 0;
-  TriangleSearch triangle_search = TriangleSearch::brute_force;  // never automatic here
+  PrimitiveSearch search = PrimitiveSearch::brute_force;  // never automatic here
+  bool tree_has_triangles = false;
+  bool tree_has_spheres = false;
+  uint32_t triangle_count = 0;  // kept triangles
   double bvh_build_ms = 0.0;
 
-  uint32_t triangle_slots() const { return static_cast<uint32_t>(triangles.size()); }
-  // Bytes of device memory the triangles and their tree take.
-  size_t triangle_bytes() const {
-    return triangles.size() * sizeof(gpu::GpuTriangle) + bvh_nodes.size() * sizeof(gpu::GpuBvhNode);
+  bool has_tree() const { return !bvh_nodes.empty(); }
+  // Triangle slots the brute-force loop walks (0 with the tree).
+  uint32_t brute_force_triangle_slots() const { return has_tree() ? 0 : static_cast<uint32_t>(primitives.size()); }
+  // Bytes of device memory the triangles, spheres and their tree take.
+  size_t geometry_bytes() const {
+    return spheres.size() * sizeof(gpu::GpuSphere) + primitives.size() * sizeof(gpu::GpuPrimitive) +
+           bvh_nodes.size() * sizeof(gpu::GpuBvhNode);
   }
 };
 
@@ -51,8 +57,8 @@ struct GpuScene {
 // scene of planes alone.
 glm::dvec3 scene_anchor(const Scene& scene);
 
-// Brute force for meshes of at most this many triangles, the tree beyond: see gpu_scene.cpp.
-TriangleSearch choose_triangle_search(size_t triangle_count);
+// brute_force for scenes of a handful of triangles and spheres, bvh_per_ray otherwise.
+PrimitiveSearch choose_search(size_t triangle_count, size_t sphere_count);
 
 GpuScene make_gpu_scene(const Scene& scene, const GpuSceneOptions& options = {});
 

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <thread>
 
 namespace vkray {
@@ -65,7 +66,6 @@ double intersect_triangle(const glm::dvec3& v0, const glm::dvec3& v1, const glm:
 
 ReferenceScene::ReferenceScene(const Scene& scene) : spheres_(scene.spheres), planes_(scene.planes) {
   uint32_t index = 0;
-  std::vector<Triangle> triangles;
   std::vector<Box> boxes;
   for (const auto& mesh : scene.meshes) {
     for (const auto& corners : mesh.triangles) {
@@ -74,18 +74,39 @@ ReferenceScene::ReferenceScene(const Scene& scene) : spheres_(scene.spheres), pl
       const glm::dvec3& v2 = mesh.positions[corners[2]];
       const glm::dvec3 cross = glm::cross(v1 - v0, v2 - v0);
       if (cross != glm::dvec3(0.0)) {
-        triangles.push_back({v0, v1, v2, unit_vector(cross), index});
+        tree_entries_.push_back({PrimitiveKind::triangle, static_cast<uint32_t>(triangles_.size())});
+        triangles_.push_back({v0, v1, v2, unit_vector(cross), index});
         boxes.push_back({glm::min(v0, glm::min(v1, v2)), glm::max(v0, glm::max(v1, v2))});
       }
       ++index;
     }
   }
-  if (triangles.empty()) return;
+  // Corners rounded outward, so the box holds the whole sphere.
+  constexpr double infinity = std::numeric_limits<double>::infinity();
+  auto below = [&](const glm::dvec3& v) {
+    return glm::dvec3(std::nextafter(v.x, -infinity), std::nextafter(v.y, -infinity), std::nextafter(v.z, -infinity));
+  };
+  auto above = [&](const glm::dvec3& v) {
+    return glm::dvec3(std::nextafter(v.x, infinity), std::nextafter(v.y, infinity), std::nextafter(v.z, infinity));
+  };
+  for (uint32_t i = 0; i < spheres_.size(); ++i) {
+    tree_entries_.push_back({PrimitiveKind::sphere, i});
+    boxes.push_back({below(spheres_[i].center - spheres_[i].radius), above(spheres_[i].center + spheres_[i].radius)});
+  }
+  if (boxes.empty()) return;
   const Bvh bvh = build_bvh(boxes);
-  triangles_.reserve(triangles.size());
-  for (uint32_t i : bvh.primitive_order) triangles_.push_back(triangles[i]);
+  std::vector<TreeEntry> ordered;
+  ordered.reserve(tree_entries_.size());
+  for (uint32_t i : bvh.primitive_order) ordered.push_back(tree_entries_[i]);
+  tree_entries_ = std::move(ordered);
   nodes_ = bvh.nodes;
   child_boxes_ = child_bounds<Box>(bvh, [&](uint32_t slot) { return boxes[bvh.primitive_order[slot]]; });
+}
+
+void ReferenceScene::test_sphere(uint32_t index, const glm::dvec3& origin, const glm::dvec3& dir, ReferenceHit& hit) const {
+  const glm::dvec3 f = origin - spheres_[index].center;
+  const double t = intersect_sphere(f, spheres_[index].radius, dir, hit.t);
+  if (t < hit.t) hit = {t, (f + t * dir) / spheres_[index].radius, PrimitiveKind::sphere, index};
 }
 
 void ReferenceScene::test_triangle(const Triangle& triangle, const glm::dvec3& origin, const glm::dvec3& dir,
@@ -119,7 +140,7 @@ double enter_box(const Box& box, const glm::dvec3& origin, const glm::dvec3& inv
 
 }  // namespace
 
-void ReferenceScene::nearest_triangle_in_tree(const glm::dvec3& origin, const glm::dvec3& dir, ReferenceHit& hit) const {
+void ReferenceScene::nearest_in_tree(const glm::dvec3& origin, const glm::dvec3& dir, ReferenceHit& hit) const {
   glm::dvec3 inv_dir;
   for (int axis = 0; axis < 3; ++axis) {
     constexpr double tiny = 1e-300;
@@ -145,28 +166,33 @@ void ReferenceScene::nearest_triangle_in_tree(const glm::dvec3& origin, const gl
         continue;
       }
     } else {
-      for (uint32_t k = 0; k < leaf_count(current); ++k) test_triangle(triangles_[leaf_first(current) + k], origin, dir, hit);
+      for (uint32_t k = 0; k < leaf_count(current); ++k) {
+        const TreeEntry& entry = tree_entries_[leaf_first(current) + k];
+        if (entry.kind == PrimitiveKind::sphere) {
+          test_sphere(entry.index, origin, dir, hit);
+        } else {
+          test_triangle(triangles_[entry.index], origin, dir, hit);
+        }
+      }
     }
     if (stack_size == 0) return;
     current = stack[--stack_size];
   }
 }
 
+// Planes first, then spheres and triangles, in the shader's order (the first of equal distances
+// wins, but for the triangles' tie-break).
 ReferenceHit ReferenceScene::trace_with(const glm::dvec3& origin, const glm::dvec3& dir, bool brute_force) const {
   ReferenceHit hit;
-  for (uint32_t i = 0; i < spheres_.size(); ++i) {
-    const glm::dvec3 f = origin - spheres_[i].center;
-    const double t = intersect_sphere(f, spheres_[i].radius, dir, hit.t);
-    if (t < hit.t) hit = {t, (f + t * dir) / spheres_[i].radius, PrimitiveKind::sphere, i};
-  }
   for (uint32_t i = 0; i < planes_.size(); ++i) {
     const double t = intersect_plane(planes_[i].normal, planes_[i].point, origin, dir, hit.t);
     if (t < hit.t) hit = {t, planes_[i].normal, PrimitiveKind::plane, i};
   }
   if (brute_force) {
+    for (uint32_t i = 0; i < spheres_.size(); ++i) test_sphere(i, origin, dir, hit);
     for (const auto& triangle : triangles_) test_triangle(triangle, origin, dir, hit);
   } else if (!nodes_.empty()) {
-    nearest_triangle_in_tree(origin, dir, hit);
+    nearest_in_tree(origin, dir, hit);
   }
   if (hit.kind != PrimitiveKind::none) {
     hit.normal = glm::normalize(hit.normal);

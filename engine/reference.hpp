@@ -49,14 +49,22 @@ class ReferenceScene {
     glm::dvec3 v0, v1, v2, normal;
     uint32_t index;
   };
+  // What a tree leaf holds: a triangle (into triangles_) or a sphere (into spheres_).
+  struct TreeEntry {
+    PrimitiveKind kind;
+    uint32_t index;
+  };
+  void test_sphere(uint32_t index, const glm::dvec3& origin, const glm::dvec3& dir, ReferenceHit& hit) const;
   void test_triangle(const Triangle& triangle, const glm::dvec3& origin, const glm::dvec3& dir, ReferenceHit& hit) const;
-  void nearest_triangle_in_tree(const glm::dvec3& origin, const glm::dvec3& dir, ReferenceHit& hit) const;
+  void nearest_in_tree(const glm::dvec3& origin, const glm::dvec3& dir, ReferenceHit& hit) const;
   ReferenceHit trace_with(const glm::dvec3& origin, const glm::dvec3& dir, bool brute_force) const;
 
   std::vector<Sphere> spheres_;
   std::vector<Plane> planes_;
-  std::vector<Triangle> triangles_;  // zero-area triangles left out (no ray can hit them), in leaf order
-  std::vector<std::array<uint32_t, 2>> nodes_;    // the BVH's child references (engine/bvh.hpp)
+  std::vector<Triangle> triangles_;  // zero-area triangles left out: no ray can hit them
+  // The BVH over triangles and spheres (planes are infinite: always tested one by one).
+  std::vector<TreeEntry> tree_entries_;           // in leaf order
+  std::vector<std::array<uint32_t, 2>> nodes_;    // child references (engine/bvh.hpp)
   std::vector<std::array<Box, 2>> child_boxes_;   // their boxes, exact in double
 };
 

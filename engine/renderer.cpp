@@ -69,7 +69,7 @@ struct TileOutputs {
 uint64_t fixed_loop_iterations(const GpuScene& scene) {
   constexpr uint64_t loop_margin = 16;
   uint64_t iterations = scene.spheres.size() + scene.planes.size() + loop_margin;
-  if (scene.triangle_search == TriangleSearch::brute_force) iterations += scene.triangle_slots() / VKRAY_TRIANGLE_BATCH;
+  iterations += scene.brute_force_triangle_slots() / VKRAY_TRIANGLE_BATCH;
   return iterations;
 }
 
@@ -85,7 +85,7 @@ struct Renderer::Impl {
   // Bound wherever the scene lacks a primitive type or an output is off.
   GpuBuffer placeholder;
   TexelBuffer placeholder_texels;
-  std::optional<TexelBuffer> spheres, planes, triangles, bvh_nodes;
+  std::optional<TexelBuffer> spheres, planes, primitives, bvh_nodes;
   SceneStats stats;
   // Where a loop budget applies: the scene, to finish on the CPU the rays that run out of it.
   std::optional<Scene> scene_for_unfinished;
@@ -120,7 +120,7 @@ struct Renderer::Impl {
     RaycastPipeline::Resources resources{};
     resources.texel_views[VKRAY_BINDING_SPHERES] = floats(spheres);
     resources.texel_views[VKRAY_BINDING_PLANES] = floats(planes);
-    resources.texel_views[VKRAY_BINDING_TRIANGLES] = floats(triangles);
+    resources.texel_views[VKRAY_BINDING_PRIMITIVES] = floats(primitives);
     resources.texel_views[VKRAY_BINDING_BVH_BOUNDS] = floats(bvh_nodes);
     resources.texel_views[VKRAY_BINDING_BVH_LINKS] = *(bvh_nodes ? bvh_nodes->uints : placeholder_texels.uints);
     resources.buffers[VKRAY_BINDING_DEPTH] = output(tile.depth);
@@ -188,11 +188,11 @@ Renderer::Renderer(GpuDevice& device, const Scene& scene, RendererOptions option
     };
     r.spheres = upload(gpu_scene.spheres, "spheres");
     r.planes = upload(gpu_scene.planes, "planes");
-    r.triangles = upload(gpu_scene.triangles, "triangles");
+    r.primitives = upload(gpu_scene.primitives, "triangles and spheres");
     r.bvh_nodes = upload(gpu_scene.bvh_nodes, "BVH nodes");
-    r.stats = SceneStats{gpu_scene.triangle_count, gpu_scene.triangle_bytes(),
-                         static_cast<uint32_t>(gpu_scene.bvh_nodes.size()), gpu_scene.bvh_depth,
-                         gpu_scene.triangle_search, 0};
+    r.stats = SceneStats{gpu_scene.triangle_count, static_cast<uint32_t>(scene.spheres.size()),
+                         gpu_scene.geometry_bytes(), static_cast<uint32_t>(gpu_scene.bvh_nodes.size()),
+                         gpu_scene.bvh_depth, gpu_scene.search, 0};
 
     // A tree walk has no static bound on its iterations; where the device caps them, the walk gets
     // what the other loops leave and rays that need more are finished on the CPU.
@@ -203,8 +203,7 @@ Renderer::Renderer(GpuDevice& device, const Scene& scene, RendererOptions option
                      r.context.info.name + " stops a shader after " + std::to_string(loop_limit) +
                      " and would silently drop geometry; use another device (--device)");
     }
-    const bool walks_tree = !gpu_scene.bvh_nodes.empty();
-    if (walks_tree && (loop_limit > 0 || options.loop_budget > 0)) {
+    if (gpu_scene.has_tree() && (loop_limit > 0 || options.loop_budget > 0)) {
       uint64_t budget = loop_limit > 0 ? loop_limit - fixed_iterations : UINT32_MAX;
       if (options.loop_budget > 0) budget = std::min<uint64_t>(budget, options.loop_budget);
       r.stats.loop_budget = static_cast<uint32_t>(budget);
@@ -215,13 +214,17 @@ Renderer::Renderer(GpuDevice& device, const Scene& scene, RendererOptions option
     r.placeholder = create_storage_buffer(r.context, texel_bytes);
     const std::array<uint32_t, 4> zero_texel{};
     r.placeholder_texels = make_texel_buffer(r.context, zero_texel.data(), texel_bytes);
-    r.pipeline.emplace(r.context, PipelineSpecialization{checked_count(gpu_scene.spheres.size(), "spheres"),
-                                                         checked_count(gpu_scene.planes.size(), "planes"),
-                                                         gpu_scene.triangle_slots(),
-                                                         gpu_scene.triangle_count > 0
-                                                             ? static_cast<uint32_t>(gpu_scene.triangle_search)
-                                                             : uint32_t{VKRAY_TRIANGLES_NONE},
-                                                         r.stats.loop_budget});
+    PipelineSpecialization specialization;
+    specialization.spheres = checked_count(gpu_scene.spheres.size(), "spheres");
+    specialization.planes = checked_count(gpu_scene.planes.size(), "planes");
+    specialization.triangle_slots = gpu_scene.brute_force_triangle_slots();
+    specialization.search_mode = gpu_scene.search == PrimitiveSearch::bvh_packet   ? uint32_t{VKRAY_SEARCH_BVH_PACKET}
+                                 : gpu_scene.search == PrimitiveSearch::bvh_per_ray ? uint32_t{VKRAY_SEARCH_BVH_PER_RAY}
+                                                                                    : uint32_t{VKRAY_SEARCH_BRUTE_FORCE};
+    specialization.tree_has_triangles = gpu_scene.tree_has_triangles;
+    specialization.tree_has_spheres = gpu_scene.tree_has_spheres;
+    specialization.loop_budget = r.stats.loop_budget;
+    r.pipeline.emplace(r.context, specialization);
     if (r.context.info.timestamp_period_ns > 0.0) {
       r.timestamps = vk::raii::QueryPool(r.context.device, vk::QueryPoolCreateInfo({}, vk::QueryType::eTimestamp, 3));
     }

@@ -26,10 +26,11 @@ struct RenderTimings {
 // What the constructor put on the device.
 struct SceneStats {
   uint32_t triangles = 0;          // kept (non-degenerate) triangles
-  size_t triangle_bytes = 0;       // device memory of the triangles and their BVH
+  uint32_t spheres = 0;
+  size_t geometry_bytes = 0;       // device memory of the triangles, spheres and their BVH
   uint32_t bvh_nodes = 0;
   uint32_t bvh_depth = 0;
-  TriangleSearch triangle_search = TriangleSearch::brute_force;
+  PrimitiveSearch search = PrimitiveSearch::brute_force;
   uint32_t loop_budget = 0;        // iterations a tree walk may take on this device; 0: no limit
 };
 

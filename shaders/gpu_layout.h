@@ -25,9 +25,9 @@ using uvec4 = glm::uvec4;
 // bounds check per lane and component, but a texel fetch into one vectorized gather, several times
 // faster; real GPUs read either at the same speed. Outputs are storage buffers. Bindings the scene
 // or the chosen outputs do not need get a 16-byte placeholder and are never read.
-#define VKRAY_BINDING_SPHERES 0      // texels, RGBA32F: one per sphere
+#define VKRAY_BINDING_SPHERES 0      // texels, RGBA32F: one per sphere tested without the tree
 #define VKRAY_BINDING_PLANES 1       // texels, RGBA32F: one per plane
-#define VKRAY_BINDING_TRIANGLES 2    // texels, RGBA32F: three per triangle slot (GpuTriangle)
+#define VKRAY_BINDING_PRIMITIVES 2   // texels, RGBA32F: three per primitive slot (GpuPrimitive)
 #define VKRAY_BINDING_DEPTH 3        // storage buffer
 #define VKRAY_BINDING_NORMAL 4       // storage buffer
 #define VKRAY_BINDING_UV 5           // storage buffer
@@ -36,27 +36,29 @@ using uvec4 = glm::uvec4;
 #define VKRAY_BINDING_OVERFLOW 8     // storage buffer
 #define VKRAY_BINDING_COUNT 9
 
-// How the shader finds the nearest triangle (VKRAY_SPEC_TRIANGLE_MODE).
-#define VKRAY_TRIANGLES_NONE 0
-#define VKRAY_TRIANGLES_BRUTE_FORCE 1  // every triangle, in batches; no tree (tiny meshes)
-#define VKRAY_TRIANGLES_BVH_PER_RAY 2  // each ray walks the tree with its own stack
-#define VKRAY_TRIANGLES_BVH_PACKET 3   // a subgroup's rays walk the tree together, one shared stack
+// How the shader finds the nearest triangle or sphere (VKRAY_SPEC_SEARCH_MODE). Planes are
+// infinite: they stay outside the tree, in their own loop.
+#define VKRAY_SEARCH_BRUTE_FORCE 0  // every primitive in a loop; no tree (a handful of them)
+#define VKRAY_SEARCH_BVH_PER_RAY 1  // each ray walks the tree with its own stack
+#define VKRAY_SEARCH_BVH_PACKET 2   // a subgroup's rays walk the tree together, one shared stack
 
-// Specialization constants: primitive counts (0 removes that loop and its buffer reads), how
-// triangles are found, which outputs are written, and the loop budget.
-#define VKRAY_SPEC_SPHERE_COUNT 0
+// Specialization constants: counts (0 removes that loop and its reads), how primitives are found,
+// what the tree holds, which outputs are written, and the loop budget.
+#define VKRAY_SPEC_SPHERE_COUNT 0           // spheres tested one by one, outside the tree
 #define VKRAY_SPEC_PLANE_COUNT 1
-#define VKRAY_SPEC_TRIANGLE_COUNT 2  // triangle slots, a multiple of VKRAY_TRIANGLE_BATCH
+#define VKRAY_SPEC_TRIANGLE_SLOTS 2         // triangles tested by brute force, a multiple of VKRAY_TRIANGLE_BATCH
 #define VKRAY_SPEC_WRITE_DEPTH 3
 #define VKRAY_SPEC_WRITE_NORMAL 4
 #define VKRAY_SPEC_WRITE_UV 5
-#define VKRAY_SPEC_TRIANGLE_MODE 6
+#define VKRAY_SPEC_SEARCH_MODE 6
+#define VKRAY_SPEC_TREE_HAS_TRIANGLES 8
+#define VKRAY_SPEC_TREE_HAS_SPHERES 9
 // Iterations the tree walk of one ray may take; 0: unlimited. llvmpipe (lavapipe) silently ends
 // every loop of a shader invocation after 65535 iterations in total (LP_MAX_TGSI_LOOP_ITERATIONS);
 // a ray that would need more stops at this budget instead, lists its pixel in the overflow
 // buffer, and the host finishes that pixel (see engine/renderer.cpp): no geometry goes missing.
 #define VKRAY_SPEC_LOOP_BUDGET 7
-#define VKRAY_SPEC_COUNT 8
+#define VKRAY_SPEC_COUNT 10
 
 // All positions on the GPU are relative to the scene's anchor point (see engine/gpu_scene.cpp), so
 // float32 keeps its precision for scenes far from the world origin.
@@ -73,19 +75,24 @@ struct GpuPlane {
 };
 VKRAY_CHECK_SIZE(GpuPlane, 16);
 
-// A triangle's vertices relative to the anchor in xyz, and its unit geometric normal spread over
-// the three w components. The normal is computed in double on the host, so needle triangles get an
-// accurate one; the shader reads it only for the winning triangle. Triangles are stored in the
-// order of the BVH's leaves, so a leaf is a contiguous range, and pre-gathered rather than indexed:
-// three fetches a triangle instead of four dependent ones.
-struct GpuTriangle {
-  vec4 v0_nx;
-  vec4 v1_ny;
-  vec4 v2_nz;
+// A primitive the tree holds (or a triangle tested by brute force): three texels.
+// - Triangle: its vertices relative to the anchor in xyz, and its unit geometric normal spread over
+//   the three w components. The normal is computed in double on the host, so needle triangles get an
+//   accurate one; the shader reads it only for the winning triangle.
+// - Sphere: (centre relative to the anchor, radius), then (centre, VKRAY_SPHERE_MARK) and (centre,
+//   0). The mark tells it from a triangle (normal components are within [-1, 1]); read as a
+//   triangle, its three equal vertices have a zero determinant and are never hit.
+// Primitives are stored in the order of the BVH's leaves, so a leaf is a contiguous range, and
+// triangles pre-gathered rather than indexed: three fetches a triangle instead of four dependent ones.
+struct GpuPrimitive {
+  vec4 a;
+  vec4 b;
+  vec4 c;
 };
-VKRAY_CHECK_SIZE(GpuTriangle, 48);
+VKRAY_CHECK_SIZE(GpuPrimitive, 48);
+#define VKRAY_SPHERE_MARK 4.0
 
-// The brute-force path tests triangles in batches of this many, padded with (0, 0, 0) triangles
+// The brute-force path tests triangles in batches of this many, padded with all-zero triangles
 // (never hit: their determinant is 0), in one loop iteration with a constant trip count the
 // compiler unrolls. This matters on lavapipe, whose loop cap counts iterations.
 #define VKRAY_TRIANGLE_BATCH 8
@@ -93,7 +100,7 @@ VKRAY_CHECK_SIZE(GpuTriangle, 48);
 // BVH: binary, with both children's boxes stored in their parent, so one node fetch gives a ray
 // both slab tests and the nearer child. 64 bytes, one cache line. Per axis: (lower of child 0,
 // lower of child 1, upper of child 0, upper of child 1). Boxes are float32, relative to the anchor,
-// and hold the float32 triangles exactly.
+// and hold the float32 primitives exactly.
 struct GpuBvhNode {
   vec4 bounds_x;
   vec4 bounds_y;
@@ -103,7 +110,7 @@ struct GpuBvhNode {
 VKRAY_CHECK_SIZE(GpuBvhNode, 64);
 
 // A child reference is an inner node's index, or, with VKRAY_BVH_LEAF_BIT set, a leaf: its first
-// triangle in the low bits above VKRAY_BVH_LEAF_COUNT_BITS and its triangle count minus one below.
+// primitive slot in the low bits above VKRAY_BVH_LEAF_COUNT_BITS and its count minus one below.
 #define VKRAY_BVH_LEAF_BIT 0x80000000u
 #define VKRAY_BVH_LEAF_COUNT_BITS 2
 #define VKRAY_BVH_MAX_LEAF_SIZE 4                 // 1 << VKRAY_BVH_LEAF_COUNT_BITS

@@ -5,13 +5,12 @@
 
 #include "gpu_layout.h"
 #include "intersect.glsl"
-#include "triangles.glsl"
+#include "primitives.glsl"
 
 layout(local_size_x = VKRAY_WORKGROUP_X, local_size_y = VKRAY_WORKGROUP_Y) in;
 
 
 // A count of 0 removes that primitive loop entirely once the pipeline is specialized.
-layout(constant_id = VKRAY_SPEC_SPHERE_COUNT) const uint SPHERE_COUNT = 0;
 layout(constant_id = VKRAY_SPEC_PLANE_COUNT) const uint PLANE_COUNT = 0;
 layout(constant_id = VKRAY_SPEC_WRITE_DEPTH) const bool WRITE_DEPTH = true;
 layout(constant_id = VKRAY_SPEC_WRITE_NORMAL) const bool WRITE_NORMAL = true;
@@ -19,7 +18,6 @@ layout(constant_id = VKRAY_SPEC_WRITE_UV) const bool WRITE_UV = false;
 
 layout(push_constant) uniform PushConstants { RayGenParams params; };
 
-layout(binding = VKRAY_BINDING_SPHERES) uniform samplerBuffer spheres;  // GpuSphere
 layout(binding = VKRAY_BINDING_PLANES) uniform samplerBuffer planes;    // GpuPlane
 layout(std430, binding = VKRAY_BINDING_DEPTH) writeonly buffer DepthOut { float depth_out[]; };
 layout(std430, binding = VKRAY_BINDING_NORMAL) writeonly buffer NormalOut { float normal_out[]; };
@@ -65,15 +63,6 @@ void main() {
   float t_best = inside ? no_hit : 0.0;
   vec3 normal = vec3(0.0);
 
-  for (uint i = 0; i < SPHERE_COUNT; ++i) {
-    vec4 sphere = texelFetch(spheres, int(i));
-    vec3 f = origin - sphere.xyz;
-    float t = intersect_sphere(f, sphere.w, dir, t_best);
-    if (t < t_best) {
-      t_best = t;
-      normal = (f + t * dir) / sphere.w;
-    }
-  }
   for (uint i = 0; i < PLANE_COUNT; ++i) {
     vec4 plane = texelFetch(planes, int(i));
     float t = intersect_plane(plane, origin, dir, t_best);
@@ -82,14 +71,12 @@ void main() {
       normal = plane.xyz;
     }
   }
-  if (TRIANGLE_MODE != VKRAY_TRIANGLES_NONE) {
-    TriangleHit hit = nearest_triangle(origin, dir, t_best);
-    if (hit.slot != no_triangle) {
-      t_best = hit.t;
-      normal = triangle_normal(hit.slot);
-    }
-    if (hit.unfinished && inside) overflow_pixels[atomicAdd(overflow_count, 1u)] = out_index;
+  PrimitiveHit hit = nearest_primitive(origin, dir, t_best);
+  if (hit.t < t_best) {
+    t_best = hit.t;
+    normal = hit.normal;
   }
+  if (hit.unfinished && inside) overflow_pixels[atomicAdd(overflow_count, 1u)] = out_index;
   if (!inside) return;
 
   if (WRITE_DEPTH) depth_out[out_index] = t_best;

@@ -209,9 +209,9 @@ TEST(GpuRenderer, SceneBeyondTheDriversLoopLimitIsRefused) {
 TEST(GpuRenderer, RaysBeyondTheLoopBudgetAreFinishedNotDropped) {
   Scene scene = sized(default_scene(), 48, 36);
   scene.meshes.push_back(quad_grid({-3, 0.01, -3}, {6, 0, 0}, {0, 0, 6}, 40));
-  for (const TriangleSearch search : {TriangleSearch::bvh_per_ray, TriangleSearch::bvh_packet}) {
+  for (const PrimitiveSearch search : {PrimitiveSearch::bvh_per_ray, PrimitiveSearch::bvh_packet}) {
     RendererOptions options;
-    options.scene.triangle_search = search;
+    options.scene.search = search;
     options.loop_budget = 3;
     Renderer renderer(device(), scene, options);
     const Frame frame = renderer.render(scene.camera, scene.width, scene.height, {Aov::depth, Aov::normal});

@@ -37,8 +37,10 @@ const vk::raii::Pipeline& RaycastPipeline::pipeline(AovSet aovs, double& created
   std::array<uint32_t, VKRAY_SPEC_COUNT> values{};
   values[VKRAY_SPEC_SPHERE_COUNT] = specialization_.spheres;
   values[VKRAY_SPEC_PLANE_COUNT] = specialization_.planes;
-  values[VKRAY_SPEC_TRIANGLE_COUNT] = specialization_.triangle_slots;
-  values[VKRAY_SPEC_TRIANGLE_MODE] = specialization_.triangle_mode;
+  values[VKRAY_SPEC_TRIANGLE_SLOTS] = specialization_.triangle_slots;
+  values[VKRAY_SPEC_SEARCH_MODE] = specialization_.search_mode;
+  values[VKRAY_SPEC_TREE_HAS_TRIANGLES] = specialization_.tree_has_triangles ? 1u : 0u;
+  values[VKRAY_SPEC_TREE_HAS_SPHERES] = specialization_.tree_has_spheres ? 1u : 0u;
   values[VKRAY_SPEC_LOOP_BUDGET] = specialization_.loop_budget;
   values[VKRAY_SPEC_WRITE_DEPTH] = aovs.has(Aov::depth) ? 1u : 0u;
   values[VKRAY_SPEC_WRITE_NORMAL] = aovs.has(Aov::normal) ? 1u : 0u;

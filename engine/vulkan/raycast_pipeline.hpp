@@ -16,7 +16,9 @@ struct PipelineSpecialization {
   uint32_t spheres = 0;
   uint32_t planes = 0;
   uint32_t triangle_slots = 0;
-  uint32_t triangle_mode = VKRAY_TRIANGLES_NONE;
+  uint32_t search_mode = VKRAY_SEARCH_BRUTE_FORCE;
+  bool tree_has_triangles = false;
+  bool tree_has_spheres = false;
   uint32_t loop_budget = 0;
 };
 
