@@ -1,5 +1,7 @@
 #include "cli/commands.hpp"
+#include "cli/progress.hpp"
 #include "engine/compare.hpp"
+#include "engine/host_memory.hpp"
 #include "engine/image_io.hpp"
 #include "engine/reference.hpp"
 #include "engine/renderer.hpp"
@@ -88,6 +90,7 @@ int run_render(const RenderOptions& options) {
 
   Frame frame;
   std::optional<RenderTimings> gpu_timings;
+  std::optional<SceneStats> scene_stats;
   double reference_ms = 0.0;
   double device_ms = 0.0;
   std::string device_name = "CPU reference (double precision)";
@@ -109,9 +112,13 @@ int run_render(const RenderOptions& options) {
     GpuDevice device(options.device);
     device_name = device.info().name;
     device_ms = stopwatch.lap_ms();
-    Renderer renderer(device, scene);
+    ProgressLine progress("building the BVH");
+    RendererOptions renderer_options;
+    renderer_options.scene.bvh.progress = progress.callback();
+    Renderer renderer(device, scene, renderer_options);
     frame = renderer.render(scene.camera, scene.width, scene.height, aovs);
     gpu_timings = renderer.timings();
+    scene_stats = renderer.scene_stats();
   }
   const double render_ms = stopwatch.lap_ms();
 
@@ -138,6 +145,7 @@ int run_render(const RenderOptions& options) {
     if (gpu_timings) {
       print_timing("device open", device_ms);
       print_timing("upload", gpu_timings->upload_ms);
+      if (scene_stats->bvh_nodes > 0) print_timing("  of which BVH build", gpu_timings->bvh_build_ms);
       print_timing("pipeline creation", gpu_timings->pipeline_ms);
       if (gpu_timings->has_gpu_times) {
         print_timing("dispatch (GPU)", gpu_timings->dispatch_gpu_ms);
@@ -147,9 +155,24 @@ int run_render(const RenderOptions& options) {
       print_timing("readback", gpu_timings->readback_ms);
       print_timing("render (wall)", render_ms);
       std::printf("  %-22s %10u\n", "tiles", gpu_timings->tiles);
+      if (gpu_timings->unfinished_rays > 0) {
+        std::printf("  %-22s %10llu (finished on the CPU in %.3f ms)\n", "rays past loop budget",
+                    static_cast<unsigned long long>(gpu_timings->unfinished_rays), gpu_timings->cpu_finish_ms);
+      }
     }
     if (reference_hits) print_timing("reference (CPU)", reference_ms);
     print_timing("file writing", write_ms);
+    if (scene_stats) {
+      const SceneStats& stats = *scene_stats;
+      std::printf("scene on the device: %u triangles, %u spheres, %.1f MiB", stats.triangles, stats.spheres,
+                  static_cast<double>(stats.geometry_bytes) / (1 << 20));
+      if (stats.triangles > 0 && stats.spheres == 0) {
+        std::printf(" (%.1f bytes a triangle)", static_cast<double>(stats.geometry_bytes) / stats.triangles);
+      }
+      if (stats.bvh_nodes > 0) std::printf("; BVH of %u nodes, depth %u", stats.bvh_nodes, stats.bvh_depth);
+      std::printf("\n");
+    }
+    std::printf("peak host memory: %.1f MiB\n", static_cast<double>(peak_host_memory_bytes()) / (1 << 20));
   }
   return 0;
 }
