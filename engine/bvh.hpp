@@ -39,6 +39,8 @@ struct BvhBuildOptions {
   // four texels and tests two boxes against one triangle's three texels, and a deeper tree costs
   // stack traffic; on the bunny at 1920x1080 on lavapipe, traversal costs 1, 2, 4 and 8 gave about
   // 190, 179, 170 and 172 ms (best of 7 frames, leaves of up to 4) and 4 also gives the fewest nodes.
+  // Leaves of up to 8 then kept the time (165 ms) and took the bunny from 67.6 to 59.6 device bytes
+  // a triangle (48 of them the triangle itself).
   float traversal_cost = 4.0f;
   float intersection_cost = 1.0f;
   uint32_t max_leaf_size = VKRAY_BVH_MAX_LEAF_SIZE;

@@ -112,9 +112,9 @@ VKRAY_CHECK_SIZE(GpuBvhNode, 64);
 // A child reference is an inner node's index, or, with VKRAY_BVH_LEAF_BIT set, a leaf: its first
 // primitive slot in the low bits above VKRAY_BVH_LEAF_COUNT_BITS and its count minus one below.
 #define VKRAY_BVH_LEAF_BIT 0x80000000u
-#define VKRAY_BVH_LEAF_COUNT_BITS 2
-#define VKRAY_BVH_MAX_LEAF_SIZE 4                 // 1 << VKRAY_BVH_LEAF_COUNT_BITS
-#define VKRAY_BVH_MAX_PRIMITIVES 0x1fffffffu      // what the 29 bits of a leaf's first index hold
+#define VKRAY_BVH_LEAF_COUNT_BITS 3
+#define VKRAY_BVH_MAX_LEAF_SIZE 8                 // 1 << VKRAY_BVH_LEAF_COUNT_BITS
+#define VKRAY_BVH_MAX_PRIMITIVES 0x0fffffffu      // what the 28 bits of a leaf's first slot hold
 // The builder stops splitting at this depth; it bounds the traversal stack. A SAH tree over n
 // primitives is about 2 log2(n) deep (~45 for 4M triangles); beyond 64 the builder makes leaves.
 #define VKRAY_BVH_MAX_DEPTH 64
