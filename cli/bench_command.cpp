@@ -1,8 +1,11 @@
 #include "cli/commands.hpp"
+#include "cli/scene_argument.hpp"
 #include "engine/bench.hpp"
+#include "engine/embree_baseline.hpp"
 #include "engine/scene_loader.hpp"
 
 #include <cstdio>
+#include <filesystem>
 #include <memory>
 #include <string>
 #include <vector>
@@ -16,6 +19,7 @@ struct BenchOptions {
   uint32_t frames = 5;
   std::string variants = "bvh-per-ray,bvh-packet";
   std::string device;
+  bool no_embree = false;
 };
 
 std::pair<uint32_t, uint32_t> parse_size(const std::string& text) {
@@ -57,8 +61,10 @@ int run_bench(const BenchOptions& options) {
   const auto [width, height] = parse_size(options.size);
   const std::vector<BenchVariant> variants = parse_variants(options.variants);
   std::vector<std::pair<std::string, Scene>> scenes;
-  if (options.scenes.empty()) scenes.emplace_back("default", default_scene());
-  for (const auto& path : options.scenes) scenes.emplace_back(path, load_scene_file(path));
+  if (options.scenes.empty()) scenes.emplace_back("default", load_scene_argument("", width, height));
+  for (const auto& path : options.scenes) {
+    scenes.emplace_back(std::filesystem::path(path).filename().string(), load_scene_argument(path, width, height));
+  }
 
   GpuDevice device(options.device);
   std::printf("vkray bench on %s (%s), %ux%u, %u frames\n", device.info().name.c_str(), device.info().driver.c_str(),
@@ -66,13 +72,13 @@ int run_bench(const BenchOptions& options) {
   std::printf("%-24s %-12s %9s %8s %9s %9s %9s %8s %8s %7s %9s %9s\n", "scene", "variant", "triangles", "B/tri",
               "build ms", "gpu med", "gpu min", "Mrays/s", "flips", "unfin.", "depth p99", "norm p99");
   for (auto& [name, scene] : scenes) {
-    scene.width = width;
-    scene.height = height;
     const ReferenceScene reference_scene(scene);
     const std::vector<ReferenceHit> reference =
         render_reference_hits(reference_scene, make_camera_basis(scene.camera, width, height), width, height);
+    double best_vkray_ms = 0.0;
     for (const auto& variant : variants) {
       const BenchRow row = run_bench_variant(device, scene, variant, options.frames, reference);
+      if (best_vkray_ms == 0.0 || row.dispatch_median_ms < best_vkray_ms) best_vkray_ms = row.dispatch_median_ms;
       const double bytes_per_triangle =
           row.stats.triangles ? static_cast<double>(row.stats.geometry_bytes) / row.stats.triangles : 0.0;
       std::printf("%-24s %-12s %9u %8.1f %9.1f %9.2f %9.2f %8.2f %8zu %7llu %9.2e %9.2e\n", name.c_str(),
@@ -80,6 +86,17 @@ int run_bench(const BenchOptions& options) {
                   row.dispatch_min_ms, row.mrays_per_s, row.error.hit_mismatches,
                   static_cast<unsigned long long>(row.unfinished_rays), row.error.depth_p99, row.error.normal_deg_p99);
     }
+    if (options.no_embree) continue;
+    const EmbreeResult embree = trace_with_embree(scene, width, height, options.frames);
+    const FrameError embree_error = measure_error(embree.frame, reference);
+    const double pixels = static_cast<double>(width) * height;
+    for (const auto& [mode, ms] : {std::pair{"embree-1", embree.single_ms}, std::pair{"embree-8", embree.packet_ms}}) {
+      std::printf("%-24s %-12s %9s %8s %9.1f %9s %9.2f %8.2f %8zu %7s %9.2e %9.2e\n", name.c_str(), mode, "", "",
+                  embree.build_ms, "", ms, pixels / (ms * 1e3), embree_error.hit_mismatches, "", embree_error.depth_p99,
+                  embree_error.normal_deg_p99);
+    }
+    std::printf("%-24s vkray's fastest variant against Embree's packets on %u CPU threads: %.2fx the time\n", name.c_str(),
+                embree.threads, best_vkray_ms / embree.packet_ms);
   }
   return 0;
 }
@@ -89,7 +106,8 @@ int run_bench(const BenchOptions& options) {
 Action add_bench_command(CLI::App& app) {
   CLI::App* command = app.add_subcommand("bench", "Time configurations of the renderer beside their error against the reference.");
   auto options = std::make_shared<BenchOptions>();
-  command->add_option("scenes", options->scenes, "Scene files (JSON); the built-in scene when none is given");
+  command->add_option("scenes", options->scenes,
+                      "Scene files (.json) or models (.obj, framed automatically); the built-in scene when none is given");
   command->add_option("--size", options->size, "Image size WIDTHxHEIGHT")->capture_default_str();
   command->add_option("--frames", options->frames, "Timed frames per variant, after one warm-up")
       ->capture_default_str()
@@ -97,6 +115,7 @@ Action add_bench_command(CLI::App& app) {
   command->add_option("--variants", options->variants, "Comma-separated: brute-force, bvh-per-ray, bvh-packet")
       ->capture_default_str();
   command->add_option("--device", options->device, "Use the Vulkan device whose name contains this text");
+  command->add_flag("--no-embree", options->no_embree, "Leave out the Embree CPU baseline");
   return [options] { return run_bench(*options); };
 }
 

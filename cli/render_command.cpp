@@ -1,5 +1,6 @@
 #include "cli/commands.hpp"
 #include "cli/progress.hpp"
+#include "cli/scene_argument.hpp"
 #include "engine/compare.hpp"
 #include "engine/host_memory.hpp"
 #include "engine/image_io.hpp"
@@ -21,6 +22,7 @@ namespace {
 
 struct RenderOptions {
   std::string scene_path;
+  std::optional<std::string> camera;
   std::string output = "render.exr";
   std::optional<std::string> preview;
   bool no_preview = false;
@@ -82,10 +84,8 @@ int run_render(const RenderOptions& options) {
   Stopwatch stopwatch;
   const AovSet aovs = parse_aov_list(options.aovs);
   check_render_options(options, aovs);
-  Scene scene = options.scene_path.empty() ? default_scene() : load_scene_file(options.scene_path);
-  if (options.width) scene.width = *options.width;
-  if (options.height) scene.height = *options.height;
-  check_image_size(scene.width, scene.height);
+  Scene scene = load_scene_argument(options.scene_path, options.width, options.height);
+  if (options.camera) apply_camera_option(*options.camera, scene.camera);
   const double load_ms = stopwatch.lap_ms();
 
   Frame frame;
@@ -182,7 +182,10 @@ int run_render(const RenderOptions& options) {
 Action add_render_command(CLI::App& app) {
   CLI::App* command = app.add_subcommand("render", "Render a scene (or the built-in one) to OpenEXR and a PNG preview.");
   auto options = std::make_shared<RenderOptions>();
-  command->add_option("scene", options->scene_path, "Scene file (JSON); the built-in course scene when omitted");
+  command->add_option("scene", options->scene_path,
+                      "Scene file (.json) or model (.obj, framed automatically); the built-in course scene when omitted");
+  command->add_option("--camera", options->camera,
+                      "Override the camera: 'from=X,Y,Z to=X,Y,Z up=X,Y,Z fovy=DEGREES', any of the keys");
   command->add_option("-o,--output", options->output, "OpenEXR file to write")->capture_default_str();
   command->add_option("--width", options->width, "Image width in pixels (overrides the scene)");
   command->add_option("--height", options->height, "Image height in pixels (overrides the scene)");

@@ -1,0 +1,20 @@
+// What a user names on the command line: the scene to render and the camera to render it with.
+#pragma once
+
+#include "engine/scene.hpp"
+
+#include <optional>
+#include <string>
+
+namespace vkray::cli {
+
+// A scene file (.json), or a model (.obj) alone in a scene with a camera that frames it
+// (engine/framing.hpp); the built-in scene for an empty path. `width`/`height` override the image
+// size, and the framing is done at the final size. Throws InputError naming the file.
+Scene load_scene_argument(const std::string& path, std::optional<uint32_t> width, std::optional<uint32_t> height);
+
+// Applies a --camera override: space- or semicolon-separated keys, each optional,
+// "from=X,Y,Z to=X,Y,Z up=X,Y,Z fovy=DEGREES". Throws InputError for anything else.
+void apply_camera_option(const std::string& text, Camera& camera);
+
+}  // namespace vkray::cli

@@ -1,0 +1,26 @@
+// The CPU baseline vkray is measured against: Embree 3 tracing the same primary rays on all CPU
+// cores, one ray at a time (rtcIntersect1) and in packets of 8 (rtcIntersect8).
+#pragma once
+
+#include "engine/frame.hpp"
+#include "engine/scene.hpp"
+
+#include <cstdint>
+
+namespace vkray {
+
+struct EmbreeResult {
+  double build_ms = 0.0;      // scene commit (Embree's own BVH build)
+  double single_ms = 0.0;     // best of the timed runs, all cores
+  double packet_ms = 0.0;
+  uint32_t threads = 0;
+  Frame frame;                // depth and normal from the packet path, for the error against the reference
+};
+
+// Traces the scene camera's primary rays at width x height (the same rays as vkray: pixel_uv and
+// CameraBasis::direction), `repeats` timed runs of each mode after one warm-up. Triangles and
+// spheres go to Embree; infinite planes, which Embree lacks, are intersected after each query.
+// Throws std::runtime_error when Embree fails.
+EmbreeResult trace_with_embree(const Scene& scene, uint32_t width, uint32_t height, uint32_t repeats);
+
+}  // namespace vkray

@@ -1,0 +1,50 @@
+#include "engine/framing.hpp"
+
+#include "engine/obj_loader.hpp"
+#include "engine/unit_vector.hpp"
+
+#include <glm/geometric.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numbers>
+
+namespace vkray {
+
+Camera frame_scene(const Scene& scene, uint32_t width, uint32_t height) {
+  glm::dvec3 lower(std::numeric_limits<double>::infinity()), upper(-std::numeric_limits<double>::infinity());
+  for (const auto& mesh : scene.meshes) {
+    for (const auto& p : mesh.positions) lower = glm::min(lower, p), upper = glm::max(upper, p);
+  }
+  for (const auto& sphere : scene.spheres) {
+    lower = glm::min(lower, sphere.center - sphere.radius), upper = glm::max(upper, sphere.center + sphere.radius);
+  }
+  if (!(lower.x <= upper.x)) throw InputError("nothing to frame: the scene has no mesh or sphere");
+  const glm::dvec3 centre = 0.5 * (lower + upper);
+  double radius = 0.0;
+  for (const auto& mesh : scene.meshes) {
+    for (const auto& p : mesh.positions) radius = std::max(radius, glm::length(p - centre));
+  }
+  for (const auto& sphere : scene.spheres) radius = std::max(radius, glm::length(sphere.center - centre) + sphere.radius);
+  // A single point still needs a camera somewhere: one unit away.
+  if (radius == 0.0) radius = 0.5;
+
+  // Half the field of view across the shorter side: the vertical one, or the horizontal one of a
+  // portrait image, tan(h) = tan(fovy / 2) * width / height. At distance r / sin(half) the sphere's
+  // silhouette cone has exactly that half-angle.
+  const double half_fovy = framing_fovy_degrees * std::numbers::pi / 360.0;
+  const double half = width >= height ? half_fovy : std::atan(std::tan(half_fovy) * width / height);
+  const double distance = radius / std::sin(half);
+  return {centre + distance * unit_vector(framing_view_from), centre, {0.0, 1.0, 0.0}, framing_fovy_degrees};
+}
+
+Scene load_model_file(const std::filesystem::path& path) {
+  Scene scene;
+  scene.meshes.push_back(load_obj_file(path));
+  if (scene.meshes[0].triangles.empty()) throw InputError(path.string() + ": no faces to render");
+  scene.camera = frame_scene(scene, scene.width, scene.height);
+  return scene;
+}
+
+}  // namespace vkray
