@@ -725,4 +725,102 @@ TEST_F(CliTest, CheckPrintsErrorAgainstReference) {
   EXPECT_EQ(exr.width, 32);
 }
 
+// A UV sphere of radius 1 around (2, 3, -1) as OBJ text: 64 segments around, 32 from pole to pole.
+// Its silhouette from any direction lies between radius cos(pi / 32) > 0.995 and 1.
+std::string uv_sphere_obj() {
+  std::ostringstream obj;
+  constexpr int rings = 32, segments = 64;
+  obj << "v 2 4 -1\n";
+  for (int r = 1; r < rings; ++r) {
+    const double theta = std::numbers::pi * r / rings;
+    for (int s = 0; s < segments; ++s) {
+      const double phi = 2.0 * std::numbers::pi * s / segments;
+      obj << "v " << 2 + std::sin(theta) * std::cos(phi) << ' ' << 3 + std::cos(theta) << ' ' << -1 + std::sin(theta) * std::sin(phi) << '\n';
+    }
+  }
+  obj << "v 2 2 -1\n";
+  auto vertex = [](int r, int s) { return 2 + (r - 1) * segments + s % segments; };
+  for (int s = 0; s < segments; ++s) obj << "f 1 " << vertex(1, s + 1) << ' ' << vertex(1, s) << '\n';
+  for (int r = 1; r < rings - 1; ++r) {
+    for (int s = 0; s < segments; ++s) {
+      obj << "f " << vertex(r, s) << ' ' << vertex(r, s + 1) << ' ' << vertex(r + 1, s + 1) << '\n';
+      obj << "f " << vertex(r, s) << ' ' << vertex(r + 1, s + 1) << ' ' << vertex(r + 1, s) << '\n';
+    }
+  }
+  const int last = 2 + (rings - 1) * segments;
+  for (int s = 0; s < segments; ++s) obj << "f " << last << ' ' << vertex(rings - 1, s) << ' ' << vertex(rings - 1, s + 1) << '\n';
+  return obj.str();
+}
+
+// `vkray render MODEL.obj` frames the model: its bounding sphere (here the sphere itself) touches
+// the shorter borders. A pixel centre at distance k + 0.5 pixels from the image centre along the
+// shorter side lies inside the silhouette (radius between 0.995 and 1 of half that side) for the
+// outermost rows or columns at these sizes, and the longer side keeps the same margins as the
+// circle does.
+TEST_F(CliTest, ModelIsFramedToItsBoundingSphere) {
+  {
+    std::ofstream(path("ball.obj")) << uv_sphere_obj();
+  }
+  for (const auto& [width, height] : {std::pair{64, 48}, std::pair{48, 64}, std::pair{40, 40}}) {
+    SCOPED_TRACE(std::to_string(width) + "x" + std::to_string(height));
+    const RunResult run = vkray({"render", "ball.obj", "--width", std::to_string(width), "--height",
+                                 std::to_string(height), "--aov", "depth", "--no-preview", "-o", "ball.exr"});
+    ASSERT_EQ(run.exit_code, 0) << run.err;
+    Image exr;
+    ASSERT_NO_FATAL_FAILURE(read_image(path("ball.exr"), exr, true));
+    int min_i = width, max_i = -1, min_j = height, max_j = -1;
+    for (int j = 0; j < height; ++j) {
+      for (int i = 0; i < width; ++i) {
+        if (exr.at("A", i, j) == 1.0f) min_i = std::min(min_i, i), max_i = std::max(max_i, i), min_j = std::min(min_j, j), max_j = std::max(max_j, j);
+      }
+    }
+    const int shorter = std::min(width, height);
+    // Centred: the hit pixels span the same number of pixels on both sides of the centre.
+    EXPECT_EQ(min_i + max_i, width - 1);
+    EXPECT_EQ(min_j + max_j, height - 1);
+    // Touching the shorter borders, and a disk: as wide as it is high.
+    EXPECT_EQ(max_i - min_i + 1, shorter);
+    EXPECT_EQ(max_j - min_j + 1, shorter);
+  }
+}
+
+TEST_F(CliTest, UnknownSceneKindExitsTwo) {
+  {
+    std::ofstream(path("scene.ply")) << "ply\n";
+  }
+  expect_error(vkray({"render", "scene.ply"}), 2, {"scene.ply", ".json", ".obj"});
+}
+
+TEST_F(CliTest, CameraOptionOverridesTheScene) {
+  {
+    std::ofstream(path("sphere.json")) << sphere_scene;
+  }
+  // Moved from z = 5 to z = 10: the centre pixel hits the unit sphere at distance 9, not 4.
+  const RunResult run = vkray({"render", "sphere.json", "--camera", "from=0,0,10", "--aov", "depth", "-o", "far.exr"});
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  Image exr;
+  ASSERT_NO_FATAL_FAILURE(read_image(path("far.exr"), exr, true));
+  EXPECT_EQ(exr.at("Z", 16, 16), 9.0f);
+}
+
+TEST_F(CliTest, BadCameraOptionsExitTwo) {
+  expect_error(vkray({"render", "--camera", "from=1,2"}), 2, {"--camera", "from"});
+  expect_error(vkray({"render", "--camera", "fovy=180"}), 2, {"--camera", "fovy"});
+  expect_error(vkray({"render", "--camera", "to=0,1,x"}), 2, {"--camera", "'x'"});
+  expect_error(vkray({"render", "--camera", "from=0,0,0 to=0,0,0"}), 2, {"--camera", "differ"});
+  expect_error(vkray({"render", "--camera", "eye=0,0,1"}), 2, {"--camera", "'eye'"});
+  expect_error(vkray({"render", "--camera", "up=0,0,0"}), 2, {"--camera", "up"});
+}
+
+// The bench prints a row per variant and the Embree baseline with its error; no speed is asserted.
+TEST_F(CliTest, BenchPrintsTimesBesideErrors) {
+  const RunResult run = vkray({"bench", "--size", "32x24", "--frames", "1"});
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  for (const char* variant : {"bvh-per-ray", "bvh-packet", "embree-1", "embree-8"}) {
+    EXPECT_NE(run.out.find(variant), std::string::npos) << variant << " missing from:\n" << run.out;
+  }
+  expect_error(vkray({"bench", "--size", "32by24"}), 2, {"--size"});
+  expect_error(vkray({"bench", "--variants", "fastest"}), 2, {"--variants", "'fastest'"});
+}
+
 }  // namespace
