@@ -32,6 +32,7 @@ struct RenderOptions {
   bool timings = false;
   bool check = false;
   bool reference = false;
+  std::string compression = default_exr_compression;
 };
 
 AovSet parse_aov_list(const std::string& list) {
@@ -74,6 +75,11 @@ void check_render_options(const RenderOptions& options, const AovSet& aovs) {
   if (options.preview && !options.no_preview &&
       std::filesystem::path(*options.preview).lexically_normal() == std::filesystem::path(options.output).lexically_normal()) {
     throw InputError("--preview: '" + *options.preview + "' is the OpenEXR output; give another file");
+  }
+  if (!is_exr_compression(options.compression)) {
+    std::string known;
+    for (const char* name : exr_compressions) known += (known.empty() ? "" : ", ") + std::string(name);
+    throw InputError("--compression: unknown '" + options.compression + "' (choose from " + known + ")");
   }
   if (options.check && !options.reference && !aovs.needs_rays()) {
     throw InputError("--check compares depth and normal with the reference; add one of them to --aov");
@@ -126,14 +132,11 @@ int run_render(const RenderOptions& options) {
   if (options.check && !options.reference) error = measure_error(frame, reference());
   stopwatch.lap_ms();
 
-  write_exr(options.output, frame);
   std::string written = options.output;
-  if (!options.no_preview) {
-    const std::string preview =
-        options.preview.value_or(std::filesystem::path(options.output).replace_extension(".png").string());
-    write_preview_png(preview, frame);
-    written += " and " + preview;
-  }
+  const std::filesystem::path preview =
+      options.preview.value_or(std::filesystem::path(options.output).replace_extension(".png").string());
+  write_outputs(options.output, options.no_preview ? nullptr : &preview, frame, options.compression);
+  if (!options.no_preview) written += " and " + preview.string();
   const double write_ms = stopwatch.lap_ms();
 
   std::printf("vkray: wrote %s (%ux%u, %s) on %s\n", written.c_str(), scene.width, scene.height,
@@ -193,6 +196,8 @@ Action add_render_command(CLI::App& app) {
       ->capture_default_str();
   command->add_option("--preview", options->preview, "PNG preview to write (default: the output with .png)");
   command->add_flag("--no-preview", options->no_preview, "Write no PNG preview");
+  command->add_option("--compression", options->compression,
+                      "OpenEXR compression, all lossless: zip (default), zips, piz, rle, none (fastest, largest)");
   command->add_option("--device", options->device, "Use the Vulkan device whose name contains this text");
   command->add_flag("--timings", options->timings, "Print where the time went");
   command->add_flag("--check", options->check,

@@ -4,6 +4,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <exception>
+#include <future>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -21,7 +23,12 @@ void write_image(const std::filesystem::path& path, const OIIO::ImageSpec& spec,
 
 }  // namespace
 
-void write_exr(const std::filesystem::path& path, const Frame& frame) {
+bool is_exr_compression(std::string_view name) {
+  return std::find(std::begin(exr_compressions), std::end(exr_compressions), name) != std::end(exr_compressions);
+}
+
+void write_exr(const std::filesystem::path& path, const Frame& frame, std::string_view compression) {
+  if (!is_exr_compression(compression)) throw std::invalid_argument("unknown EXR compression " + std::string(compression));
   const bool has_hits = frame.aovs.needs_rays();
   std::vector<std::string> names;
   if (frame.aovs.has(Aov::depth)) names.push_back("Z");
@@ -51,7 +58,7 @@ void write_exr(const std::filesystem::path& path, const Frame& frame) {
   spec.channelnames = names;
   spec.alpha_channel = has_hits ? static_cast<int>(channels) - 1 : -1;
   spec.z_channel = frame.aovs.has(Aov::depth) ? 0 : -1;
-  spec.attribute("compression", "zip");
+  spec.attribute("compression", std::string(compression));
   spec.attribute("Software", "vkray");
   write_image(path, spec, OIIO::TypeDesc::FLOAT, pixels.data());
 }
@@ -103,6 +110,20 @@ void write_preview_png(const std::filesystem::path& path, const Frame& frame) {
 
   OIIO::ImageSpec spec(static_cast<int>(row_width), static_cast<int>(height), 3, OIIO::TypeDesc::UINT8);
   write_image(path, spec, OIIO::TypeDesc::UINT8, rgb.data());
+}
+
+void write_outputs(const std::filesystem::path& exr, const std::filesystem::path* preview, const Frame& frame,
+                   std::string_view compression) {
+  std::future<void> png;
+  if (preview) png = std::async(std::launch::async, [&] { write_preview_png(*preview, frame); });
+  std::exception_ptr exr_failure;
+  try {
+    write_exr(exr, frame, compression);
+  } catch (...) {
+    exr_failure = std::current_exception();
+  }
+  if (png.valid()) png.get();  // rethrows the PNG's failure
+  if (exr_failure) std::rethrow_exception(exr_failure);
 }
 
 }  // namespace vkray

@@ -13,6 +13,7 @@
 #include <array>
 #include <cmath>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <initializer_list>
@@ -821,6 +822,29 @@ TEST_F(CliTest, BenchPrintsTimesBesideErrors) {
   }
   expect_error(vkray({"bench", "--size", "32by24"}), 2, {"--size"});
   expect_error(vkray({"bench", "--variants", "fastest"}), 2, {"--variants", "'fastest'"});
+}
+
+// Every offered compression is lossless: the channels read back bit for bit the same.
+TEST_F(CliTest, EveryCompressionWritesTheSameFloats) {
+  Image reference;
+  for (const char* compression : {"zip", "zips", "piz", "rle", "none"}) {
+    SCOPED_TRACE(compression);
+    const std::string name = std::string(compression) + ".exr";
+    const RunResult run = vkray({"render", "--width", "40", "--height", "30", "--aov", "depth,normal,uv",
+                                 "--compression", compression, "--no-preview", "-o", name});
+    ASSERT_EQ(run.exit_code, 0) << run.err;
+    Image exr;
+    ASSERT_NO_FATAL_FAILURE(read_image(path(name), exr, true));
+    if (reference.channels.empty()) {
+      reference = exr;
+      continue;
+    }
+    for (const auto& [channel, values] : reference.channels) {
+      ASSERT_EQ(exr.channels.count(channel), 1u) << channel;
+      EXPECT_EQ(std::memcmp(values.data(), exr.channels.at(channel).data(), values.size() * sizeof(float)), 0) << channel;
+    }
+  }
+  expect_error(vkray({"render", "--compression", "b44"}), 2, {"--compression", "'b44'"});
 }
 
 }  // namespace
