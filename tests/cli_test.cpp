@@ -844,7 +844,11 @@ TEST_F(CliTest, EveryCompressionWritesTheSameFloats) {
       EXPECT_EQ(std::memcmp(values.data(), exr.channels.at(channel).data(), values.size() * sizeof(float)), 0) << channel;
     }
   }
+}
+
+TEST_F(CliTest, LossyOrUnknownCompressionExitsTwo) {
   expect_error(vkray({"render", "--compression", "b44"}), 2, {"--compression", "'b44'"});
+  expect_error(vkray({"render", "--compression", "zip2"}), 2, {"--compression", "'zip2'"});
 }
 
 }  // namespace
