@@ -232,19 +232,6 @@ std::vector<Box> chain_over_cluster(size_t cluster) {
   return boxes;
 }
 
-// The same as triangles spanning those boxes (the cluster: triangles 1e-12 across).
-Scene chain_over_cluster_scene(size_t cluster) {
-  Mesh mesh;
-  for (const Box& box : chain_over_cluster(cluster)) {
-    const glm::dvec3 lo = box.lower;
-    const glm::dvec3 hi = box.upper == box.lower ? box.lower + glm::dvec3(1e-12, 1e-12, 0) : box.upper;
-    const auto first = static_cast<uint32_t>(mesh.positions.size());
-    mesh.positions.insert(mesh.positions.end(), {lo, {hi.x, lo.y, hi.z}, {lo.x, hi.y, hi.z}});
-    mesh.triangles.push_back({first, first + 1, first + 2});
-  }
-  return mesh_scene(mesh);
-}
-
 // A chain as deep as the builder's limit (62 levels with these boxes): the tree must be valid and
 // within the shader's stack (VKRAY_BVH_MAX_DEPTH).
 TEST(BvhBuild, DeepChainStaysWithinTheDepthLimit) {
@@ -256,14 +243,14 @@ TEST(BvhBuild, DeepChainStaysWithinTheDepthLimit) {
 }
 
 // BUG (found by this test; engine code left as is): build_bvh throws "Embree's BVH builder failed
-// (RTCError 1)" on legal input, so ReferenceScene (and make_gpu_scene, hence Renderer) cannot be
-// built. Embree's SAH builder, given maxDepth = VKRAY_BVH_MAX_DEPTH = 64, switches to its
-// fallback "large leaf" splitting MIN_LARGE_LEAF_LEVELS (8) levels above the limit, and that
-// fallback, which halves the primitives per level, throws "depth limit reached" (RTC_ERROR_UNKNOWN)
-// when more than about 2^8 * 4 primitives remain there. Input: 53 nested-scale boxes (the chain
-// above) over 20000 points; as a scene, 53 triangles from 1e-3 to 2e3 across plus 20000 triangles
-// 1e-12 across packed within 1e-9 of the origin: every coordinate is legal (|x| <= 1e15). With 2000
-// cluster points it builds (depth 62: DeepChainStaysWithinTheDepthLimit).
+// (RTCError 1)" on input its header allows ("boxes may be flat"). Embree's SAH builder, given
+// maxDepth = VKRAY_BVH_MAX_DEPTH = 64, switches to its fallback "large leaf" splitting
+// MIN_LARGE_LEAF_LEVELS (8) levels above the limit, and that fallback, which halves the primitives
+// per level, throws "depth limit reached" (RTC_ERROR_UNKNOWN) when more than about 2^8 * 4
+// primitives remain there. Input: the 53 chain boxes above over 20000 point boxes (with 2000 it
+// builds, depth 62: DeepChainStaysWithinTheDepthLimit). Not reproduced through a Scene so far:
+// triangles kept by ReferenceScene / make_gpu_scene have boxes of non-zero area, and clusters of
+// 5000 to 100000 triangles 1e-25 to 1e-6 across under the same chain all built.
 TEST(BvhBuild, DISABLED_DeepChainOverALargeClusterBuilds) {
   const auto boxes = chain_over_cluster(20000);
   Bvh bvh;
@@ -271,8 +258,6 @@ TEST(BvhBuild, DISABLED_DeepChainOverALargeClusterBuilds) {
   if (!bvh.nodes.empty()) {
     EXPECT_TRUE(tree_is_valid(bvh, boxes));
   }
-  const Scene scene = chain_over_cluster_scene(20000);
-  EXPECT_NO_THROW(ReferenceScene{scene});
 }
 
 // ---------------------------------------------------------------------------------------------
