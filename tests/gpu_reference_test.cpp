@@ -4,7 +4,7 @@
 #include "engine/renderer.hpp"
 #include "engine/scene_loader.hpp"
 #include "shaders/gpu_layout.h"
-#include "tests/reference_envelope.hpp"
+#include "tests/gpu_test_support.hpp"
 
 #include <glm/geometric.hpp>
 #include <gtest/gtest.h>
@@ -17,59 +17,7 @@
 namespace vkray {
 namespace {
 
-GpuDevice& device() {
-  static GpuDevice gpu;  // fails the test with GpuError when no Vulkan device exists
-  return gpu;
-}
-
-Frame render(const Scene& scene, AovSet aovs = {Aov::depth, Aov::normal}) {
-  Renderer renderer(device(), scene);
-  return renderer.render(scene.camera, scene.width, scene.height, aovs);
-}
-
-enum class Percentiles { checked, ill_conditioned };
-
-// Every pixel within the envelope derived in reference_envelope.cpp. On ordinary views also the
-// acceptance bar of the issue: 99th percentiles of the relative depth error below 1e-5 and of the
-// normal error below 0.01 degrees. Views dominated by ill-conditioned pixels are held to the
-// envelope alone: there the exact answer moves by more than that within float32's direction
-// uncertainty (normals of a sphere 1e5 times smaller than its distance turn by eta * t / r, about
-// 0.1 degrees; depth near a curved horizon changes like t * tan(theta) per radian).
-void expect_frame_matches_reference(const Scene& scene, const Frame& frame,
-                                    Percentiles percentiles = Percentiles::checked) {
-  const test::EnvelopeReport report = test::check_against_reference(scene, frame);
-  EXPECT_EQ(report.failures, 0u) << report.describe();
-  if (percentiles == Percentiles::checked) {
-    EXPECT_LT(report.stats.depth_p99, 1e-5) << report.describe();
-    EXPECT_LT(report.stats.normal_deg_p99, 0.01) << report.describe();
-  }
-  std::printf("    %ux%u: %s\n", scene.width, scene.height, report.stats.summary().c_str());
-}
-
-void expect_matches_reference(const Scene& scene, Percentiles percentiles = Percentiles::checked) {
-  expect_frame_matches_reference(scene, render(scene), percentiles);
-}
-
-Scene sized(Scene scene, uint32_t width, uint32_t height) {
-  scene.width = width;
-  scene.height = height;
-  return scene;
-}
-
-Mesh quad_grid(glm::dvec3 corner, glm::dvec3 edge_u, glm::dvec3 edge_v, int cells) {
-  Mesh mesh;
-  for (int j = 0; j <= cells; ++j) {
-    for (int i = 0; i <= cells; ++i) mesh.positions.push_back(corner + (double(i) / cells) * edge_u + (double(j) / cells) * edge_v);
-  }
-  for (int j = 0; j < cells; ++j) {
-    for (int i = 0; i < cells; ++i) {
-      const uint32_t a = uint32_t(j * (cells + 1) + i), b = a + 1, c = a + uint32_t(cells) + 1, d = c + 1;
-      mesh.triangles.push_back({a, b, d});
-      mesh.triangles.push_back({a, d, c});
-    }
-  }
-  return mesh;
-}
+using namespace test;
 
 TEST(GpuReference, DefaultScene) { expect_matches_reference(sized(default_scene(), 160, 120)); }
 
@@ -292,20 +240,6 @@ TEST(GpuRenderer, UvMappingAndUnitDisk) {
       }
     }
   }
-}
-
-const std::filesystem::path models_dir = VKRAY_MODELS_DIR;
-
-// A mesh from ../shared/models seen from above the front, filling most of the image.
-Scene framed_model(const char* name, uint32_t width, uint32_t height) {
-  Scene scene;
-  scene.meshes.push_back(load_obj_file(models_dir / name));
-  glm::dvec3 lower(INFINITY), upper(-INFINITY);
-  for (const auto& p : scene.meshes[0].positions) lower = glm::min(lower, p), upper = glm::max(upper, p);
-  const glm::dvec3 centre = 0.5 * (lower + upper);
-  const double radius = 0.5 * glm::length(upper - lower);
-  scene.camera = {centre + radius * glm::dvec3(0.9, 1.1, 2.6), centre, {0, 1, 0}, 45};
-  return sized(scene, width, height);
 }
 
 // Real meshes with their defects (quads, n-gons, degenerate triangles, non-manifold edges, a flat

@@ -1,0 +1,115 @@
+// Scenes and cameras shared by the tests: sizes, a grid of quads, the shared models framed or seen
+// from random cameras. Host only (no Vulkan).
+#pragma once
+
+#include "engine/bvh.hpp"
+#include "engine/mesh_generators.hpp"
+#include "engine/obj_loader.hpp"
+#include "engine/scene.hpp"
+
+#include <glm/common.hpp>
+#include <glm/geometric.hpp>
+
+#include <cmath>
+#include <filesystem>
+#include <limits>
+#include <vector>
+
+namespace vkray::test {
+
+inline const std::filesystem::path models_dir = VKRAY_MODELS_DIR;
+
+#define VKRAY_SKIP_WITHOUT_MODELS()                                                                            \
+  if (!std::filesystem::is_directory(::vkray::test::models_dir)) {                                             \
+    GTEST_SKIP() << "shared models folder " << ::vkray::test::models_dir                                        \
+                 << " is absent (set VKRAY_MODELS_DIR to use it)";                                              \
+  }
+
+inline Scene sized(Scene scene, uint32_t width, uint32_t height) {
+  scene.width = width;
+  scene.height = height;
+  return scene;
+}
+
+inline Mesh quad_grid(glm::dvec3 corner, glm::dvec3 edge_u, glm::dvec3 edge_v, int cells) {
+  Mesh mesh;
+  for (int j = 0; j <= cells; ++j) {
+    for (int i = 0; i <= cells; ++i) mesh.positions.push_back(corner + (double(i) / cells) * edge_u + (double(j) / cells) * edge_v);
+  }
+  for (int j = 0; j < cells; ++j) {
+    for (int i = 0; i < cells; ++i) {
+      const uint32_t a = uint32_t(j * (cells + 1) + i), b = a + 1, c = a + uint32_t(cells) + 1, d = c + 1;
+      mesh.triangles.push_back({a, b, d});
+      mesh.triangles.push_back({a, d, c});
+    }
+  }
+  return mesh;
+}
+
+inline Box mesh_bounds(const Mesh& mesh) {
+  Box box{glm::dvec3(std::numeric_limits<double>::infinity()), glm::dvec3(-std::numeric_limits<double>::infinity())};
+  for (const auto& p : mesh.positions) box.lower = glm::min(box.lower, p), box.upper = glm::max(box.upper, p);
+  return box;
+}
+
+// A mesh from ../shared/models seen from above the front, filling most of the image.
+inline Scene framed_model(const char* name, uint32_t width, uint32_t height) {
+  Scene scene;
+  scene.meshes.push_back(load_obj_file(models_dir / name));
+  const Box box = mesh_bounds(scene.meshes[0]);
+  const glm::dvec3 centre = 0.5 * (box.lower + box.upper);
+  const double radius = 0.5 * glm::length(box.upper - box.lower);
+  scene.camera = {centre + radius * glm::dvec3(0.9, 1.1, 2.6), centre, {0, 1, 0}, 45};
+  return sized(scene, width, height);
+}
+
+// `count` cameras from a fixed seed, each outside the bounding sphere of `box` (1.3 to 2.5 of its
+// radius from the centre, in a random direction), looking at a point near the centre with a
+// random up vector and a view angle of 25 to 55 degrees, so the box fills much of the image. Then
+// one camera on the +z axis looking down -z with up +y: with an odd image size its middle row and
+// column have exactly zero direction components (the slab tests' 0 * inf case).
+inline std::vector<Camera> cameras_around(const Box& box, uint64_t seed, int count) {
+  PortableRandom random(seed);
+  const glm::dvec3 centre = 0.5 * (box.lower + box.upper);
+  const double radius = std::max(0.5 * glm::length(box.upper - box.lower), 1e-300);
+  std::vector<Camera> cameras;
+  for (int k = 0; k < count; ++k) {
+    Camera camera;
+    camera.from = centre + random.uniform(1.3, 2.5) * radius * random.unit_vector();
+    camera.to = centre + 0.2 * radius * random.unit_vector();
+    camera.up = random.unit_vector();
+    camera.fovy_degrees = random.uniform(25.0, 55.0);
+    cameras.push_back(camera);
+  }
+  cameras.push_back({centre + glm::dvec3(0, 0, 2.5 * radius), centre, {0, 1, 0}, 45});
+  return cameras;
+}
+
+// `count` cameras from a fixed seed, each looking at the centre of a random triangle of `mesh` from
+// `distance` away in a random direction, with a 30 degree view: close-ups of soups whose triangles
+// fill only parts of their bounding box (clusters).
+inline std::vector<Camera> cameras_at_triangles(const Mesh& mesh, uint64_t seed, int count, double distance) {
+  PortableRandom random(seed);
+  std::vector<Camera> cameras;
+  for (int k = 0; k < count; ++k) {
+    const auto& t = mesh.triangles[random.below(mesh.triangles.size())];
+    const glm::dvec3 centre = (mesh.positions[t[0]] + mesh.positions[t[1]] + mesh.positions[t[2]]) / 3.0;
+    cameras.push_back({centre + distance * random.unit_vector(), centre, random.unit_vector(), 30});
+  }
+  return cameras;
+}
+
+inline Scene mesh_scene(Mesh mesh) {
+  Scene scene;
+  scene.meshes.push_back(std::move(mesh));
+  return scene;
+}
+
+// The closed cube [-1, 1]^3 as 12 triangles (6 quads).
+inline Scene cube_scene() {
+  return mesh_scene(load_obj_text("v -1 -1 -1\nv 1 -1 -1\nv 1 1 -1\nv -1 1 -1\nv -1 -1 1\nv 1 -1 1\nv 1 1 1\nv -1 1 1\n"
+                                  "f 1 4 3 2\nf 5 6 7 8\nf 1 2 6 5\nf 4 8 7 3\nf 1 5 8 4\nf 2 3 7 6\n",
+                                  "cube.obj"));
+}
+
+}  // namespace vkray::test
