@@ -122,8 +122,15 @@ void write_outputs(const std::filesystem::path& exr, const std::filesystem::path
   } catch (...) {
     exr_failure = std::current_exception();
   }
-  if (png.valid()) png.get();  // rethrows the PNG's failure
+  std::exception_ptr png_failure;
+  try {
+    if (png.valid()) png.get();
+  } catch (...) {
+    png_failure = std::current_exception();
+  }
+  // The EXR is the output asked for: its failure is the one to report.
   if (exr_failure) std::rethrow_exception(exr_failure);
+  if (png_failure) std::rethrow_exception(png_failure);
 }
 
 }  // namespace vkray

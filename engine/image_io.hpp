@@ -26,7 +26,7 @@ void write_exr(const std::filesystem::path& path, const Frame& frame, std::strin
 void write_preview_png(const std::filesystem::path& path, const Frame& frame);
 
 // The EXR and, when `preview` is set, the PNG preview, written at the same time on two threads
-// (each takes about as long at 1920x1080). Throws the first failure.
+// (each takes about as long at 1920x1080). Throws the EXR's failure, else the PNG's.
 void write_outputs(const std::filesystem::path& exr, const std::filesystem::path* preview, const Frame& frame,
                    std::string_view compression = default_exr_compression);
 

@@ -17,28 +17,28 @@ namespace {
 
 using namespace test;
 
-const char* name_of(TriangleSearch search) {
+const char* name_of(PrimitiveSearch search) {
   switch (search) {
-    case TriangleSearch::brute_force: return "brute force";
-    case TriangleSearch::bvh_per_ray: return "BVH per ray";
-    case TriangleSearch::bvh_packet: return "BVH packet";
+    case PrimitiveSearch::brute_force: return "brute force";
+    case PrimitiveSearch::bvh_per_ray: return "BVH per ray";
+    case PrimitiveSearch::bvh_packet: return "BVH packet";
     default: return "automatic";
   }
 }
 
-using Searches = std::vector<TriangleSearch>;
-const Searches tree_walks = {TriangleSearch::bvh_per_ray, TriangleSearch::bvh_packet};
-const Searches all_searches = {TriangleSearch::brute_force, TriangleSearch::bvh_per_ray, TriangleSearch::bvh_packet};
+using Searches = std::vector<PrimitiveSearch>;
+const Searches tree_walks = {PrimitiveSearch::bvh_per_ray, PrimitiveSearch::bvh_packet};
+const Searches all_searches = {PrimitiveSearch::brute_force, PrimitiveSearch::bvh_per_ray, PrimitiveSearch::bvh_packet};
 
 // Renders the scene's camera with `search` and checks that this search is what ran, that the GPU
 // finished every ray itself (a ray handed to the CPU is traced by the reference, which would hide
 // a broken walk) and that every pixel is within the envelope.
-Frame render_and_check(const Scene& scene, TriangleSearch search, Percentiles percentiles = Percentiles::checked) {
+Frame render_and_check(const Scene& scene, PrimitiveSearch search, Percentiles percentiles = Percentiles::checked) {
   SCOPED_TRACE(name_of(search));
   RendererOptions options;
-  options.scene.triangle_search = search;
+  options.scene.search = search;
   Renderer renderer(device(), scene, options);
-  EXPECT_EQ(renderer.scene_stats().triangle_search, search);
+  EXPECT_EQ(renderer.scene_stats().search, search);
   Frame frame = renderer.render(scene.camera, scene.width, scene.height, {Aov::depth, Aov::normal});
   EXPECT_EQ(renderer.timings().unfinished_rays, 0u) << "rays finished on the CPU";
   expect_frame_matches_reference(scene, frame, percentiles);
@@ -72,7 +72,7 @@ void expect_searches_match(Scene scene, const std::vector<Camera>& cameras, cons
     SCOPED_TRACE("camera " + std::to_string(c));
     scene.camera = cameras[c];
     std::vector<Frame> frames;
-    for (TriangleSearch search : searches) frames.push_back(render_and_check(scene, search, percentiles));
+    for (PrimitiveSearch search : searches) frames.push_back(render_and_check(scene, search, percentiles));
     EXPECT_GT(count_hits(frames[0]), frames[0].pixel_count() / 50) << "the camera must see the mesh";
     for (size_t k = 1; k < frames.size(); ++k) {
       size_t differing = 0;
@@ -115,7 +115,7 @@ TEST(BvhGpu, OddImageSizes) {
     SCOPED_TRACE(std::to_string(width) + "x" + std::to_string(height));
     Scene scene = sized(mesh_scene(mesh), width, height);
     scene.camera = cameras[0];
-    for (TriangleSearch search : tree_walks) render_and_check(scene, search);
+    for (PrimitiveSearch search : tree_walks) render_and_check(scene, search);
   }
 }
 
@@ -169,7 +169,7 @@ TEST(BvhGpu, FlatAlligatorFaceOnAndEdgeOn) {
   };
   for (const Camera& camera : edge_on) {
     scene.camera = camera;
-    for (TriangleSearch search : tree_walks) EXPECT_EQ(count_hits(render_and_check(scene, search)), 0u) << name_of(search);
+    for (PrimitiveSearch search : tree_walks) EXPECT_EQ(count_hits(render_and_check(scene, search)), 0u) << name_of(search);
     size_t reference_hits = 0;
     for (const ReferenceHit& hit : render_reference_hits(reference, make_camera_basis(camera, 63, 47), 63, 47)) {
       reference_hits += hit.kind != PrimitiveKind::none;
@@ -178,7 +178,7 @@ TEST(BvhGpu, FlatAlligatorFaceOnAndEdgeOn) {
   }
 
   scene.camera = {{box.lower.x - 100, centre.y, 10.0}, {centre.x, centre.y, 0}, {0, 0, 1}, 4};
-  for (TriangleSearch search : tree_walks) {
+  for (PrimitiveSearch search : tree_walks) {
     EXPECT_GT(count_hits(render_and_check(scene, search)), scene.width * scene.height / 10) << name_of(search);
   }
 }
@@ -202,7 +202,7 @@ TEST(BvhGpu, CameraInsideMillionTriangleSphere) {
     scene.camera = camera;
     scene.width = size.first;
     scene.height = size.second;
-    for (TriangleSearch search : tree_walks) {
+    for (PrimitiveSearch search : tree_walks) {
       const Frame frame = render_and_check(scene, search);
       EXPECT_EQ(count_hits(frame), frame.pixel_count()) << name_of(search) << ": rays leak through the closed mesh";
     }
