@@ -5,6 +5,7 @@
 #include <glm/geometric.hpp>
 
 #include <chrono>
+#include <cmath>
 #include <limits>
 
 namespace vkray {
@@ -25,6 +26,20 @@ struct FloatBox {
   glm::vec3 lower;
   glm::vec3 upper;
 };
+
+// At least one float step and VKRAY_BOX_MARGIN outward (see safe_inverse in shaders/intersect.glsl).
+float step_down(float value) {
+  return float_below(std::min<double>(std::nextafter(value, -std::numeric_limits<float>::infinity()),
+                                      double{value} - VKRAY_BOX_MARGIN));
+}
+float step_up(float value) {
+  return float_above(std::max<double>(std::nextafter(value, std::numeric_limits<float>::infinity()),
+                                      double{value} + VKRAY_BOX_MARGIN));
+}
+FloatBox widened(const FloatBox& box) {
+  return {{step_down(box.lower.x), step_down(box.lower.y), step_down(box.lower.z)},
+          {step_up(box.upper.x), step_up(box.upper.y), step_up(box.upper.z)}};
+}
 
 // The float box of a primitive as the shader tests it: a triangle's float vertices; a sphere's
 // float centre plus or minus its float radius, rounded outward.
@@ -122,12 +137,13 @@ GpuScene make_gpu_scene(const Scene& scene, const GpuSceneOptions& options) {
   const Bvh bvh = build_bvh(boxes, options.bvh);
   gpu.primitives.reserve(unordered.size() + VKRAY_BVH_MAX_LEAF_SIZE);
   for (uint32_t i : bvh.primitive_order) gpu.primitives.push_back(unordered[i]);
-  // Boxes of the float32 primitives the shader tests, so each box holds its primitives exactly.
+  // Boxes of the float32 primitives the shader tests, so each box holds its primitives exactly,
+  // then widened (see safe_inverse in shaders/intersect.glsl).
   const auto bounds = child_bounds<FloatBox>(bvh, [&](uint32_t slot) { return primitive_box(gpu.primitives[slot]); });
   gpu.bvh_nodes.resize(bvh.nodes.size());
   for (size_t n = 0; n < bvh.nodes.size(); ++n) {
-    const FloatBox& first = bounds[n][0];
-    const FloatBox& second = bounds[n][1];
+    const FloatBox first = widened(bounds[n][0]);
+    const FloatBox second = widened(bounds[n][1]);
     gpu.bvh_nodes[n] = {
         glm::vec4(first.lower.x, second.lower.x, first.upper.x, second.upper.x),
         glm::vec4(first.lower.y, second.lower.y, first.upper.y, second.upper.y),

@@ -81,14 +81,16 @@ ReferenceScene::ReferenceScene(const Scene& scene) : spheres_(scene.spheres), pl
       ++index;
     }
   }
-  // Corners rounded outward, so the box holds the whole sphere.
+  // At least one double step and box_margin outward: sphere boxes then hold the whole sphere, and
+  // node boxes keep their faces off what they hold (see enter_box).
   constexpr double infinity = std::numeric_limits<double>::infinity();
-  auto below = [&](const glm::dvec3& v) {
-    return glm::dvec3(std::nextafter(v.x, -infinity), std::nextafter(v.y, -infinity), std::nextafter(v.z, -infinity));
+  constexpr double box_margin = 1e-200;
+  auto step = [&](double v, double direction) {
+    return direction < 0 ? std::min(std::nextafter(v, -infinity), v - box_margin)
+                         : std::max(std::nextafter(v, infinity), v + box_margin);
   };
-  auto above = [&](const glm::dvec3& v) {
-    return glm::dvec3(std::nextafter(v.x, infinity), std::nextafter(v.y, infinity), std::nextafter(v.z, infinity));
-  };
+  auto below = [&](const glm::dvec3& v) { return glm::dvec3(step(v.x, -1), step(v.y, -1), step(v.z, -1)); };
+  auto above = [&](const glm::dvec3& v) { return glm::dvec3(step(v.x, 1), step(v.y, 1), step(v.z, 1)); };
   for (uint32_t i = 0; i < spheres_.size(); ++i) {
     tree_entries_.push_back({PrimitiveKind::sphere, i});
     boxes.push_back({below(spheres_[i].center - spheres_[i].radius), above(spheres_[i].center + spheres_[i].radius)});
@@ -101,6 +103,9 @@ ReferenceScene::ReferenceScene(const Scene& scene) : spheres_(scene.spheres), pl
   tree_entries_ = std::move(ordered);
   nodes_ = bvh.nodes;
   child_boxes_ = child_bounds<Box>(bvh, [&](uint32_t slot) { return boxes[bvh.primitive_order[slot]]; });
+  for (auto& children : child_boxes_) {
+    for (Box& box : children) box = {below(box.lower), above(box.upper)};
+  }
 }
 
 void ReferenceScene::test_sphere(uint32_t index, const glm::dvec3& origin, const glm::dvec3& dir, ReferenceHit& hit) const {
@@ -123,8 +128,12 @@ void ReferenceScene::test_triangle(const Triangle& triangle, const glm::dvec3& o
 namespace {
 
 // Where the ray enters `box`, or +inf when it misses it or enters beyond t_max. Conservative like
-// the shader's test (shaders/intersect.glsl) with gamma(3) of double: a box holding a hit is never
-// culled. Zero direction components get a huge finite inverse, so no 0 * inf makes a NaN.
+// the shader's test (shaders/intersect.glsl) with gamma(3) of double on both ends: a box holding a
+// hit, even one tied with the best so far, is never culled. Direction components below 1e-300
+// (zeros) get the largest double as inverse, never 0 * inf = NaN; with faces at least box_margin
+// from what a box holds, an origin inside the slab gets ends beyond 1e-200 * 1.8e308, farther than
+// any hit, and a ray in the plane of a face meets nothing in the box (the shader does the same in
+// float).
 double enter_box(const Box& box, const glm::dvec3& origin, const glm::dvec3& inv_dir, double t_max) {
   double near = 0.0;
   double far = no_hit;
@@ -135,7 +144,7 @@ double enter_box(const Box& box, const glm::dvec3& origin, const glm::dvec3& inv
     far = std::min(far, std::max(t0, t1));
   }
   constexpr double gamma3 = 3.0 * 0x1p-53 / (1.0 - 3.0 * 0x1p-53);
-  return near <= far * (1.0 + 2.0 * gamma3) && near <= t_max ? near : no_hit;
+  return near <= far * (1.0 + 2.0 * gamma3) && near * (1.0 - 2.0 * gamma3) <= t_max ? near : no_hit;
 }
 
 }  // namespace
@@ -144,7 +153,8 @@ void ReferenceScene::nearest_in_tree(const glm::dvec3& origin, const glm::dvec3&
   glm::dvec3 inv_dir;
   for (int axis = 0; axis < 3; ++axis) {
     constexpr double tiny = 1e-300;
-    inv_dir[axis] = 1.0 / (std::abs(dir[axis]) < tiny ? std::copysign(tiny, dir[axis]) : dir[axis]);
+    inv_dir[axis] = std::abs(dir[axis]) < tiny ? std::copysign(std::numeric_limits<double>::max(), dir[axis])
+                                               : 1.0 / dir[axis];
   }
   std::array<uint32_t, VKRAY_BVH_MAX_DEPTH + 1> stack;
   size_t stack_size = 0;

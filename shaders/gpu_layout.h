@@ -109,15 +109,20 @@ struct GpuBvhNode {
 };
 VKRAY_CHECK_SIZE(GpuBvhNode, 64);
 
+// Node boxes are widened by at least this much beyond what they hold (see safe_inverse in
+// shaders/intersect.glsl); relative to a scene's size that is nothing for any scene float32 can hold.
+#define VKRAY_BOX_MARGIN 1e-20
+
 // A child reference is an inner node's index, or, with VKRAY_BVH_LEAF_BIT set, a leaf: its first
 // primitive slot in the low bits above VKRAY_BVH_LEAF_COUNT_BITS and its count minus one below.
 #define VKRAY_BVH_LEAF_BIT 0x80000000u
 #define VKRAY_BVH_LEAF_COUNT_BITS 3
 #define VKRAY_BVH_MAX_LEAF_SIZE 8                 // 1 << VKRAY_BVH_LEAF_COUNT_BITS
 #define VKRAY_BVH_MAX_PRIMITIVES 0x0fffffffu      // what the 28 bits of a leaf's first slot hold
-// The builder stops splitting at this depth; it bounds the traversal stack. A SAH tree over n
-// primitives is about 2 log2(n) deep (~45 for 4M triangles); beyond 64 the builder makes leaves.
-#define VKRAY_BVH_MAX_DEPTH 64
+// The builder's depth limit; it bounds the traversal stack. SAH trees of real meshes are far
+// shallower (the bunny's is 17 deep, a 4M-triangle sphere's 27), but a chain of nested clusters
+// across many scales drove Embree's builder into its depth limit at 64 (tests/bvh_test.cpp).
+#define VKRAY_BVH_MAX_DEPTH 128
 
 // Per-dispatch camera and image parameters (push constants). The camera basis is computed in
 // double on the host; the shader only evaluates direction = x*right + y*up + forward_scaled.

@@ -139,21 +139,29 @@ float intersect_triangle(RayFrame frame, vec3 origin, vec3 v0, vec3 v1, vec3 v2,
   return (t > 0.0 && t < t_max) ? t : t_max;
 }
 
-// 1 / dir with zero components replaced by 1 / 1e-30 of the same sign: a ray parallel to a slab
-// then gets a huge but finite slab interval, never the NaN of 0 * inf (GLSL's min and max are
-// undefined on NaN). The interval is still right: it spans everything when the origin lies
-// between the slab's planes and starts beyond any hit otherwise.
+// 1 / dir, with components below 1e-37 in magnitude (in practice: exactly 0, a ray parallel to a
+// slab) replaced by the largest float of the same sign: never the NaN of 0 * inf (GLSL's min and
+// max are undefined on NaN), and the slab interval is still right. Box faces lie at least
+// VKRAY_BOX_MARGIN from anything inside (engine/gpu_scene.cpp), so when the origin is inside the
+// slab both ends are at least 1e-20 * 3.4e38 away, beyond any hit (coordinates stay within 1e15);
+// when it lies outside, the interval is empty or starts beyond any hit; and a ray exactly in the
+// plane of a face can meet nothing in the box.
 vec3 safe_inverse(vec3 dir) {
-  const float tiny = 1e-30;
-  return 1.0 / mix(dir, mix(vec3(tiny), vec3(-tiny), lessThan(dir, vec3(0.0))), lessThan(abs(dir), vec3(tiny)));
+  const float tiny = 1e-37;
+  const float largest = 3.4028235e38;
+  bvec3 parallel = lessThan(abs(dir), vec3(tiny));
+  vec3 signed_largest = mix(vec3(largest), vec3(-largest), lessThan(dir, vec3(0.0)));
+  return mix(1.0 / mix(dir, vec3(1.0), parallel), signed_largest, parallel);
 }
 
 // Slab tests of a ray against two boxes at once (a BVH node's children; see GpuBvhNode for the
 // layout), conservative under rounding: the far distance is enlarged by 1 + 2 gamma(3),
 // gamma(n) = n u / (1 - n u), u = 2^-24, which covers the error of the three operations behind
 // each slab distance (Ize, "Robust BVH Ray Traversal", JCGT 2(2), 2013). A ray that meets a box is
-// never rejected, so culling by box can not open holes in a mesh. `enter` is where the ray enters
-// each box (0 when it starts inside); a box is hit when it is entered before t_max.
+// never rejected, so culling by box can not open holes in a mesh. Likewise the near distance is
+// shrunk by 1 - 2 gamma(3) before it is compared with t_max, so a box entered at the nearest hit so
+// far up to rounding is still visited. `enter` is where the ray enters each box (0 when it starts
+// inside). See safe_inverse for rays parallel to a slab.
 bvec2 ray_hits_boxes(vec4 bounds_x, vec4 bounds_y, vec4 bounds_z, vec3 origin, vec3 inv_dir, float t_max,
                      out vec2 enter) {
   vec4 tx = (bounds_x - origin.x) * inv_dir.x;
@@ -163,7 +171,8 @@ bvec2 ray_hits_boxes(vec4 bounds_x, vec4 bounds_y, vec4 bounds_z, vec3 origin, v
   const float gamma3 = 1.7881396e-7;  // 3 * 2^-24 / (1 - 3 * 2^-24), rounded up
   vec2 far = min(min(max(tx.xy, tx.zw), max(ty.xy, ty.zw)), max(tz.xy, tz.zw)) * (1.0 + 2.0 * gamma3);
   enter = near;
-  return bvec2(near.x <= far.x && near.x < t_max, near.y <= far.y && near.y < t_max);
+  vec2 near_low = near * (1.0 - 2.0 * gamma3);
+  return bvec2(near.x <= far.x && near_low.x < t_max, near.y <= far.y && near_low.y < t_max);
 }
 
 #endif  // VKRAY_INTERSECT_GLSL
