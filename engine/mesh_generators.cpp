@@ -201,4 +201,16 @@ Mesh make_degenerate_soup(const SoupOptions& options) {
   return mesh;
 }
 
+std::vector<Sphere> make_sphere_field(size_t count, uint64_t seed, const Box& box) {
+  PortableRandom random(seed);
+  const glm::dvec3 extent = box.upper - box.lower;
+  const double largest_radius = 0.5 * std::max({extent.x, extent.y, extent.z}) / std::cbrt(static_cast<double>(count));
+  std::vector<Sphere> spheres(count);
+  for (auto& sphere : spheres) {
+    sphere.center = random.uniform(box);
+    sphere.radius = largest_radius * std::pow(10.0, random.uniform(-2.0, 0.0));
+  }
+  return spheres;
+}
+
 }  // namespace vkray

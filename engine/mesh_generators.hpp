@@ -73,4 +73,8 @@ Mesh make_clustered_soup(const SoupOptions& options, uint32_t clusters = 4);
 // ~4% huge triangles, corners anywhere in the box scaled 20 times about its centre.
 Mesh make_degenerate_soup(const SoupOptions& options);
 
+// `count` spheres with centres uniform in `box` and radii log-uniform over two decades below the
+// box's largest side / cbrt(count) / 2, so fields of any size are about equally dense along a ray.
+std::vector<Sphere> make_sphere_field(size_t count, uint64_t seed, const Box& box = {glm::dvec3(-1.0), glm::dvec3(1.0)});
+
 }  // namespace vkray

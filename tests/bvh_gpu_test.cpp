@@ -106,6 +106,17 @@ TEST(BvhGpu, DegenerateAndHugeSoup) {
   expect_searches_match(sized(mesh_scene(mesh), 64, 48), cameras_around(options.box, 203, 2), all_searches);
 }
 
+// A tree holding spheres and triangles (the walk tells them apart by the sphere mark), and one
+// holding spheres alone (specialized without triangle code); brute force tests them one by one.
+TEST(BvhGpu, SpheresAndTrianglesInOneTree) {
+  Scene scene = sized(mesh_scene(make_uniform_soup(soup(500, 25))), 64, 48);
+  scene.spheres = make_sphere_field(500, 26);
+  const std::vector<Camera> cameras = cameras_around(Box{glm::dvec3(-1.0), glm::dvec3(1.0)}, 205, 1);
+  expect_searches_match(scene, cameras, all_searches);
+  scene.meshes.clear();
+  expect_searches_match(scene, cameras, all_searches);
+}
+
 // Image sizes that leave workgroups and subgroups partly outside the image: the packet walk's
 // lanes past the edge must neither break the shared walk nor write anything.
 TEST(BvhGpu, OddImageSizes) {

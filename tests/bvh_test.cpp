@@ -341,6 +341,15 @@ TEST(ReferenceTree, MatchesBruteForceOnClusteredSoup) {
   expect_tree_matches_brute_force(mesh_scene(mesh), cameras_at_triangles(mesh, 112, 3, 0.3), 41, 31, 0.1);
 }
 
+// Spheres share the tree with triangles (tree entries of two kinds), and fill one alone.
+TEST(ReferenceTree, MatchesBruteForceOnSpheresAndTriangles) {
+  Scene scene = mesh_scene(make_uniform_soup(soup(500, 14)));
+  scene.spheres = make_sphere_field(500, 15);
+  expect_tree_matches_brute_force(scene, cameras_around(Box{glm::dvec3(-1.0), glm::dvec3(1.0)}, 104, 3), 41, 31);
+  scene.meshes.clear();
+  expect_tree_matches_brute_force(scene, cameras_around(Box{glm::dvec3(-1.0), glm::dvec3(1.0)}, 105, 2), 41, 31);
+}
+
 // Zero-area triangles, needles, axis-aligned triangles lying on their box's face, exact and
 // rotated copies (ties broken by index), huge triangles spanning the scene.
 TEST(ReferenceTree, MatchesBruteForceOnDegenerateAndHugeSoup) {
