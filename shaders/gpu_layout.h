@@ -51,13 +51,13 @@ using uvec4 = glm::uvec4;
 #define VKRAY_SPEC_WRITE_NORMAL 4
 #define VKRAY_SPEC_WRITE_UV 5
 #define VKRAY_SPEC_SEARCH_MODE 6
-#define VKRAY_SPEC_TREE_HAS_TRIANGLES 8
-#define VKRAY_SPEC_TREE_HAS_SPHERES 9
 // Iterations the tree walk of one ray may take; 0: unlimited. llvmpipe (lavapipe) silently ends
 // every loop of a shader invocation after 65535 iterations in total (LP_MAX_TGSI_LOOP_ITERATIONS);
 // a ray that would need more stops at this budget instead, lists its pixel in the overflow
 // buffer, and the host finishes that pixel (see engine/renderer.cpp): no geometry goes missing.
 #define VKRAY_SPEC_LOOP_BUDGET 7
+#define VKRAY_SPEC_TREE_HAS_TRIANGLES 8
+#define VKRAY_SPEC_TREE_HAS_SPHERES 9
 #define VKRAY_SPEC_COUNT 10
 
 // All positions on the GPU are relative to the scene's anchor point (see engine/gpu_scene.cpp), so

@@ -89,11 +89,7 @@ PrimitiveHit nearest_primitive_brute_force(RayFrame frame, vec3 origin, vec3 dir
                     texelFetch(primitives, texel + 2).xyz, batch + k, hit);
     }
   }
-  if (hit.slot != no_primitive) {
-    int texel = 3 * int(hit.slot);
-    result = PrimitiveHit(hit.t, vec3(texelFetch(primitives, texel).w, texelFetch(primitives, texel + 1).w,
-                                      texelFetch(primitives, texel + 2).w), false);
-  }
+  if (hit.slot != no_primitive) result = PrimitiveHit(hit.t, primitive_normal(hit.slot, origin, dir, hit.t), false);
   return result;
 }
 

@@ -35,8 +35,8 @@ void main() {
   uvec2 morton = uvec2((local & 1u) | ((local >> 1) & 2u) | ((local >> 2) & 4u),
                        ((local >> 1) & 1u) | ((local >> 2) & 2u) | ((local >> 3) & 4u));
   uvec2 tile_pixel = gl_WorkGroupID.xy * uvec2(VKRAY_WORKGROUP_X, VKRAY_WORKGROUP_Y) + morton;
-  // Invocations past the image's edge stay alive with a ray that can hit nothing (t_max = 0), so a
-  // subgroup walking the tree together always has all its lanes (see nearest_triangle_packet).
+  // Invocations past the image's edge stay alive with a ray that can hit nothing (t_max = 0): the
+  // packet walk's subgroup operations then always see whole subgroups.
   bool inside = tile_pixel.x < width && tile_pixel.y < params.image.w;
   uint row = params.image.z + tile_pixel.y;
   // Outputs are planar (all x, then all y, ...) with one plane per buffer tile, so neighbouring

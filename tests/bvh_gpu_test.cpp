@@ -83,13 +83,6 @@ void expect_searches_match(Scene scene, const std::vector<Camera>& cameras, cons
   }
 }
 
-SoupOptions soup(size_t triangles, uint64_t seed) {
-  SoupOptions options;
-  options.triangles = triangles;
-  options.seed = seed;
-  return options;
-}
-
 TEST(BvhGpu, UniformSoup) {
   const Mesh mesh = make_uniform_soup(soup(3000, 21));
   expect_searches_match(sized(mesh_scene(mesh), 64, 48), cameras_around(mesh_bounds(mesh), 201, 1), all_searches);

@@ -322,13 +322,6 @@ void expect_tree_matches_brute_force(const Scene& scene, const std::vector<Camer
   std::printf("    %zu pixels, %zu hits\n", check.pixels, check.hits);
 }
 
-SoupOptions soup(size_t triangles, uint64_t seed) {
-  SoupOptions options;
-  options.triangles = triangles;
-  options.seed = seed;
-  return options;
-}
-
 TEST(ReferenceTree, MatchesBruteForceOnUniformSoup) {
   const Mesh mesh = make_uniform_soup(soup(4000, 11));
   expect_tree_matches_brute_force(mesh_scene(mesh), cameras_around(mesh_bounds(mesh), 101, 4), 41, 31);

@@ -99,6 +99,14 @@ inline std::vector<Camera> cameras_at_triangles(const Mesh& mesh, uint64_t seed,
   return cameras;
 }
 
+// Soup options with the default box and triangle size.
+inline SoupOptions soup(size_t triangles, uint64_t seed) {
+  SoupOptions options;
+  options.triangles = triangles;
+  options.seed = seed;
+  return options;
+}
+
 inline Scene mesh_scene(Mesh mesh) {
   Scene scene;
   scene.meshes.push_back(std::move(mesh));
