@@ -75,11 +75,6 @@ class Flattener {
   Bvh& bvh_;
 };
 
-double half_area(const Box& box) {
-  const glm::dvec3 d = box.upper - box.lower;
-  return d.x * d.y + d.y * d.z + d.z * d.x;
-}
-
 }  // namespace
 
 float float_below(double value) {
@@ -156,23 +151,6 @@ Bvh build_bvh(const std::vector<Box>& boxes, const BvhBuildOptions& options) {
   }
   rtcReleaseBVH(builder);
   return bvh;
-}
-
-double Bvh::sah_cost(const std::function<Box(uint32_t child)>& box_of_child, const BvhBuildOptions& options) const {
-  Box root = box_of_child(nodes[0][0]);
-  const Box second = box_of_child(nodes[0][1]);
-  root.lower = glm::min(root.lower, second.lower);
-  root.upper = glm::max(root.upper, second.upper);
-  const double root_area = half_area(root);
-  if (root_area <= 0.0) return 0.0;
-  double cost = options.traversal_cost;  // the root itself
-  for (const auto& children : nodes) {
-    for (uint32_t child : children) {
-      const double weight = half_area(box_of_child(child)) / root_area;
-      cost += weight * (is_leaf(child) ? double(leaf_count(child)) * options.intersection_cost : double(options.traversal_cost));
-    }
-  }
-  return cost;
 }
 
 }  // namespace vkray

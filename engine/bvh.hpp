@@ -55,19 +55,14 @@ struct Bvh {
   // Leaves reference ranges of this array; entries are indices into the builder's input boxes.
   std::vector<uint32_t> primitive_order;
   uint32_t depth = 0;  // edges on the longest root-to-leaf path
-
-  // SAH cost of the tree: sum over nodes of area(node) / area(root) * traversal cost plus, for
-  // leaves, area(leaf) / area(root) * primitives * intersection cost, with `box_of_child` giving
-  // each child's box. For comparing builders and settings.
-  double sah_cost(const std::function<Box(uint32_t child)>& box_of_child, const BvhBuildOptions& options) const;
 };
 
-// Builds the tree over `boxes` (at least one; boxes may be flat). Throws GpuError-free
-// std::runtime_error on Embree failures and std::length_error beyond VKRAY_BVH_MAX_PRIMITIVES.
+// Builds the tree over `boxes` (at least one; boxes may be flat). Throws std::runtime_error when
+// Embree fails and std::length_error beyond VKRAY_BVH_MAX_PRIMITIVES.
 Bvh build_bvh(const std::vector<Box>& boxes, const BvhBuildOptions& options = {});
 
 // Bounds of every node's two children in one pass from the leaves up, from `primitive_box(index
-// into primitive_order)`; Bounds is any type with lower/upper members of a vector type.
+// into primitive_order)`; BoxType is any type with lower/upper members of a vector type.
 template <typename BoxType, typename PrimitiveBox>
 std::vector<std::array<BoxType, 2>> child_bounds(const Bvh& bvh, PrimitiveBox primitive_box) {
   std::vector<std::array<BoxType, 2>> bounds(bvh.nodes.size());
