@@ -120,7 +120,7 @@ VKRAY_CHECK_SIZE(GpuBvhNode, 64);
 #define VKRAY_BVH_MAX_LEAF_SIZE 8                 // 1 << VKRAY_BVH_LEAF_COUNT_BITS
 #define VKRAY_BVH_MAX_PRIMITIVES 0x0fffffffu      // what the 28 bits of a leaf's first slot hold
 // The builder's depth limit; it bounds the traversal stack. SAH trees of real meshes are far
-// shallower (the bunny's is 17 deep, a 4M-triangle sphere's 27), but a chain of nested clusters
+// shallower (the bunny's is 16 deep, a 4M-triangle sphere's 24), but a chain of nested clusters
 // across many scales drove Embree's builder into its depth limit at 64 (tests/bvh_test.cpp).
 #define VKRAY_BVH_MAX_DEPTH 128
 
