@@ -82,7 +82,12 @@ GpuDeviceInfo describe(const vk::raii::PhysicalDevice& physical_device) {
   info.subgroup_size = chain.get<vk::PhysicalDeviceSubgroupProperties>().subgroupSize;
   info.shader_float64 = physical_device.getFeatures().shaderFloat64 == VK_TRUE;
   const uint32_t family = compute_queue_family(physical_device);
-  info.can_compute = family != UINT32_MAX;
+  const auto& subgroups = chain.get<vk::PhysicalDeviceSubgroupProperties>();
+  const bool subgroup_operations =
+      (subgroups.supportedStages & vk::ShaderStageFlagBits::eCompute) &&
+      (subgroups.supportedOperations & vk::SubgroupFeatureFlagBits::eVote) &&
+      (subgroups.supportedOperations & vk::SubgroupFeatureFlagBits::eBallot);
+  info.can_compute = family != UINT32_MAX && subgroup_operations;
   if (info.can_compute && physical_device.getQueueFamilyProperties()[family].timestampValidBits > 0) {
     info.timestamp_period_ns = limits.timestampPeriod;
   }
@@ -118,9 +123,10 @@ size_t choose_gpu_device(const std::vector<GpuDeviceInfo>& devices, std::string_
       if (!names.empty()) names += ", ";
       names += "'" + device.name + "'";
     }
-    throw GpuError(name_filter.empty() ? "no Vulkan device with a compute queue among " + names
-                                       : "no Vulkan device named like '" + std::string(name_filter) +
-                                             "' with a compute queue; found " + names);
+    throw GpuError(name_filter.empty()
+                       ? "no Vulkan device with a compute queue and subgroup vote and ballot among " + names
+                       : "no Vulkan device named like '" + std::string(name_filter) +
+                             "' with a compute queue and subgroup vote and ballot; found " + names);
   }
   return best;
 }
