@@ -785,6 +785,13 @@ TEST_F(CliTest, ModelIsFramedToItsBoundingSphere) {
   }
 }
 
+TEST_F(CliTest, ModelBeyondTheCoordinateLimitExitsTwo) {
+  {
+    std::ofstream(path("huge.obj")) << "v 0 0 0\nv 1 0 0\nv 0 2e16 0\nf 1 2 3\n";
+  }
+  expect_error(vkray({"render", "huge.obj"}), 2, {"huge.obj", "vertex 3", "1e15"});
+}
+
 TEST_F(CliTest, UnknownSceneKindExitsTwo) {
   {
     std::ofstream(path("scene.ply")) << "ply\n";
