@@ -156,10 +156,28 @@ GpuScene make_gpu_scene(const Scene& scene, const GpuSceneOptions& options) {
   return gpu;
 }
 
+uint32_t GpuScene::search_mode() const {
+  switch (search) {
+    case PrimitiveSearch::bvh_packet:
+      return VKRAY_SEARCH_BVH_PACKET;
+    case PrimitiveSearch::bvh_per_ray:
+      return VKRAY_SEARCH_BVH_PER_RAY;
+    default:
+      return VKRAY_SEARCH_BRUTE_FORCE;
+  }
+}
+
+glm::uvec4 run_time_counts(const GpuScene& scene) {
+  return {static_cast<uint32_t>(scene.spheres.size()), static_cast<uint32_t>(scene.planes.size()),
+          scene.brute_force_triangle_slots(), scene.search_mode()};
+}
+
 gpu::RayGenParams make_ray_gen_params(const CameraBasis& camera, const glm::dvec3& anchor, uint32_t width,
-                                      uint32_t height, uint32_t first_row, uint32_t row_count) {
-  return {to_float4(camera.origin - anchor), to_float4(camera.right), to_float4(camera.up),
-          to_float4(-camera.plane_distance * camera.forward), glm::uvec4(width, height, first_row, row_count)};
+                                      uint32_t height, uint32_t first_row, uint32_t row_count,
+                                      const glm::uvec4& counts) {
+  return {to_float4(camera.origin - anchor), to_float4(camera.right),
+          to_float4(camera.up),              to_float4(-camera.plane_distance * camera.forward),
+          glm::uvec4(width, height, first_row, row_count), counts};
 }
 
 }  // namespace vkray

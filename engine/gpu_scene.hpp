@@ -44,6 +44,7 @@ struct GpuScene {
   double bvh_build_ms = 0.0;
 
   bool has_tree() const { return !bvh_nodes.empty(); }
+  uint32_t search_mode() const;  // VKRAY_SEARCH_*
   // Triangle slots the brute-force loop walks (0 with the tree).
   uint32_t brute_force_triangle_slots() const { return has_tree() ? 0 : static_cast<uint32_t>(primitives.size()); }
   // Bytes of device memory the triangles, spheres and their tree take.
@@ -62,8 +63,12 @@ PrimitiveSearch choose_search(size_t triangle_count, size_t sphere_count);
 
 GpuScene make_gpu_scene(const Scene& scene, const GpuSceneOptions& options = {});
 
+// RayGenParams.counts: what the generic shader variant reads instead of specialization constants.
+glm::uvec4 run_time_counts(const GpuScene& scene);
+
 // Push constants for one tile of rows of a width x height image.
 gpu::RayGenParams make_ray_gen_params(const CameraBasis& camera, const glm::dvec3& anchor, uint32_t width,
-                                      uint32_t height, uint32_t first_row, uint32_t row_count);
+                                      uint32_t height, uint32_t first_row, uint32_t row_count,
+                                      const glm::uvec4& counts);
 
 }  // namespace vkray

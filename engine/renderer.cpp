@@ -82,6 +82,7 @@ struct Renderer::Impl {
   VulkanContext& context;
   RendererOptions options;
   glm::dvec3 anchor{0.0};
+  glm::uvec4 counts{0};  // RayGenParams.counts
   // Bound wherever the scene lacks a primitive type or an output is off.
   GpuBuffer placeholder;
   TexelBuffer placeholder_texels;
@@ -162,7 +163,8 @@ struct Renderer::Impl {
     if (stats.loop_budget > 0) {  // the overflow list: a count, then 4 bytes a pixel
       by_bytes = std::min(by_bytes, std::max<vk::DeviceSize>(1, (limit - sizeof(uint32_t)) / (vk::DeviceSize{width} * 4)));
     }
-    const vk::DeviceSize by_groups = vk::DeviceSize{context.limits.maxComputeWorkGroupCount[1]} * VKRAY_WORKGROUP_Y;
+    const vk::DeviceSize by_groups =
+        vk::DeviceSize{context.limits.maxComputeWorkGroupCount[1]} * options.shader.workgroup_height;
     return static_cast<uint32_t>(std::min<vk::DeviceSize>({height, by_bytes, by_groups}));
   }
 };
@@ -210,6 +212,19 @@ Renderer::Renderer(GpuDevice& device, const Scene& scene, RendererOptions option
       r.scene_for_unfinished = scene;
     }
 
+    const ShaderVariant& shader = options.shader;
+    const uint32_t group_size = shader.workgroup_width * shader.workgroup_height;
+    if (group_size == 0 || group_size > r.context.limits.maxComputeWorkGroupInvocations ||
+        shader.workgroup_width > r.context.limits.maxComputeWorkGroupSize[0] ||
+        shader.workgroup_height > r.context.limits.maxComputeWorkGroupSize[1]) {
+      throw GpuError(r.context.info.name + " has no " + std::to_string(shader.workgroup_width) + "x" +
+                     std::to_string(shader.workgroup_height) + " compute workgroups");
+    }
+    const bool square_power_of_two = shader.workgroup_width == shader.workgroup_height && (group_size & (group_size - 1)) == 0;
+    if (shader.morton_order && !(square_power_of_two && shader.workgroup_width <= 16)) {
+      throw std::invalid_argument("Morton order needs a square power-of-two workgroup of at most 16x16");
+    }
+
     r.anchor = gpu_scene.anchor;
     r.placeholder = create_storage_buffer(r.context, texel_bytes);
     const std::array<uint32_t, 4> zero_texel{};
@@ -218,12 +233,12 @@ Renderer::Renderer(GpuDevice& device, const Scene& scene, RendererOptions option
     specialization.spheres = checked_count(gpu_scene.spheres.size(), "spheres");
     specialization.planes = checked_count(gpu_scene.planes.size(), "planes");
     specialization.triangle_slots = gpu_scene.brute_force_triangle_slots();
-    specialization.search_mode = gpu_scene.search == PrimitiveSearch::bvh_packet   ? uint32_t{VKRAY_SEARCH_BVH_PACKET}
-                                 : gpu_scene.search == PrimitiveSearch::bvh_per_ray ? uint32_t{VKRAY_SEARCH_BVH_PER_RAY}
-                                                                                    : uint32_t{VKRAY_SEARCH_BRUTE_FORCE};
+    specialization.search_mode = gpu_scene.search_mode();
     specialization.tree_has_triangles = gpu_scene.tree_has_triangles;
     specialization.tree_has_spheres = gpu_scene.tree_has_spheres;
     specialization.loop_budget = r.stats.loop_budget;
+    specialization.variant = options.shader;
+    r.counts = run_time_counts(gpu_scene);
     r.pipeline.emplace(r.context, specialization);
     if (r.context.info.timestamp_period_ns > 0.0) {
       r.timestamps = vk::raii::QueryPool(r.context.device, vk::QueryPoolCreateInfo({}, vk::QueryType::eTimestamp, 3));
@@ -242,6 +257,7 @@ const SceneStats& Renderer::scene_stats() const { return impl_->stats; }
 Frame Renderer::render(const Camera& camera, uint32_t width, uint32_t height, AovSet aovs) {
   check_image_size(width, height);
   Impl& r = *impl_;
+  if (r.options.shader.generic) aovs = AovSet{Aov::depth, Aov::normal, Aov::uv};  // it writes them all
   Frame frame{width, height, aovs, {}, {}, {}};
   frame.allocate();
   r.timings = RenderTimings{r.timings.upload_ms, r.timings.bvh_build_ms, 0.0, *r.timestamps != vk::QueryPool(),
@@ -256,7 +272,7 @@ Frame Renderer::render(const Camera& camera, uint32_t width, uint32_t height, Ao
 
     for (uint32_t first_row = 0; first_row < height; first_row += tile_rows) {
       const uint32_t rows = std::min(tile_rows, height - first_row);
-      const gpu::RayGenParams params = make_ray_gen_params(basis, r.anchor, width, height, first_row, rows);
+      const gpu::RayGenParams params = make_ray_gen_params(basis, r.anchor, width, height, first_row, rows, r.counts);
       r.context.submit_and_wait([&](const vk::raii::CommandBuffer& commands) {
         if (*r.timestamps) {
           commands.resetQueryPool(*r.timestamps, 0, 3);
@@ -270,8 +286,9 @@ Frame Renderer::render(const Camera& camera, uint32_t width, uint32_t height, Ao
                                    cleared, {}, {});
         }
         r.pipeline->bind(commands, pipeline, params);
-        commands.dispatch((width + VKRAY_WORKGROUP_X - 1) / VKRAY_WORKGROUP_X,
-                          (rows + VKRAY_WORKGROUP_Y - 1) / VKRAY_WORKGROUP_Y, 1);
+        const uint32_t group_width = r.options.shader.workgroup_width;
+        const uint32_t group_height = r.options.shader.workgroup_height;
+        commands.dispatch((width + group_width - 1) / group_width, (rows + group_height - 1) / group_height, 1);
         if (*r.timestamps) commands.writeTimestamp(vk::PipelineStageFlagBits::eComputeShader, *r.timestamps, 1);
         // Make the shader's writes visible to the copy into host-visible memory, and to the host.
         const vk::MemoryBarrier barrier(vk::AccessFlagBits::eShaderWrite,

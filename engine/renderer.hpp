@@ -6,6 +6,7 @@
 #include "engine/gpu_device.hpp"
 #include "engine/gpu_scene.hpp"
 #include "engine/scene.hpp"
+#include "engine/shader_variant.hpp"
 
 #include <memory>
 
@@ -43,6 +44,7 @@ struct RendererOptions {
   // Iterations one ray's tree walk may take before the CPU finishes it; 0: as many as the device
   // allows. Tests lower it to force that path.
   uint32_t loop_budget = 0;
+  ShaderVariant shader;
 };
 
 class Renderer {
@@ -52,7 +54,8 @@ class Renderer {
   Renderer(const Renderer&) = delete;
   Renderer& operator=(const Renderer&) = delete;
 
-  // Renders `camera` at width x height; only the outputs in `aovs` are computed and read back.
+  // Renders `camera` at width x height; only the outputs in `aovs` are computed and read back
+  // (every output with the generic shader variant).
   Frame render(const Camera& camera, uint32_t width, uint32_t height, AovSet aovs);
 
   // Timings of the last render (upload_ms and bvh_build_ms are the constructor's).

@@ -16,7 +16,8 @@ using uvec4 = glm::uvec4;
 #define VKRAY_CHECK_SIZE(type, bytes)
 #endif
 
-// Workgroup shape: 8x8 keeps a warp/wavefront/subgroup on a compact tile of pixels.
+// Default workgroup shape: 8x8 in Morton order keeps a warp/wavefront/subgroup on a compact tile
+// of pixels (see raycast.comp). Other shapes exist for `vkray bench` (VKRAY_SPEC_WORKGROUP_*).
 #define VKRAY_WORKGROUP_X 8
 #define VKRAY_WORKGROUP_Y 8
 
@@ -58,7 +59,22 @@ using uvec4 = glm::uvec4;
 #define VKRAY_SPEC_LOOP_BUDGET 7
 #define VKRAY_SPEC_TREE_HAS_TRIANGLES 8
 #define VKRAY_SPEC_TREE_HAS_SPHERES 9
-#define VKRAY_SPEC_COUNT 10
+// Variants that trade error or generality for time, so `vkray bench` can show what each choice buys;
+// the defaults are what vkray renders with (engine/shader_variant.hpp).
+#define VKRAY_SPEC_SPHERE_FORMULA 10        // VKRAY_SPHERE_*
+#define VKRAY_SPEC_TRIANGLE_TEST 11         // VKRAY_TRIANGLE_*
+#define VKRAY_SPEC_WORKGROUP_X 12           // local_size_x
+#define VKRAY_SPEC_WORKGROUP_Y 13           // local_size_y
+#define VKRAY_SPEC_MORTON_ORDER 14          // invocations in Morton order (square power-of-two groups)
+// Every primitive type's code compiled in, with counts and search mode read from the push
+// constants (RayGenParams.counts) instead of specialized: what a shader not built for its scene costs.
+#define VKRAY_SPEC_GENERIC 15
+#define VKRAY_SPEC_COUNT 16
+
+#define VKRAY_SPHERE_STABLE 0               // Ray Tracing Gems ch. 7 (intersect.glsl)
+#define VKRAY_SPHERE_NAIVE 1                // the textbook b^2 - c
+#define VKRAY_TRIANGLE_WATERTIGHT 0         // Woop, Benthin and Wald 2013
+#define VKRAY_TRIANGLE_MOLLER_TRUMBORE 1    // Moeller and Trumbore 1997
 
 // All positions on the GPU are relative to the scene's anchor point (see engine/gpu_scene.cpp), so
 // float32 keeps its precision for scenes far from the world origin.
@@ -132,8 +148,9 @@ struct RayGenParams {
   vec4 up;              // unit up vector (forward x right)
   vec4 forward_scaled;  // -plane_distance * forward
   uvec4 image;          // width, height, first row of this tile, rows in this tile
+  uvec4 counts;         // read by the generic variant only: spheres, planes, triangle slots, search mode
 };
-VKRAY_CHECK_SIZE(RayGenParams, 80);
+VKRAY_CHECK_SIZE(RayGenParams, 96);
 
 #ifdef __cplusplus
 }  // namespace vkray::gpu

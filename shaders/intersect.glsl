@@ -4,6 +4,11 @@
 #ifndef VKRAY_INTERSECT_GLSL
 #define VKRAY_INTERSECT_GLSL
 
+#include "gpu_layout.h"
+
+layout(constant_id = VKRAY_SPEC_SPHERE_FORMULA) const uint SPHERE_FORMULA = VKRAY_SPHERE_STABLE;
+layout(constant_id = VKRAY_SPEC_TRIANGLE_TEST) const uint TRIANGLE_TEST = VKRAY_TRIANGLE_WATERTIGHT;
+
 // s + e == a + b exactly (Knuth's TwoSum).
 void two_sum(float a, float b, out float s, out float e) {
   precise float sum = a + b;
@@ -60,7 +65,20 @@ float sphere_c(vec3 f, float radius) {
 //   the ray, instead of b^2 - c, which cancels catastrophically for small spheres far away;
 // - the two roots come from q = -(b + sign(b) sqrt(disc)) as c/q and q/a, so neither root is a
 //   difference of nearly equal numbers; c itself comes from sphere_c.
+// The textbook form, kept as a benchmark variant (VKRAY_SPHERE_NAIVE) to show what the stable one
+// buys: b^2 - c cancels when the sphere is small against its distance, -b + sqrt(disc) when the
+// camera is inside, and c = |f|^2 - r^2 loses everything near a large sphere's surface.
+float intersect_sphere_naive(vec3 f, float radius, vec3 dir, float t_max) {
+  float b = dot(f, dir);
+  float disc = b * b - (dot(f, f) - radius * radius);
+  if (disc < 0.0) return t_max;
+  float root = sqrt(disc);
+  float t = -b - root > 0.0 ? -b - root : -b + root;
+  return (t > 0.0 && t < t_max) ? t : t_max;
+}
+
 float intersect_sphere(vec3 f, float radius, vec3 dir, float t_max) {
+  if (SPHERE_FORMULA == VKRAY_SPHERE_NAIVE) return intersect_sphere_naive(f, radius, dir, t_max);
   float a = dot(dir, dir);
   float b = dot(f, dir);
   vec3 f_perp = f - (b / a) * dir;
@@ -125,7 +143,28 @@ vec3 to_ray_frame(RayFrame frame, vec3 vertex, vec3 origin) {
   return vec3(px, py, p.z);
 }
 
-float intersect_triangle(RayFrame frame, vec3 origin, vec3 v0, vec3 v1, vec3 v2, float t_max) {
+// Moeller and Trumbore, "Fast, Minimum Storage Ray/Triangle Intersection", JGT 2(1), 1997: a
+// benchmark variant (VKRAY_TRIANGLE_MOLLER_TRUMBORE). Barycentrics are computed per triangle, so a
+// ray through an edge shared by two triangles can miss both.
+float intersect_triangle_moller_trumbore(vec3 origin, vec3 dir, vec3 v0, vec3 v1, vec3 v2, float t_max) {
+  vec3 e1 = v1 - v0;
+  vec3 e2 = v2 - v0;
+  vec3 p = cross(dir, e2);
+  float det = dot(e1, p);
+  if (det == 0.0) return t_max;
+  float inv_det = 1.0 / det;
+  vec3 s = origin - v0;
+  float u = dot(s, p) * inv_det;
+  if (u < 0.0 || u > 1.0) return t_max;
+  vec3 q = cross(s, e1);
+  float v = dot(dir, q) * inv_det;
+  if (v < 0.0 || u + v > 1.0) return t_max;
+  float t = dot(e2, q) * inv_det;
+  return (t > 0.0 && t < t_max) ? t : t_max;
+}
+
+float intersect_triangle(RayFrame frame, vec3 origin, vec3 dir, vec3 v0, vec3 v1, vec3 v2, float t_max) {
+  if (TRIANGLE_TEST == VKRAY_TRIANGLE_MOLLER_TRUMBORE) return intersect_triangle_moller_trumbore(origin, dir, v0, v1, v2, t_max);
   vec3 a = to_ray_frame(frame, v0, origin);
   vec3 b = to_ray_frame(frame, v1, origin);
   vec3 c = to_ray_frame(frame, v2, origin);

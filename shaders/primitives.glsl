@@ -17,6 +17,10 @@ layout(constant_id = VKRAY_SPEC_SEARCH_MODE) const uint SEARCH_MODE = VKRAY_SEAR
 layout(constant_id = VKRAY_SPEC_TREE_HAS_TRIANGLES) const bool TREE_HAS_TRIANGLES = false;
 layout(constant_id = VKRAY_SPEC_TREE_HAS_SPHERES) const bool TREE_HAS_SPHERES = false;
 layout(constant_id = VKRAY_SPEC_LOOP_BUDGET) const uint LOOP_BUDGET = 0;
+layout(constant_id = VKRAY_SPEC_GENERIC) const bool GENERIC = false;
+// What the tree may hold: in the generic variant, both kinds.
+const bool TREE_TRIANGLES = GENERIC || TREE_HAS_TRIANGLES;
+const bool TREE_SPHERES = GENERIC || TREE_HAS_SPHERES;
 
 layout(binding = VKRAY_BINDING_SPHERES) uniform samplerBuffer spheres;        // GpuSphere
 layout(binding = VKRAY_BINDING_PRIMITIVES) uniform samplerBuffer primitives;  // GpuPrimitive: 3 texels
@@ -37,8 +41,8 @@ struct SlotHit {
   uint slot;
 };
 
-void test_triangle(RayFrame frame, vec3 origin, vec3 v0, vec3 v1, vec3 v2, uint slot, inout SlotHit hit) {
-  float t = intersect_triangle(frame, origin, v0, v1, v2, hit.t);
+void test_triangle(RayFrame frame, vec3 origin, vec3 dir, vec3 v0, vec3 v1, vec3 v2, uint slot, inout SlotHit hit) {
+  float t = intersect_triangle(frame, origin, dir, v0, v1, v2, hit.t);
   if (t < hit.t) {
     hit.t = t;
     hit.slot = slot;
@@ -50,9 +54,9 @@ void test_triangle(RayFrame frame, vec3 origin, vec3 v0, vec3 v1, vec3 v2, uint 
 void test_primitive(RayFrame frame, vec3 origin, vec3 dir, uint slot, inout SlotHit hit) {
   int texel = 3 * int(slot);
   vec4 a = texelFetch(primitives, texel);
-  vec4 b = TREE_HAS_TRIANGLES ? texelFetch(primitives, texel + 1) : vec4(0.0);
-  if (TREE_HAS_TRIANGLES) test_triangle(frame, origin, a.xyz, b.xyz, texelFetch(primitives, texel + 2).xyz, slot, hit);
-  if (TREE_HAS_SPHERES && (!TREE_HAS_TRIANGLES || b.w == VKRAY_SPHERE_MARK)) {
+  vec4 b = TREE_TRIANGLES ? texelFetch(primitives, texel + 1) : vec4(0.0);
+  if (TREE_TRIANGLES) test_triangle(frame, origin, dir, a.xyz, b.xyz, texelFetch(primitives, texel + 2).xyz, slot, hit);
+  if (TREE_SPHERES && (!TREE_TRIANGLES || b.w == VKRAY_SPHERE_MARK)) {
     float t = intersect_sphere(origin - a.xyz, a.w, dir, hit.t);
     if (t < hit.t) {
       hit.t = t;
@@ -65,14 +69,15 @@ vec3 primitive_normal(uint slot, vec3 origin, vec3 dir, float t) {
   int texel = 3 * int(slot);
   vec4 a = texelFetch(primitives, texel);
   vec4 b = texelFetch(primitives, texel + 1);
-  if (TREE_HAS_SPHERES && (!TREE_HAS_TRIANGLES || b.w == VKRAY_SPHERE_MARK)) return (origin - a.xyz + t * dir) / a.w;
+  if (TREE_SPHERES && (!TREE_TRIANGLES || b.w == VKRAY_SPHERE_MARK)) return (origin - a.xyz + t * dir) / a.w;
   return vec3(a.w, b.w, texelFetch(primitives, texel + 2).w);
 }
 
 // Every sphere, then every triangle in batches of VKRAY_TRIANGLE_BATCH (one loop iteration each).
-PrimitiveHit nearest_primitive_brute_force(RayFrame frame, vec3 origin, vec3 dir, float t_max) {
+PrimitiveHit nearest_primitive_brute_force(RayFrame frame, vec3 origin, vec3 dir, float t_max, uint sphere_count,
+                                           uint triangle_slots) {
   PrimitiveHit result = PrimitiveHit(t_max, vec3(0.0), false);
-  for (uint i = 0; i < SPHERE_COUNT; ++i) {
+  for (uint i = 0; i < sphere_count; ++i) {
     vec4 sphere = texelFetch(spheres, int(i));
     vec3 f = origin - sphere.xyz;
     float t = intersect_sphere(f, sphere.w, dir, result.t);
@@ -82,10 +87,10 @@ PrimitiveHit nearest_primitive_brute_force(RayFrame frame, vec3 origin, vec3 dir
     }
   }
   SlotHit hit = SlotHit(result.t, no_primitive);
-  for (uint batch = 0; batch < TRIANGLE_SLOTS; batch += VKRAY_TRIANGLE_BATCH) {
+  for (uint batch = 0; batch < triangle_slots; batch += VKRAY_TRIANGLE_BATCH) {
     [[unroll]] for (uint k = 0; k < VKRAY_TRIANGLE_BATCH; ++k) {
       int texel = 3 * int(batch + k);
-      test_triangle(frame, origin, texelFetch(primitives, texel).xyz, texelFetch(primitives, texel + 1).xyz,
+      test_triangle(frame, origin, dir, texelFetch(primitives, texel).xyz, texelFetch(primitives, texel + 1).xyz,
                     texelFetch(primitives, texel + 2).xyz, batch + k, hit);
     }
   }
@@ -160,10 +165,15 @@ PrimitiveHit nearest_primitive_in_tree(RayFrame frame, vec3 origin, vec3 dir, fl
   return result;
 }
 
-PrimitiveHit nearest_primitive(vec3 origin, vec3 dir, float t_max) {
+// `counts`: RayGenParams.counts, read only by the generic variant.
+PrimitiveHit nearest_primitive(vec3 origin, vec3 dir, float t_max, uvec4 counts) {
   RayFrame frame = make_ray_frame(dir);
-  if (SEARCH_MODE == VKRAY_SEARCH_BRUTE_FORCE) return nearest_primitive_brute_force(frame, origin, dir, t_max);
-  return nearest_primitive_in_tree(frame, origin, dir, t_max, SEARCH_MODE == VKRAY_SEARCH_BVH_PACKET);
+  uint search_mode = GENERIC ? counts.w : SEARCH_MODE;
+  if (search_mode == VKRAY_SEARCH_BRUTE_FORCE) {
+    return nearest_primitive_brute_force(frame, origin, dir, t_max, GENERIC ? counts.x : SPHERE_COUNT,
+                                         GENERIC ? counts.z : TRIANGLE_SLOTS);
+  }
+  return nearest_primitive_in_tree(frame, origin, dir, t_max, search_mode == VKRAY_SEARCH_BVH_PACKET);
 }
 
 #endif  // VKRAY_PRIMITIVES_GLSL

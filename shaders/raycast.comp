@@ -7,14 +7,14 @@
 #include "intersect.glsl"
 #include "primitives.glsl"
 
-layout(local_size_x = VKRAY_WORKGROUP_X, local_size_y = VKRAY_WORKGROUP_Y) in;
-
+layout(local_size_x_id = VKRAY_SPEC_WORKGROUP_X, local_size_y_id = VKRAY_SPEC_WORKGROUP_Y) in;
 
 // A count of 0 removes that primitive loop entirely once the pipeline is specialized.
 layout(constant_id = VKRAY_SPEC_PLANE_COUNT) const uint PLANE_COUNT = 0;
 layout(constant_id = VKRAY_SPEC_WRITE_DEPTH) const bool WRITE_DEPTH = true;
 layout(constant_id = VKRAY_SPEC_WRITE_NORMAL) const bool WRITE_NORMAL = true;
 layout(constant_id = VKRAY_SPEC_WRITE_UV) const bool WRITE_UV = false;
+layout(constant_id = VKRAY_SPEC_MORTON_ORDER) const bool MORTON_ORDER = true;
 
 layout(push_constant) uniform PushConstants { RayGenParams params; };
 
@@ -25,16 +25,22 @@ layout(std430, binding = VKRAY_BINDING_UV) writeonly buffer UvOut { float uv_out
 // Rays that ran out of LOOP_BUDGET: their count, then their pixels' indices within the tile.
 layout(std430, binding = VKRAY_BINDING_OVERFLOW) buffer Overflow { uint overflow_count; uint overflow_pixels[]; };
 
+// Every other bit of `bits` (bits 0, 2, 4, 6), packed: one coordinate of a Morton index below 256.
+uint compact_even_bits(uint bits) {
+  bits &= 0x55u;
+  bits = (bits | (bits >> 1)) & 0x33u;
+  return (bits | (bits >> 2)) & 0x0fu;
+}
+
 void main() {
   uint width = params.image.x;
   uint height = params.image.y;
-  // Invocations cover their 8x8 workgroup in Morton order, so any 8 consecutive ones (a lavapipe
+  // Invocations cover their square workgroup in Morton order, so any 8 consecutive ones (a lavapipe
   // subgroup) form a 4x2 block and any 32 (an NVIDIA warp) an 8x4 block: rays that run together are
   // as close together as they can be, which is what tree walks in lockstep want.
   uint local = gl_LocalInvocationIndex;
-  uvec2 morton = uvec2((local & 1u) | ((local >> 1) & 2u) | ((local >> 2) & 4u),
-                       ((local >> 1) & 1u) | ((local >> 2) & 2u) | ((local >> 3) & 4u));
-  uvec2 tile_pixel = gl_WorkGroupID.xy * uvec2(VKRAY_WORKGROUP_X, VKRAY_WORKGROUP_Y) + morton;
+  uvec2 in_group = MORTON_ORDER ? uvec2(compact_even_bits(local), compact_even_bits(local >> 1)) : gl_LocalInvocationID.xy;
+  uvec2 tile_pixel = gl_WorkGroupID.xy * gl_WorkGroupSize.xy + in_group;
   // Invocations past the image's edge stay alive with a ray that can hit nothing (t_max = 0): the
   // packet walk's subgroup operations then always see whole subgroups.
   bool inside = tile_pixel.x < width && tile_pixel.y < params.image.w;
@@ -63,7 +69,8 @@ void main() {
   float t_best = inside ? no_hit : 0.0;
   vec3 normal = vec3(0.0);
 
-  for (uint i = 0; i < PLANE_COUNT; ++i) {
+  uint plane_count = GENERIC ? params.counts.y : PLANE_COUNT;
+  for (uint i = 0; i < plane_count; ++i) {
     vec4 plane = texelFetch(planes, int(i));
     float t = intersect_plane(plane, origin, dir, t_best);
     if (t < t_best) {
@@ -71,7 +78,7 @@ void main() {
       normal = plane.xyz;
     }
   }
-  PrimitiveHit hit = nearest_primitive(origin, dir, t_best);
+  PrimitiveHit hit = nearest_primitive(origin, dir, t_best, params.counts);
   if (hit.t < t_best) {
     t_best = hit.t;
     normal = hit.normal;

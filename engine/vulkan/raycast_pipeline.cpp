@@ -45,6 +45,13 @@ const vk::raii::Pipeline& RaycastPipeline::pipeline(AovSet aovs, double& created
   values[VKRAY_SPEC_WRITE_DEPTH] = aovs.has(Aov::depth) ? 1u : 0u;
   values[VKRAY_SPEC_WRITE_NORMAL] = aovs.has(Aov::normal) ? 1u : 0u;
   values[VKRAY_SPEC_WRITE_UV] = aovs.has(Aov::uv) ? 1u : 0u;
+  const ShaderVariant& variant = specialization_.variant;
+  values[VKRAY_SPEC_SPHERE_FORMULA] = variant.sphere_formula;
+  values[VKRAY_SPEC_TRIANGLE_TEST] = variant.triangle_test;
+  values[VKRAY_SPEC_WORKGROUP_X] = variant.workgroup_width;
+  values[VKRAY_SPEC_WORKGROUP_Y] = variant.workgroup_height;
+  values[VKRAY_SPEC_MORTON_ORDER] = variant.morton_order ? 1u : 0u;
+  values[VKRAY_SPEC_GENERIC] = variant.generic ? 1u : 0u;
   std::array<vk::SpecializationMapEntry, values.size()> entries;
   for (uint32_t id = 0; id < entries.size(); ++id) entries[id] = vk::SpecializationMapEntry(id, id * 4u, 4u);
   const vk::SpecializationInfo specialization(entries, vk::ArrayProxyNoTemporaries<const uint32_t>(values));

@@ -3,6 +3,7 @@
 #pragma once
 
 #include "engine/frame.hpp"
+#include "engine/shader_variant.hpp"
 #include "engine/vulkan/context.hpp"
 #include "shaders/gpu_layout.h"
 
@@ -20,6 +21,7 @@ struct PipelineSpecialization {
   bool tree_has_triangles = false;
   bool tree_has_spheres = false;
   uint32_t loop_budget = 0;
+  ShaderVariant variant;
 };
 
 class RaycastPipeline {

@@ -1,0 +1,25 @@
+// Choices compiled into the ray-casting shader that trade accuracy, generality or memory order for
+// time. The defaults are what vkray renders with; the others exist so that `vkray bench` can show,
+// measured, what each choice buys (engine/bench.cpp).
+#pragma once
+
+#include "shaders/gpu_layout.h"
+
+#include <cstdint>
+
+namespace vkray {
+
+struct ShaderVariant {
+  uint32_t sphere_formula = VKRAY_SPHERE_STABLE;         // VKRAY_SPHERE_*
+  uint32_t triangle_test = VKRAY_TRIANGLE_WATERTIGHT;    // VKRAY_TRIANGLE_*
+  uint32_t workgroup_width = VKRAY_WORKGROUP_X;
+  uint32_t workgroup_height = VKRAY_WORKGROUP_Y;
+  // Invocations in Morton order within the workgroup; needs a square power-of-two workgroup of at
+  // most 16x16 (raycast.comp decodes 8 bits). Otherwise row by row.
+  bool morton_order = true;
+  // Every primitive type's code compiled in, counts and search mode read at run time (see
+  // VKRAY_SPEC_GENERIC); renders must then request every output, since the shader writes them all.
+  bool generic = false;
+};
+
+}  // namespace vkray
