@@ -1,11 +1,15 @@
 #include "cli/commands.hpp"
+#include "cli/progress.hpp"
 #include "cli/scene_argument.hpp"
 #include "engine/bench.hpp"
-#include "engine/embree_baseline.hpp"
-#include "engine/scene_loader.hpp"
+#include "engine/bench_plot.hpp"
+#include "engine/bench_report.hpp"
+
+#include <unistd.h>
 
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <memory>
 #include <string>
 #include <vector>
@@ -15,11 +19,15 @@ namespace {
 
 struct BenchOptions {
   std::vector<std::string> scenes;
+  std::string suite;
   std::string size = "1920x1080";
   uint32_t frames = 5;
-  std::string variants = "bvh-per-ray,bvh-packet";
+  std::string variants;
   std::string device;
+  std::string models = "../shared/models";
   bool no_embree = false;
+  std::string json, csv, plot;
+  std::vector<std::string> compare;
 };
 
 std::pair<uint32_t, uint32_t> parse_size(const std::string& text) {
@@ -39,64 +47,89 @@ std::pair<uint32_t, uint32_t> parse_size(const std::string& text) {
   }
 }
 
-std::vector<BenchVariant> parse_variants(const std::string& list) {
-  std::vector<BenchVariant> chosen;
+std::vector<std::string> split_list(const std::string& list) {
+  std::vector<std::string> items;
   size_t start = 0;
-  while (start <= list.size()) {
+  while (start <= list.size() && !list.empty()) {
     const size_t comma = std::min(list.find(',', start), list.size());
-    const std::string name = list.substr(start, comma - start);
-    std::string known;
-    bool found = false;
-    for (const auto& variant : bench_variants()) {
-      known += (known.empty() ? "" : ", ") + variant.name;
-      if (variant.name == name) chosen.push_back(variant), found = true;
-    }
-    if (!found) throw InputError("--variants: unknown variant '" + name + "' (choose from " + known + ")");
+    items.push_back(list.substr(start, comma - start));
     start = comma + 1;
   }
-  return chosen;
+  return items;
+}
+
+// Output folders are checked before the first frame, so a bad path fails at once, not after the run.
+void check_writable(const std::string& path, const char* option) {
+  if (path.empty()) return;
+  const std::filesystem::path folder = std::filesystem::path(path).parent_path();
+  const std::string shown = folder.empty() ? "." : folder.string();
+  if (!std::filesystem::is_directory(shown) || access(shown.c_str(), W_OK) != 0) {
+    throw InputError(std::string(option) + ": cannot write '" + path + "' (folder '" + shown +
+                     "' is missing or not writable)");
+  }
+}
+
+void write_text(const std::string& path, const std::string& text) {
+  std::ofstream file(path);
+  file << text;
+  if (!file.flush()) throw std::runtime_error("cannot write '" + path + "'");
+}
+
+int run_compare(const BenchOptions& options) {
+  const BenchReport before = read_bench_json(options.compare[0]);
+  const BenchReport after = read_bench_json(options.compare[1]);
+  std::fputs(compare_bench(before, after).c_str(), stdout);
+  return 0;
 }
 
 int run_bench(const BenchOptions& options) {
+  if (!options.compare.empty()) return run_compare(options);
   const auto [width, height] = parse_size(options.size);
-  const std::vector<BenchVariant> variants = parse_variants(options.variants);
-  std::vector<std::pair<std::string, Scene>> scenes;
-  if (options.scenes.empty()) scenes.emplace_back("default", load_scene_argument("", width, height));
-  for (const auto& path : options.scenes) {
-    scenes.emplace_back(std::filesystem::path(path).filename().string(), load_scene_argument(path, width, height));
+  BenchSettings settings;
+  settings.frames = options.frames;
+  settings.variants = split_list(options.variants);
+  for (const auto& name : settings.variants) find_bench_variant(name);  // unknown names fail before any work
+  settings.embree = !options.no_embree;
+
+  std::vector<BenchScene> scenes;
+  if (!options.suite.empty()) {
+    scenes = bench_suite(options.suite, width, height, options.models);
+    if (scenes.empty()) {
+      throw InputError("--suite models: no .obj files in '" + options.models + "' (name the folder with --models)");
+    }
   }
+  for (const auto& path : options.scenes) {
+    scenes.push_back({std::filesystem::path(path).filename().string(), load_scene_argument(path, width, height)});
+  }
+  if (scenes.empty()) scenes.push_back({"default", load_scene_argument("", width, height)});
+
+  check_writable(options.json, "--json");
+  check_writable(options.csv, "--csv");
+  check_writable(options.plot, "--plot");
 
   GpuDevice device(options.device);
-  std::printf("vkray bench on %s (%s), %ux%u, %u frames\n", device.info().name.c_str(), device.info().driver.c_str(),
-              width, height, options.frames);
-  std::printf("%-24s %-12s %9s %8s %9s %9s %9s %8s %8s %7s %9s %9s\n", "scene", "variant", "triangles", "B/tri",
-              "build ms", "gpu med", "gpu min", "Mrays/s", "flips", "unfin.", "depth p99", "norm p99");
-  for (auto& [name, scene] : scenes) {
-    const ReferenceScene reference_scene(scene);
-    const std::vector<ReferenceHit> reference =
-        render_reference_hits(reference_scene, make_camera_basis(scene.camera, width, height), width, height);
-    double best_vkray_ms = 0.0;
-    for (const auto& variant : variants) {
-      const BenchRow row = run_bench_variant(device, scene, variant, options.frames, reference);
-      if (best_vkray_ms == 0.0 || row.dispatch_median_ms < best_vkray_ms) best_vkray_ms = row.dispatch_median_ms;
-      const double bytes_per_triangle =
-          row.stats.triangles ? static_cast<double>(row.stats.geometry_bytes) / row.stats.triangles : 0.0;
-      std::printf("%-24s %-12s %9u %8.1f %9.1f %9.2f %9.2f %8.2f %8zu %7llu %9.2e %9.2e\n", name.c_str(),
-                  row.variant.c_str(), row.stats.triangles, bytes_per_triangle, row.bvh_build_ms, row.dispatch_median_ms,
-                  row.dispatch_min_ms, row.mrays_per_s, row.error.hit_mismatches,
-                  static_cast<unsigned long long>(row.unfinished_rays), row.error.depth_p99, row.error.normal_deg_p99);
+  BenchReport report = new_bench_report(device.info(), options.suite, options.frames);
+  std::printf("vkray bench on %s (%s), %ux%u, %u frames after a warm-up\n%s", device.info().name.c_str(),
+              device.info().driver.c_str(), width, height, options.frames, bench_table_header().c_str());
+  std::fflush(stdout);
+  for (const auto& scene : scenes) {
+    ProgressLine progress("reference for " + scene.name);
+    settings.reference_progress = progress.callback();
+    report.scenes.push_back(bench_scene(device, scene, settings));
+    std::fputs(bench_table_rows(report.scenes.back()).c_str(), stdout);
+    std::fflush(stdout);
+  }
+
+  if (!options.json.empty()) write_text(options.json, bench_json(report));
+  if (!options.csv.empty()) write_text(options.csv, bench_csv(report));
+  if (!options.plot.empty()) {
+    std::string json_path = options.json;
+    if (json_path.empty()) {  // the script reads the report from a file
+      json_path = (std::filesystem::temp_directory_path() / ("vkray-bench-" + std::to_string(getpid()) + ".json")).string();
+      write_text(json_path, bench_json(report));
     }
-    if (options.no_embree) continue;
-    const EmbreeResult embree = trace_with_embree(scene, width, height, options.frames);
-    const FrameError embree_error = measure_error(embree.frame, reference);
-    const double pixels = static_cast<double>(width) * height;
-    for (const auto& [mode, ms] : {std::pair{"embree-1", embree.single_ms}, std::pair{"embree-8", embree.packet_ms}}) {
-      std::printf("%-24s %-12s %9s %8s %9.1f %9s %9.2f %8.2f %8zu %7s %9.2e %9.2e\n", name.c_str(), mode, "", "",
-                  embree.build_ms, "", ms, pixels / (ms * 1e3), embree_error.hit_mismatches, "", embree_error.depth_p99,
-                  embree_error.normal_deg_p99);
-    }
-    std::printf("%-24s vkray's fastest variant against Embree's packets on %u CPU threads: %.2fx the time\n", name.c_str(),
-                embree.threads, best_vkray_ms / embree.packet_ms);
+    plot_bench(json_path, options.plot);
+    if (options.json.empty()) std::filesystem::remove(json_path);
   }
   return 0;
 }
@@ -104,18 +137,29 @@ int run_bench(const BenchOptions& options) {
 }  // namespace
 
 Action add_bench_command(CLI::App& app) {
-  CLI::App* command = app.add_subcommand("bench", "Time configurations of the renderer beside their error against the reference.");
+  CLI::App* command =
+      app.add_subcommand("bench", "Time configurations of the renderer beside their error against the reference.");
   auto options = std::make_shared<BenchOptions>();
   command->add_option("scenes", options->scenes,
-                      "Scene files (.json) or models (.obj, framed automatically); the built-in scene when none is given");
+                      "Scene files (.json) or models (.obj, framed automatically); the built-in scene when neither "
+                      "these nor --suite are given");
+  command->add_option("--suite", options->suite, std::string("Built-in scenes: ") + bench_suite_names);
   command->add_option("--size", options->size, "Image size WIDTHxHEIGHT")->capture_default_str();
   command->add_option("--frames", options->frames, "Timed frames per variant, after one warm-up")
       ->capture_default_str()
       ->check(CLI::Range(1u, 100000u));
-  command->add_option("--variants", options->variants, "Comma-separated: brute-force, bvh-per-ray, bvh-packet")
-      ->capture_default_str();
+  std::string variant_names;
+  for (const auto& variant : bench_variants()) variant_names += "\n  " + variant.name + ": " + variant.description;
+  command->add_option("--variants", options->variants,
+                      "Comma-separated variants; default: every one that applies to the scene:" + variant_names);
   command->add_option("--device", options->device, "Use the Vulkan device whose name contains this text");
+  command->add_option("--models", options->models, "Folder of .obj files for --suite models")->capture_default_str();
   command->add_flag("--no-embree", options->no_embree, "Leave out the Embree CPU baseline");
+  command->add_option("--json", options->json, "Write every figure as JSON (schema: README, 'vkray bench')");
+  command->add_option("--csv", options->csv, "Write every figure as CSV, a line per row");
+  command->add_option("--plot", options->plot, "Plot error against time as PNG (needs python3-matplotlib)");
+  command->add_option("--compare", options->compare, "Compare two JSON files of earlier runs (A B): ratios B/A")
+      ->expected(2);
   return [options] { return run_bench(*options); };
 }
 

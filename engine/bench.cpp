@@ -1,61 +1,170 @@
 #include "engine/bench.hpp"
 
+#include "engine/bench_report.hpp"
+#include "engine/embree_baseline.hpp"
+
 #include <algorithm>
 #include <chrono>
+#include <tuple>
 
 namespace vkray {
 namespace {
 
-BenchVariant variant(std::string name, PrimitiveSearch search) {
-  BenchVariant result{std::move(name), {}};
-  result.options.scene.search = search;
-  return result;
+using Clock = std::chrono::steady_clock;
+
+double elapsed_ms(Clock::time_point start) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
 }
 
-double median(std::vector<double> values) {
-  std::sort(values.begin(), values.end());
-  const size_t n = values.size();
-  return n % 2 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
-}
+size_t finite_primitives(const Scene& scene) { return scene.triangle_count() + scene.spheres.size(); }
 
-}  // namespace
-
-const std::vector<BenchVariant>& bench_variants() {
-  static const std::vector<BenchVariant> variants = {
-      variant("brute-force", PrimitiveSearch::brute_force),
-      variant("bvh-per-ray", PrimitiveSearch::bvh_per_ray),
-      variant("bvh-packet", PrimitiveSearch::bvh_packet),
+BenchVariant search_variant(std::string name, std::string description, PrimitiveSearch search, size_t max_primitives) {
+  BenchVariant variant{std::move(name), std::move(description), {}, {}};
+  variant.options.scene.search = search;
+  variant.applies = [max_primitives](const Scene& scene) {
+    return finite_primitives(scene) > 0 && finite_primitives(scene) <= max_primitives;
   };
-  return variants;
+  return variant;
 }
 
-BenchRow run_bench_variant(GpuDevice& device, const Scene& scene, const BenchVariant& variant, uint32_t frames,
-                           const std::vector<ReferenceHit>& reference) {
+BenchVariant shader_variant(std::string name, std::string description, ShaderVariant shader,
+                            std::function<bool(const Scene&)> applies = [](const Scene&) { return true; }) {
+  BenchVariant variant{std::move(name), std::move(description), {}, std::move(applies)};
+  variant.options.shader = shader;
+  return variant;
+}
+
+BenchRow run_variant(GpuDevice& device, const Scene& scene, const BenchVariant& variant, uint32_t frames,
+                     const std::vector<ReferenceHit>& reference) {
   const AovSet aovs{Aov::depth, Aov::normal};
   Renderer renderer(device, scene, variant.options);
   BenchRow row;
   row.variant = variant.name;
-  row.width = scene.width;
-  row.height = scene.height;
   row.stats = renderer.scene_stats();
   Frame frame = renderer.render(scene.camera, scene.width, scene.height, aovs);  // warm-up, creates the pipeline
   row.upload_ms = renderer.timings().upload_ms;
   row.bvh_build_ms = renderer.timings().bvh_build_ms;
   row.pipeline_ms = renderer.timings().pipeline_ms;
-  std::vector<double> dispatch_ms, frame_ms;
+  std::vector<double> gpu_ms, frame_ms;
   for (uint32_t i = 0; i < std::max(frames, 1u); ++i) {
-    const auto start = std::chrono::steady_clock::now();
+    const auto start = Clock::now();
     frame = renderer.render(scene.camera, scene.width, scene.height, aovs);
-    frame_ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
-    dispatch_ms.push_back(renderer.timings().has_gpu_times ? renderer.timings().dispatch_gpu_ms : frame_ms.back());
+    frame_ms.push_back(elapsed_ms(start));
+    gpu_ms.push_back(renderer.timings().has_gpu_times ? renderer.timings().dispatch_gpu_ms : frame_ms.back());
   }
-  row.dispatch_median_ms = median(dispatch_ms);
-  row.dispatch_min_ms = *std::min_element(dispatch_ms.begin(), dispatch_ms.end());
+  row.gpu = time_stats(gpu_ms);
   row.frame_median_ms = median(frame_ms);
-  row.mrays_per_s = static_cast<double>(frame.pixel_count()) / (row.dispatch_median_ms * 1e3);
+  row.mrays_per_s = static_cast<double>(frame.pixel_count()) / (row.gpu.median_ms * 1e3);
   row.unfinished_rays = renderer.timings().unfinished_rays;
   row.error = measure_error(frame, reference);
   return row;
+}
+
+}  // namespace
+
+const std::vector<BenchVariant>& bench_variants() {
+  auto has_spheres = [](const Scene& scene) { return !scene.spheres.empty(); };
+  auto has_triangles = [](const Scene& scene) { return scene.triangle_count() > 0; };
+  ShaderVariant naive_sphere, moller_trumbore, generic;
+  naive_sphere.sphere_formula = VKRAY_SPHERE_NAIVE;
+  moller_trumbore.triangle_test = VKRAY_TRIANGLE_MOLLER_TRUMBORE;
+  generic.generic = true;
+  static const std::vector<BenchVariant> variants = {
+      shader_variant("default", "what vkray render uses", ShaderVariant{}),
+      search_variant("brute-force", "every primitive tested, no tree", PrimitiveSearch::brute_force,
+                     bench_brute_force_max_primitives),
+      search_variant("bvh-per-ray", "BVH, each ray its own stack", PrimitiveSearch::bvh_per_ray, SIZE_MAX),
+      search_variant("bvh-packet", "BVH, a subgroup's rays walk together", PrimitiveSearch::bvh_packet, SIZE_MAX),
+      shader_variant("generic", "not specialized: every primitive type and output, counts at run time", generic),
+      shader_variant("rows-8x8", "8x8 workgroups row by row instead of Morton order", with_workgroup(8, 8, false)),
+      shader_variant("wg-16x16", "16x16 workgroups in Morton order", with_workgroup(16, 16, true)),
+      shader_variant("wg-64x1", "64x1 workgroups", with_workgroup(64, 1, false)),
+      shader_variant("naive-sphere", "textbook ray/sphere (b^2 - c)", naive_sphere, has_spheres),
+      shader_variant("moller-trumbore", "Moeller-Trumbore triangles (not watertight)", moller_trumbore, has_triangles),
+  };
+  return variants;
+}
+
+const BenchVariant& find_bench_variant(const std::string& name) {
+  std::string known;
+  for (const auto& variant : bench_variants()) {
+    if (variant.name == name) return variant;
+    known += (known.empty() ? "" : ", ") + variant.name;
+  }
+  throw InputError("--variants: unknown variant '" + name + "' (choose from " + known + ")");
+}
+
+BenchSceneResult bench_scene(GpuDevice& device, const BenchScene& bench, const BenchSettings& settings) {
+  const Scene& scene = bench.scene;
+  BenchSceneResult result;
+  result.name = bench.name;
+  result.hash = scene_hash(scene);
+  result.width = scene.width;
+  result.height = scene.height;
+  result.triangles = scene.triangle_count();
+  result.spheres = scene.spheres.size();
+  result.planes = scene.planes.size();
+
+  const auto reference_start = Clock::now();
+  const ReferenceScene reference_scene(scene);
+  const std::vector<ReferenceHit> reference =
+      render_reference_hits(reference_scene, make_camera_basis(scene.camera, scene.width, scene.height), scene.width,
+                            scene.height, settings.reference_progress);
+  result.reference_ms = elapsed_ms(reference_start);
+
+  std::vector<const BenchVariant*> chosen;
+  for (const auto& name : settings.variants) chosen.push_back(&find_bench_variant(name));
+  if (settings.variants.empty()) {
+    for (const auto& variant : bench_variants()) chosen.push_back(&variant);
+  }
+  for (const BenchVariant* variant : chosen) {
+    if (!variant->applies(scene)) {
+      if (!settings.variants.empty()) result.skipped.push_back(variant->name + " (does not apply)");
+      continue;
+    }
+    try {
+      result.rows.push_back(run_variant(device, scene, *variant, settings.frames, reference));
+    } catch (const GpuError& error) {  // e.g. a workgroup shape or loop count this device lacks
+      result.skipped.push_back(variant->name + " (" + error.what() + ")");
+    }
+  }
+
+  if (settings.embree && (scene.triangle_count() > 0 || !scene.spheres.empty())) {
+    const EmbreeResult embree = trace_with_embree(scene, scene.width, scene.height, settings.frames);
+    const FrameError error = measure_error(embree.frame, reference);
+    const double pixels = static_cast<double>(scene.width) * scene.height;
+    for (const auto& [name, times] : {std::tuple{"embree-1", embree.single}, std::tuple{"embree-8", embree.packet}}) {
+      BenchRow row;
+      row.variant = name;
+      row.on_gpu = false;
+      row.bvh_build_ms = embree.build_ms;
+      row.gpu = times;
+      row.mrays_per_s = pixels / (times.median_ms * 1e3);
+      row.error = error;
+      result.rows.push_back(row);
+    }
+  }
+  mark_pareto_front(result.rows);
+  return result;
+}
+
+void mark_pareto_front(std::vector<BenchRow>& rows) {
+  auto figures = [](const BenchRow& row) {
+    return std::array<double, 4>{row.gpu.median_ms, static_cast<double>(row.error.hit_mismatches), row.error.depth_p99,
+                                 row.error.normal_deg_p99};
+  };
+  for (auto& row : rows) {
+    const auto mine = figures(row);
+    row.pareto = std::none_of(rows.begin(), rows.end(), [&](const BenchRow& other) {
+      const auto theirs = figures(other);
+      bool no_worse = true, better = false;
+      for (size_t k = 0; k < mine.size(); ++k) {
+        no_worse = no_worse && theirs[k] <= mine[k];
+        better = better || theirs[k] < mine[k];
+      }
+      return no_worse && better;
+    });
+  }
 }
 
 }  // namespace vkray

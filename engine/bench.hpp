@@ -1,11 +1,15 @@
-// `vkray bench`: render a scene with several configurations (variants) and report, for each, its
-// time beside its error against the double-precision reference, measured in the same run.
+// `vkray bench`: renders scenes with several configurations (variants) of the shader and reports,
+// for each, its time beside its error against the double-precision reference, measured in the same
+// run; Embree on the CPU is timed on the same rays as a baseline.
 #pragma once
 
+#include "engine/bench_suites.hpp"
 #include "engine/compare.hpp"
 #include "engine/gpu_device.hpp"
 #include "engine/renderer.hpp"
+#include "engine/statistics.hpp"
 
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -13,27 +17,62 @@ namespace vkray {
 
 struct BenchVariant {
   std::string name;
+  std::string description;  // what it changes against the default
   RendererOptions options;
+  // Whether the variant means anything for a scene (a sphere formula for a scene without spheres
+  // does not, brute force over a million triangles would only take minutes to say so).
+  std::function<bool(const Scene&)> applies;
 };
 
-// Every variant, by name: brute-force, bvh-per-ray, bvh-packet.
+// Every variant, by name: the default (what `vkray render` does) first, then one change each.
 const std::vector<BenchVariant>& bench_variants();
 
+// Brute force over more triangles and spheres than this is left out of the bench: its time grows
+// with their count and says nothing new (10k spheres took 6.4 s a frame at 640x480 on lavapipe).
+inline constexpr size_t bench_brute_force_max_primitives = 1024;
+
+// One row of the bench: a variant of vkray, or a CPU baseline, on one scene.
 struct BenchRow {
   std::string variant;
-  uint32_t width = 0, height = 0;
-  SceneStats stats;
-  double upload_ms = 0, bvh_build_ms = 0, pipeline_ms = 0;  // once per variant, not in frame times
-  double dispatch_median_ms = 0, dispatch_min_ms = 0;       // GPU time per frame (timestamps)
-  double frame_median_ms = 0;                               // host wall time per frame, readback included
-  double mrays_per_s = 0;                                   // pixels / median dispatch time
-  uint64_t unfinished_rays = 0;                             // finished on the CPU (loop budget), last frame
-  FrameError error;
+  bool on_gpu = true;               // false: a CPU baseline (Embree)
+  SceneStats stats;                 // what the variant put on the device (GPU rows)
+  double upload_ms = 0.0;           // scene conversion and upload, BVH build included; never in frame times
+  double bvh_build_ms = 0.0;        // of which the BVH build (CPU rows: Embree's scene build)
+  double pipeline_ms = 0.0;         // pipeline creation, never in frame times
+  TimeStats gpu;                    // GPU time per frame, from timestamps (CPU rows: wall time of the trace)
+  double frame_median_ms = 0.0;     // host wall time per frame, readback included (GPU rows)
+  double mrays_per_s = 0.0;         // pixels / median GPU time
+  uint64_t unfinished_rays = 0;     // finished on the CPU (loop budget), last frame
+  FrameError error;                 // last frame against the reference
+  bool pareto = false;              // on the Pareto front of its scene (see mark_pareto_front)
 };
 
-// Renders `frames` timed frames after one warm-up with `variant` and measures the last against
-// `reference` (hits of the same scene, camera and size).
-BenchRow run_bench_variant(GpuDevice& device, const Scene& scene, const BenchVariant& variant, uint32_t frames,
-                           const std::vector<ReferenceHit>& reference);
+struct BenchSceneResult {
+  std::string name;
+  std::string hash;  // scene_hash: the same geometry, camera and size give the same hash
+  uint32_t width = 0, height = 0;
+  size_t triangles = 0, spheres = 0, planes = 0;
+  double reference_ms = 0.0;  // the double-precision reference, once per scene and size
+  std::vector<BenchRow> rows;
+  std::vector<std::string> skipped;  // variants asked for that do not apply to this scene
+};
+
+struct BenchSettings {
+  uint32_t frames = 5;                       // timed frames per variant, after one warm-up
+  std::vector<std::string> variants;         // names; empty: every variant that applies
+  bool embree = true;                        // the Embree rows
+  std::function<void(double)> reference_progress;  // fraction done of the reference, from any thread
+};
+
+// Throws InputError naming the known variants when `name` is not one.
+const BenchVariant& find_bench_variant(const std::string& name);
+
+// Renders the scene with each variant and Embree, measures each against the reference, and marks
+// the Pareto front.
+BenchSceneResult bench_scene(GpuDevice& device, const BenchScene& scene, const BenchSettings& settings);
+
+// A row is on the Pareto front of its scene when no other row is at least as good in time (median
+// GPU time) and in every error figure (hit/miss flips, depth p99, normal p99) and better in one.
+void mark_pareto_front(std::vector<BenchRow>& rows);
 
 }  // namespace vkray

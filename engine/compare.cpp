@@ -1,5 +1,7 @@
 #include "engine/compare.hpp"
 
+#include "engine/statistics.hpp"
+
 #include <glm/geometric.hpp>
 
 #include <algorithm>
@@ -8,17 +10,6 @@
 #include <numbers>
 
 namespace vkray {
-namespace {
-
-// Nearest-rank percentile; sorts `values`.
-double percentile(std::vector<double>& values, double fraction) {
-  if (values.empty()) return 0.0;
-  std::sort(values.begin(), values.end());
-  const size_t rank = static_cast<size_t>(std::ceil(fraction * static_cast<double>(values.size())));
-  return values[std::clamp<size_t>(rank, 1, values.size()) - 1];
-}
-
-}  // namespace
 
 double angle_between(const glm::dvec3& a, const glm::dvec3& b) {
   return std::atan2(glm::length(glm::cross(a, b)), glm::dot(a, b));

@@ -197,14 +197,13 @@ EmbreeResult trace_with_embree(const Scene& scene, uint32_t width, uint32_t heig
   };
 
   run_tiles(width, height, result.threads, trace_single);  // warm-up
-  result.single_ms = std::numeric_limits<double>::infinity();
-  result.packet_ms = std::numeric_limits<double>::infinity();
+  std::vector<double> single_ms, packet_ms;
   for (uint32_t r = 0; r < std::max(repeats, 1u); ++r) {
-    result.single_ms = std::min(result.single_ms, run_tiles(width, height, result.threads, trace_single));
-    result.packet_ms = std::min(result.packet_ms, run_tiles(width, height, result.threads, [&](uint32_t x, uint32_t y) {
-                                  trace_packets(x, y, false);
-                                }));
+    single_ms.push_back(run_tiles(width, height, result.threads, trace_single));
+    packet_ms.push_back(run_tiles(width, height, result.threads, [&](uint32_t x, uint32_t y) { trace_packets(x, y, false); }));
   }
+  result.single = time_stats(single_ms);
+  result.packet = time_stats(packet_ms);
   run_tiles(width, height, result.threads, [&](uint32_t x, uint32_t y) { trace_packets(x, y, true); });
   embree.check_errors("tracing");
   return result;

@@ -4,6 +4,7 @@
 
 #include "engine/frame.hpp"
 #include "engine/scene.hpp"
+#include "engine/statistics.hpp"
 
 #include <cstdint>
 
@@ -11,8 +12,8 @@ namespace vkray {
 
 struct EmbreeResult {
   double build_ms = 0.0;      // scene commit (Embree's own BVH build)
-  double single_ms = 0.0;     // best of the timed runs, all cores
-  double packet_ms = 0.0;
+  TimeStats single;           // over the timed runs, all cores
+  TimeStats packet;
   uint32_t threads = 0;
   Frame frame;                // depth and normal from the packet path, for the error against the reference
 };

@@ -220,7 +220,8 @@ ReferenceHit ReferenceScene::trace_brute_force(const glm::dvec3& origin, const g
 }
 
 std::vector<ReferenceHit> render_reference_hits(const ReferenceScene& scene, const CameraBasis& camera,
-                                                uint32_t width, uint32_t height) {
+                                                uint32_t width, uint32_t height,
+                                                const std::function<void(double)>& progress) {
   std::vector<ReferenceHit> hits(size_t{width} * height);
   const unsigned workers = std::max(1u, std::min(std::thread::hardware_concurrency(), height));
   std::vector<std::jthread> threads;
@@ -230,6 +231,7 @@ std::vector<ReferenceHit> render_reference_hits(const ReferenceScene& scene, con
         for (uint32_t i = 0; i < width; ++i) {
           hits[size_t{j} * width + i] = scene.trace(camera.origin, camera.direction(pixel_uv(i, j, width, height)));
         }
+        if (progress && worker == 0) progress(static_cast<double>(j + 1) / height);
       }
     });
   }

@@ -11,6 +11,7 @@
 
 #include <glm/vec3.hpp>
 
+#include <functional>
 #include <limits>
 #include <vector>
 
@@ -68,9 +69,11 @@ class ReferenceScene {
   std::vector<std::array<Box, 2>> child_boxes_;   // their boxes, exact in double
 };
 
-// Every pixel's hit for the scene's camera at width x height.
+// Every pixel's hit for the scene's camera at width x height, on all cores. `progress`, when set,
+// receives the fraction of rows done from time to time, from a worker thread.
 std::vector<ReferenceHit> render_reference_hits(const ReferenceScene& scene, const CameraBasis& camera,
-                                                uint32_t width, uint32_t height);
+                                                uint32_t width, uint32_t height,
+                                                const std::function<void(double)>& progress = {});
 
 // Pixel `pixel` of `frame`'s outputs (depth and normal; uv is the camera's) from a reference hit,
 // rounded to float only here.

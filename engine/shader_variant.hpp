@@ -22,4 +22,13 @@ struct ShaderVariant {
   bool generic = false;
 };
 
+// The default variant with another workgroup shape and order.
+inline ShaderVariant with_workgroup(uint32_t width, uint32_t height, bool morton_order) {
+  ShaderVariant shader;
+  shader.workgroup_width = width;
+  shader.workgroup_height = height;
+  shader.morton_order = morton_order;
+  return shader;
+}
+
 }  // namespace vkray

@@ -6,6 +6,7 @@
 #include "tests/temp_dir_test.hpp"
 #include <OpenImageIO/imageio.h>
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -824,11 +825,110 @@ TEST_F(CliTest, BadCameraOptionsExitTwo) {
 TEST_F(CliTest, BenchPrintsTimesBesideErrors) {
   const RunResult run = vkray({"bench", "--size", "32x24", "--frames", "1"});
   ASSERT_EQ(run.exit_code, 0) << run.err;
-  for (const char* variant : {"bvh-per-ray", "bvh-packet", "embree-1", "embree-8"}) {
+  for (const char* variant : {"default", "bvh-per-ray", "bvh-packet", "generic", "embree-1", "embree-8"}) {
     EXPECT_NE(run.out.find(variant), std::string::npos) << variant << " missing from:\n" << run.out;
   }
   expect_error(vkray({"bench", "--size", "32by24"}), 2, {"--size"});
   expect_error(vkray({"bench", "--variants", "fastest"}), 2, {"--variants", "'fastest'"});
+  expect_error(vkray({"bench", "--suite", "fast"}), 2, {"--suite", "'fast'"});
+  expect_error(vkray({"bench", "--suite", "models", "--models", "/nonexistent/vkray-models"}), 2,
+               {"--suite models", "/nonexistent/vkray-models"});
+  // Output paths are checked before any rendering.
+  expect_error(vkray({"bench", "--json", "/nonexistent/vkray/bench.json"}), 2, {"--json", "/nonexistent/vkray"});
+  expect_error(vkray({"bench", "--csv", "missing/bench.csv"}), 2, {"--csv", "missing"});
+}
+
+// The basic suite's JSON: every field of every row present and sane. Times are only required to be
+// positive and consistent with each other, never fast.
+TEST_F(CliTest, BenchBasicSuiteJsonHasEveryFieldAndSaneFigures) {
+  constexpr uint32_t width = 48, height = 32;
+  const RunResult run = vkray({"bench", "--suite", "basic", "--size", "48x32", "--frames", "2", "--json", "bench.json",
+                               "--csv", "bench.csv"});
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  const auto json = nlohmann::json::parse(read_text(path("bench.json")));
+  EXPECT_EQ(json.at("schema"), "vkray-bench-1");
+  EXPECT_EQ(json.at("suite"), "basic");
+  EXPECT_EQ(json.at("frames"), 2);
+  for (const char* field : {"vkray_version", "git_commit"}) EXPECT_FALSE(json.at(field).get<std::string>().empty());
+  for (const char* field : {"name", "type", "driver", "api_version"}) {
+    EXPECT_FALSE(json.at("device").at(field).get<std::string>().empty()) << field;
+  }
+  const std::vector<std::string> names = {"default", "one-sphere", "spheres-on-plane", "sphere-mesh-80k"};
+  ASSERT_EQ(json.at("scenes").size(), names.size());
+  const std::vector<std::string> row_fields = {
+      "variant", "on_gpu", "device_triangles", "device_geometry_bytes", "bvh_nodes", "bvh_depth", "loop_budget",
+      "upload_ms", "bvh_build_ms", "pipeline_ms", "gpu_median_ms", "gpu_min_ms", "frame_median_ms", "mrays_per_s",
+      "unfinished_rays", "pixels", "hit_mismatches", "both_hit", "depth_rel_p50", "depth_rel_p99", "depth_rel_max",
+      "normal_deg_p50", "normal_deg_p99", "normal_deg_max", "pareto"};
+  size_t rows = 0;
+  for (size_t s = 0; s < names.size(); ++s) {
+    const auto& scene = json.at("scenes").at(s);
+    SCOPED_TRACE(names[s]);
+    EXPECT_EQ(scene.at("name"), names[s]);
+    EXPECT_EQ(scene.at("hash").get<std::string>().size(), 16u);
+    EXPECT_EQ(scene.at("width"), width);
+    EXPECT_EQ(scene.at("height"), height);
+    EXPECT_GT(scene.at("reference_ms").get<double>(), 0.0);
+    bool on_front = false, has_default = false, has_generic = false, has_embree = false;
+    for (const auto& row : scene.at("rows")) {
+      ++rows;
+      const std::string variant = row.at("variant");
+      SCOPED_TRACE(variant);
+      for (const auto& field : row_fields) EXPECT_TRUE(row.contains(field)) << field;
+      EXPECT_EQ(row.size(), row_fields.size());
+      const double median = row.at("gpu_median_ms"), minimum = row.at("gpu_min_ms");
+      EXPECT_GT(minimum, 0.0);
+      EXPECT_LE(minimum, median);
+      EXPECT_EQ(row.at("pixels"), width * height);
+      // Mrays/s is the pixels over the median time, to rounding.
+      EXPECT_NEAR(row.at("mrays_per_s").get<double>(), width * height / (median * 1e3), 1e-9 * width * height / median);
+      EXPECT_LE(row.at("hit_mismatches").get<size_t>(), width * height);
+      EXPECT_LE(row.at("both_hit").get<size_t>() + row.at("hit_mismatches").get<size_t>(), width * height);
+      for (const char* error : {"depth_rel_p50", "depth_rel_p99", "depth_rel_max", "normal_deg_p50",
+                                "normal_deg_p99", "normal_deg_max"}) {
+        const double value = row.at(error);
+        EXPECT_TRUE(std::isfinite(value) && value >= 0.0) << error << " = " << value;
+      }
+      EXPECT_LE(row.at("depth_rel_p50").get<double>(), row.at("depth_rel_p99").get<double>());
+      EXPECT_LE(row.at("depth_rel_p99").get<double>(), row.at("depth_rel_max").get<double>());
+      EXPECT_LE(row.at("normal_deg_p99").get<double>(), row.at("normal_deg_max").get<double>());
+      if (row.at("on_gpu")) {
+        EXPECT_GE(row.at("frame_median_ms").get<double>(), 0.0);
+        EXPECT_GT(row.at("pipeline_ms").get<double>(), 0.0);
+      }
+      on_front = on_front || row.at("pareto").get<bool>();
+      has_default = has_default || variant == "default";
+      has_generic = has_generic || variant == "generic";
+      has_embree = has_embree || variant == "embree-8";
+    }
+    EXPECT_TRUE(on_front && has_default && has_generic && has_embree);
+  }
+  EXPECT_EQ(count_lines(read_text(path("bench.csv"))), rows + 1);
+
+  // A run compared with itself: every row, time ratio 1.
+  const RunResult compare = vkray({"bench", "--compare", "bench.json", "bench.json"});
+  ASSERT_EQ(compare.exit_code, 0) << compare.err;
+  EXPECT_EQ(count_lines(compare.out), rows + 3) << compare.out;  // two "A:"/"B:" lines and a header
+  EXPECT_NE(compare.out.find("1.000"), std::string::npos) << compare.out;
+  expect_error(vkray({"bench", "--compare", "bench.json", "absent.json"}), 2, {"absent.json"});
+  expect_error(vkray({"bench", "--compare", "bench.json", "bench.csv"}), 2, {"bench.csv"});
+}
+
+// --plot runs the embedded matplotlib script on the report; it needs Debian's python3-matplotlib
+// (cmake/debian-packages.txt), so the test says so and skips where that is missing.
+TEST_F(CliTest, BenchPlotWritesAPng) {
+  if (std::system("/usr/bin/python3 -c 'import matplotlib' >/dev/null 2>&1") != 0) {
+    GTEST_SKIP() << "/usr/bin/python3 with matplotlib is missing (Debian: python3-matplotlib)";
+  }
+  const RunResult run = vkray({"bench", "--size", "32x24", "--frames", "1", "--variants", "default,generic",
+                               "--no-embree", "--plot", "plot.png"});
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  const std::string png = read_text(path("plot.png"));
+  ASSERT_GT(png.size(), 8u);
+  EXPECT_EQ(png.substr(0, 8), std::string("\x89PNG\r\n\x1a\n", 8));
+  for (const auto& entry : fs::directory_iterator(dir_)) {  // the report the script read is gone again
+    EXPECT_NE(entry.path().extension(), ".json") << entry.path();
+  }
 }
 
 // Every offered compression is lossless: the channels read back bit for bit the same.

@@ -1,0 +1,47 @@
+// What `vkray bench` writes: the table on the terminal, JSON and CSV with every figure (schema in
+// README.md, "vkray bench"), and the comparison of two JSON files. Reading and writing a report are
+// in this one file so the schema cannot drift between them.
+#pragma once
+
+#include "engine/bench.hpp"
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+namespace vkray {
+
+inline constexpr const char* bench_schema = "vkray-bench-1";
+
+struct BenchReport {
+  std::string vkray_version;
+  std::string git_commit;  // of the build; "unknown" outside a git checkout
+  std::string device, device_type, driver, api_version;
+  std::string suite;  // empty when scenes were named on the command line
+  uint32_t frames = 0;
+  std::vector<BenchSceneResult> scenes;
+};
+
+// An empty report of this build (version, commit) on this device.
+BenchReport new_bench_report(const GpuDeviceInfo& device, std::string suite, uint32_t frames);
+
+// 64-bit FNV-1a over everything that decides the image (camera, size, every primitive's doubles),
+// as 16 hex digits: two runs timed the same scene when their hashes match.
+std::string scene_hash(const Scene& scene);
+
+// The readable table: a header, then a scene's rows ("*": on the Pareto front), and how vkray's
+// fastest variant compares with Embree's packets.
+std::string bench_table_header();
+std::string bench_table_rows(const BenchSceneResult& scene);
+
+std::string bench_json(const BenchReport& report);
+std::string bench_csv(const BenchReport& report);
+
+// Throws InputError naming the file (and the field) when it is not a bench JSON file.
+BenchReport read_bench_json(const std::filesystem::path& path);
+
+// Per row present in both (same scene name, size and variant): time and error of `after` against
+// `before`, as ratios.
+std::string compare_bench(const BenchReport& before, const BenchReport& after);
+
+}  // namespace vkray

@@ -1,0 +1,37 @@
+// Summary statistics of measured values (times, errors).
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+namespace vkray {
+
+// Nearest-rank percentile, fraction in [0, 1]; sorts `values`; 0 for none.
+inline double percentile(std::vector<double>& values, double fraction) {
+  if (values.empty()) return 0.0;
+  std::sort(values.begin(), values.end());
+  const auto rank = static_cast<size_t>(std::ceil(fraction * static_cast<double>(values.size())));
+  return values[std::clamp<size_t>(rank, 1, values.size()) - 1];
+}
+
+// Median (the mean of the middle two for an even count); 0 for none.
+inline double median(std::vector<double> values) {
+  if (values.empty()) return 0.0;
+  std::sort(values.begin(), values.end());
+  const size_t n = values.size();
+  return n % 2 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
+}
+
+// Median and minimum of repeated timings.
+struct TimeStats {
+  double median_ms = 0.0;
+  double min_ms = 0.0;
+};
+
+inline TimeStats time_stats(const std::vector<double>& times_ms) {
+  if (times_ms.empty()) return {};
+  return {median(times_ms), *std::min_element(times_ms.begin(), times_ms.end())};
+}
+
+}  // namespace vkray

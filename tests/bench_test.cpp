@@ -1,0 +1,278 @@
+// The bench's figures: error metrics on synthetic image pairs with known answers, the Pareto front,
+// the report's JSON (round trip, errors), CSV and comparison, scene hashes and suites. Host only.
+#include "engine/bench_report.hpp"
+#include "engine/reference.hpp"
+#include "tests/temp_dir_test.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+#include <numbers>
+#include <sstream>
+
+namespace vkray {
+namespace {
+
+constexpr uint32_t side = 4;
+constexpr size_t pixels = side * side;
+constexpr double true_depth = 2.0;
+
+// Reference: every pixel hits at depth 2 with normal +z.
+std::vector<ReferenceHit> reference_hits() {
+  std::vector<ReferenceHit> hits(pixels);
+  for (auto& hit : hits) hit = {true_depth, {0.0, 0.0, 1.0}, PrimitiveKind::sphere, 0};
+  return hits;
+}
+
+// A frame equal to the reference, in float.
+Frame matching_frame() {
+  Frame frame{side, side, {Aov::depth, Aov::normal}, {}, {}, {}};
+  frame.allocate();
+  for (size_t p = 0; p < pixels; ++p) {
+    frame.depth[p] = static_cast<float>(true_depth);
+    frame.normal[2 * pixels + p] = 1.0f;
+  }
+  return frame;
+}
+
+void set_normal(Frame& frame, size_t p, double x, double y, double z) {
+  frame.normal[p] = static_cast<float>(x);
+  frame.normal[pixels + p] = static_cast<float>(y);
+  frame.normal[2 * pixels + p] = static_cast<float>(z);
+}
+
+TEST(BenchErrorMetrics, IdenticalImagesHaveNoError) {
+  const FrameError error = measure_error(matching_frame(), reference_hits());
+  EXPECT_EQ(error.pixels, pixels);
+  EXPECT_EQ(error.hit_mismatches, 0u);
+  EXPECT_EQ(error.both_hit, pixels);
+  EXPECT_EQ(error.depth_max, 0.0);
+  EXPECT_EQ(error.normal_deg_max, 0.0);
+}
+
+TEST(BenchErrorMetrics, OneFlippedPixelIsOneMismatchAndLeavesTheRestAlone) {
+  Frame frame = matching_frame();
+  frame.depth[5] = std::numeric_limits<float>::infinity();
+  set_normal(frame, 5, 0, 0, 0);
+  FrameError error = measure_error(frame, reference_hits());
+  EXPECT_EQ(error.hit_mismatches, 1u);
+  EXPECT_EQ(error.both_hit, pixels - 1);
+  EXPECT_EQ(error.depth_max, 0.0);
+
+  // The other way: the reference misses a pixel the frame hits.
+  std::vector<ReferenceHit> reference = reference_hits();
+  reference[9] = ReferenceHit{};
+  error = measure_error(matching_frame(), reference);
+  EXPECT_EQ(error.hit_mismatches, 1u);
+  EXPECT_EQ(error.both_hit, pixels - 1);
+}
+
+TEST(BenchErrorMetrics, KnownDepthOffsetGivesItsRelativeError) {
+  // 2 + 2^-10 is exact in float: the relative error is exactly 2^-11 on every pixel.
+  Frame frame = matching_frame();
+  for (auto& depth : frame.depth) depth = 2.0f + 0x1p-10f;
+  FrameError error = measure_error(frame, reference_hits());
+  EXPECT_EQ(error.depth_p50, 0x1p-11);
+  EXPECT_EQ(error.depth_p99, 0x1p-11);
+  EXPECT_EQ(error.depth_max, 0x1p-11);
+
+  // One pixel in 16 off by 2^-8 (relative): the median and the 99th percentile by nearest rank
+  // (rank ceil(0.99 * 16) = 16, the largest) see it differently.
+  frame = matching_frame();
+  frame.depth[3] = 2.0f + 0x1p-7f;
+  error = measure_error(frame, reference_hits());
+  EXPECT_EQ(error.depth_p50, 0.0);
+  EXPECT_EQ(error.depth_p99, 0x1p-8);
+  EXPECT_EQ(error.depth_max, 0x1p-8);
+}
+
+TEST(BenchErrorMetrics, NormalRotatedByKnownAngle) {
+  // Half the pixels' normals turned by 1 degree about y, the rest by 0.25 degrees about x.
+  Frame frame = matching_frame();
+  const double one_degree = std::numbers::pi / 180.0;
+  for (size_t p = 0; p < pixels; ++p) {
+    const double angle = p % 2 ? one_degree : 0.25 * one_degree;
+    if (p % 2) {
+      set_normal(frame, p, std::sin(angle), 0, std::cos(angle));
+    } else {
+      set_normal(frame, p, 0, std::sin(angle), std::cos(angle));
+    }
+  }
+  const FrameError error = measure_error(frame, reference_hits());
+  // Float rounding of the rotated normal moves its angle by at most about 2^-24 rad = 3.4e-6 deg.
+  EXPECT_NEAR(error.normal_deg_p50, 0.25, 1e-5);
+  EXPECT_NEAR(error.normal_deg_p99, 1.0, 1e-5);
+  EXPECT_NEAR(error.normal_deg_max, 1.0, 1e-5);
+  EXPECT_EQ(error.depth_max, 0.0);
+}
+
+BenchRow row(const char* variant, double ms, size_t flips, double depth_p99, double normal_p99) {
+  BenchRow result;
+  result.variant = variant;
+  result.gpu = {ms, ms};
+  result.error.hit_mismatches = flips;
+  result.error.depth_p99 = depth_p99;
+  result.error.normal_deg_p99 = normal_p99;
+  return result;
+}
+
+TEST(BenchParetoFront, KeepsExactlyTheUndominatedRows) {
+  std::vector<BenchRow> rows = {
+      row("accurate", 10, 0, 1e-7, 1e-4),
+      row("fast", 5, 0, 1e-5, 1e-4),
+      row("slower-same-error", 12, 0, 1e-7, 1e-4),  // dominated by accurate
+      row("fast-but-flips", 5, 3, 1e-5, 1e-4),      // dominated by fast
+      row("best-normals", 20, 0, 1e-7, 1e-6),       // slowest, but no one has better normals
+      row("tie-a", 7, 0, 1e-6, 1e-4),
+      row("tie-b", 7, 0, 1e-6, 1e-4),  // equal rows do not dominate each other
+  };
+  mark_pareto_front(rows);
+  const std::vector<bool> expected = {true, true, false, false, true, true, true};
+  for (size_t k = 0; k < rows.size(); ++k) EXPECT_EQ(rows[k].pareto, expected[k]) << rows[k].variant;
+}
+
+// A report with every field set to a distinct value.
+BenchReport sample_report() {
+  BenchReport report;
+  report.vkray_version = "1.2.3";
+  report.git_commit = "0123456789abcdef";
+  report.device = "Some GPU, \"quoted\"";
+  report.device_type = "discrete";
+  report.driver = "driver 1";
+  report.api_version = "1.3.0";
+  report.suite = "basic";
+  report.frames = 7;
+  BenchSceneResult scene;
+  scene.name = "scene one";
+  scene.hash = "00000000deadbeef";
+  scene.width = 64;
+  scene.height = 48;
+  scene.triangles = 12;
+  scene.spheres = 3;
+  scene.planes = 1;
+  scene.reference_ms = 4.5;
+  scene.skipped = {"naive-sphere (does not apply)"};
+  BenchRow gpu = row("default", 2.5, 1, 3e-7, 2e-5);
+  gpu.stats.triangles = 12;
+  gpu.stats.geometry_bytes = 1234;
+  gpu.stats.bvh_nodes = 5;
+  gpu.stats.bvh_depth = 3;
+  gpu.stats.loop_budget = 65000;
+  gpu.upload_ms = 0.5;
+  gpu.bvh_build_ms = 0.25;
+  gpu.pipeline_ms = 30.125;
+  gpu.gpu.min_ms = 2.25;
+  gpu.frame_median_ms = 3.5;
+  gpu.mrays_per_s = 64 * 48 / 2.5e3;
+  gpu.unfinished_rays = 2;
+  gpu.error.pixels = 64 * 48;
+  gpu.error.both_hit = 1000;
+  gpu.error.depth_p50 = 1e-8;
+  gpu.error.depth_max = 4e-6;
+  gpu.error.normal_deg_p50 = 1e-6;
+  gpu.error.normal_deg_max = 0.125;
+  gpu.pareto = true;
+  BenchRow cpu = row("embree-8", 1.5, 0, 2e-7, 3e-4);
+  cpu.on_gpu = false;
+  scene.rows = {gpu, cpu};
+  report.scenes = {scene};
+  return report;
+}
+
+class BenchReportTest : public test::TempDirTest {};
+
+TEST_F(BenchReportTest, JsonRoundTripKeepsEveryField) {
+  const BenchReport report = sample_report();
+  const std::string json = bench_json(report);
+  const auto path = write("bench.json", json);
+  const BenchReport read = read_bench_json(path);
+  EXPECT_EQ(bench_json(read), json);
+  EXPECT_EQ(bench_csv(read), bench_csv(report));
+  EXPECT_NE(json.find("\"schema\": \"vkray-bench-1\""), std::string::npos) << json;
+}
+
+TEST_F(BenchReportTest, BadJsonNamesTheFileAndTheField) {
+  const auto not_json = write("not.json", "{ nope");
+  try {
+    read_bench_json(not_json);
+    FAIL() << "no error";
+  } catch (const InputError& error) {
+    EXPECT_NE(std::string(error.what()).find(not_json.string()), std::string::npos) << error.what();
+  }
+  const auto other = write("other.json", R"({"camera": {}})");
+  EXPECT_THROW(read_bench_json(other), InputError);
+
+  std::string json = bench_json(sample_report());
+  const size_t field = json.find("\"gpu_median_ms\"");
+  json.replace(field, std::string("\"gpu_median_ms\"").size(), "\"gpu_median\"");
+  try {
+    read_bench_json(write("missing.json", json));
+    FAIL() << "no error";
+  } catch (const InputError& error) {
+    EXPECT_NE(std::string(error.what()).find("scenes[0].rows[0].gpu_median_ms"), std::string::npos) << error.what();
+  }
+  EXPECT_THROW(read_bench_json(dir_ / "absent.json"), InputError);
+}
+
+TEST(BenchReport, CsvHasAHeaderAndALinePerRowWithEveryJsonField) {
+  const BenchReport report = sample_report();
+  const std::string csv = bench_csv(report);
+  std::istringstream lines(csv);
+  std::string header, line;
+  std::getline(lines, header);
+  size_t rows = 0;
+  const size_t columns = static_cast<size_t>(std::count(header.begin(), header.end(), ',')) + 1;
+  while (std::getline(lines, line)) {
+    ++rows;
+    // The device name holds a comma and quotes, written as "Some GPU, ""quoted""": one comma in a cell.
+    EXPECT_EQ(static_cast<size_t>(std::count(line.begin(), line.end(), ',')), columns) << line;
+  }
+  EXPECT_EQ(rows, 2u);
+  for (const char* field : {"scene_hash", "variant", "gpu_median_ms", "frame_median_ms", "mrays_per_s",
+                            "hit_mismatches", "depth_rel_p99", "normal_deg_max", "pareto"}) {
+    EXPECT_NE(header.find(field), std::string::npos) << field;
+  }
+}
+
+TEST(BenchReport, CompareGivesRatiosPerMatchingRow) {
+  const BenchReport before = sample_report();
+  BenchReport after = sample_report();
+  after.scenes[0].rows[0].gpu.median_ms *= 2.0;     // twice the time
+  after.scenes[0].rows[0].error.depth_p99 *= 0.5;   // half the error
+  after.scenes[0].hash = "ffffffffffffffff";
+  const std::string text = compare_bench(before, after);
+  EXPECT_NE(text.find("2.000"), std::string::npos) << text;
+  EXPECT_NE(text.find("0.500"), std::string::npos) << text;
+  EXPECT_NE(text.find("hashes differ"), std::string::npos) << text;
+  after.scenes[0].name = "another scene";
+  EXPECT_NE(compare_bench(before, after).find("no row in common"), std::string::npos);
+}
+
+TEST(BenchScenes, HashesAreDeterministicAndSeeEveryBit) {
+  for (const char* suite : {"basic", "stiff"}) {
+    const auto first = bench_suite(suite, 64, 48, "");
+    const auto second = bench_suite(suite, 64, 48, "");
+    ASSERT_EQ(first.size(), second.size());
+    ASSERT_FALSE(first.empty());
+    for (size_t k = 0; k < first.size(); ++k) {
+      EXPECT_EQ(first[k].name, second[k].name);
+      EXPECT_EQ(scene_hash(first[k].scene), scene_hash(second[k].scene)) << first[k].name;
+    }
+  }
+  Scene scene = bench_suite("basic", 64, 48, "")[0].scene;
+  const std::string hash = scene_hash(scene);
+  scene.spheres[0].radius = std::nextafter(scene.spheres[0].radius, 2.0);
+  EXPECT_NE(scene_hash(scene), hash);
+  scene = bench_suite("basic", 64, 48, "")[0].scene;
+  scene.width = 65;
+  EXPECT_NE(scene_hash(scene), hash);
+}
+
+TEST(BenchScenes, UnknownSuiteOrAbsentModelsFolder) {
+  EXPECT_THROW(bench_suite("fast", 64, 48, ""), InputError);
+  EXPECT_TRUE(bench_suite("models", 64, 48, "/nonexistent/vkray-models").empty());
+}
+
+}  // namespace
+}  // namespace vkray

@@ -1,0 +1,88 @@
+// The shader variants the bench compares (engine/shader_variant.hpp): those that must not change a
+// single bit (workgroup shape and order, the generic pipeline) do not, and the precision variants
+// differ from the defaults where the numerical analysis says they must.
+#include "engine/bench.hpp"
+#include "engine/bench_suites.hpp"
+#include "engine/scene_loader.hpp"
+#include "tests/gpu_test_support.hpp"
+
+#include <cstring>
+
+namespace vkray {
+namespace {
+
+Frame render_with(const Scene& scene, const ShaderVariant& shader) {
+  RendererOptions options;
+  options.shader = shader;
+  Renderer renderer(test::device(), scene, options);
+  return renderer.render(scene.camera, scene.width, scene.height, {Aov::depth, Aov::normal});
+}
+
+void expect_same_bits(const Frame& expected, const Frame& actual) {
+  ASSERT_EQ(expected.depth.size(), actual.depth.size());
+  ASSERT_EQ(expected.normal.size(), actual.normal.size());
+  size_t differing = 0;
+  for (size_t p = 0; p < expected.depth.size(); ++p) {
+    differing += std::memcmp(&expected.depth[p], &actual.depth[p], sizeof(float)) != 0 ? 1 : 0;
+  }
+  for (size_t k = 0; k < expected.normal.size(); ++k) {
+    differing += std::memcmp(&expected.normal[k], &actual.normal[k], sizeof(float)) != 0 ? 1 : 0;
+  }
+  EXPECT_EQ(differing, 0u) << "values differing from the default variant";
+}
+
+// Each pixel's ray and tests are the same whatever workgroup computes it, and the generic pipeline
+// runs the same code with counts read at run time: every bit must match. 37x29 leaves partial
+// workgroups on two borders; the basic suite covers brute force (the built-in scene's six
+// triangles and one sphere), spheres alone, spheres in a tree with a plane, and a mesh in a tree.
+TEST(ShaderVariants, LayoutAndGenericVariantsChangeNoBit) {
+  ShaderVariant generic;
+  generic.generic = true;
+  const std::vector<std::pair<const char*, ShaderVariant>> variants = {
+      {"rows-8x8", with_workgroup(8, 8, false)},
+      {"wg-16x16", with_workgroup(16, 16, true)},
+      {"wg-64x1", with_workgroup(64, 1, false)},
+      {"wg-4x16", with_workgroup(4, 16, false)},
+      {"generic", generic},
+  };
+  for (const auto& scene : bench_suite("basic", 37, 29, "")) {
+    SCOPED_TRACE(scene.name);
+    const Frame expected = render_with(scene.scene, ShaderVariant{});
+    for (const auto& [name, shader] : variants) {
+      SCOPED_TRACE(name);
+      expect_same_bits(expected, render_with(scene.scene, shader));
+    }
+  }
+}
+
+// Morton order needs a square power-of-two workgroup: anything else is refused, not mis-rendered.
+TEST(ShaderVariants, MortonOrderRefusesOtherShapes) {
+  const Scene scene = test::sized(default_scene(), 16, 16);
+  EXPECT_THROW(render_with(scene, with_workgroup(16, 4, true)), std::invalid_argument);
+  EXPECT_THROW(render_with(scene, with_workgroup(32, 32, true)), std::invalid_argument);
+}
+
+// A unit sphere 1e4 away (r / D = 1e-4) filling the image: in float32, b^2 and c are ~1e8, whose
+// spacing (8) dwarfs the true discriminant (at most r^2 = 1), so the textbook formula decides hit or
+// miss by rounding noise, while the stable form (r^2 - |f_perp|^2) keeps it.
+TEST(ShaderVariants, NaiveSphereLosesTheSmallFarSphereTheStableFormKeeps) {
+  Scene scene;
+  for (const auto& candidate : bench_suite("stiff", 64, 64, "")) {
+    if (candidate.name == "small-sphere-far-away") scene = candidate.scene;
+  }
+  ASSERT_EQ(scene.spheres.size(), 1u);
+  const ReferenceScene reference_scene(scene);
+  const auto reference = render_reference_hits(reference_scene, make_camera_basis(scene.camera, 64, 64), 64, 64);
+  const FrameError stable = measure_error(render_with(scene, ShaderVariant{}), reference);
+  ShaderVariant naive;
+  naive.sphere_formula = VKRAY_SPHERE_NAIVE;
+  const FrameError textbook = measure_error(render_with(scene, naive), reference);
+  std::printf("    stable: %s\n    naive:  %s\n", stable.summary().c_str(), textbook.summary().c_str());
+  ASSERT_GT(stable.both_hit, 64u * 64u / 2);  // the sphere fills most of the image
+  // Stable: only pixels whose ray passes within float rounding of the silhouette may flip.
+  EXPECT_LT(stable.mismatch_fraction(), 0.01);
+  EXPECT_GT(textbook.mismatch_fraction(), 0.1);
+}
+
+}  // namespace
+}  // namespace vkray
