@@ -5,9 +5,10 @@
 
 namespace vkray {
 
+// Members are destroyed in reverse order: the buffer goes before the memory bound to it.
 struct GpuBuffer {
-  vk::raii::Buffer buffer{nullptr};
   vk::raii::DeviceMemory memory{nullptr};
+  vk::raii::Buffer buffer{nullptr};
   vk::DeviceSize size = 0;
   void* mapped = nullptr;  // set when the memory is host-visible and coherent
 };

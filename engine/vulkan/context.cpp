@@ -1,7 +1,10 @@
 #include "engine/vulkan/context.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cctype>
+#include <cstdio>
+#include <cstdlib>
 
 namespace vkray {
 namespace {
@@ -10,15 +13,83 @@ constexpr const char* no_vulkan_fix =
     "install a Vulkan driver: on Debian, 'apt-get install mesa-vulkan-drivers' provides lavapipe, a "
     "software GPU that always works";
 
+// VKRAY_VALIDATION=1 runs vkray under the Khronos validation layer with synchronization
+// validation; the test suite sets it for every test (tests/CMakeLists.txt). Any error prints the
+// layer's message and aborts, so the test (or command) that caused it fails, and a debugger or core
+// dump shows where. VKRAY_VALIDATION=verbose prints warnings too: the best-practices checks are on,
+// and the warnings they leave are accepted, each for its reason:
+// - BestPractices-vkAllocateMemory-small-allocation and -vkBindMemory-small-dedicated-allocation:
+//   every buffer has its own allocation. A scene has at most ten buffers, created once, and the
+//   output buffers are reused across renders: sub-allocation would save nothing measurable.
+// - BestPractices-vkCreateInstance-specialuse-extension: VK_EXT_debug_utils is a debugging
+//   extension; it is enabled only in this mode, for this messenger.
+constexpr const char* validation_layer = "VK_LAYER_KHRONOS_validation";
+
+enum class Validation { off, errors, verbose };
+
+Validation validation_mode() {
+  const char* value = std::getenv("VKRAY_VALIDATION");
+  if (!value || !*value || std::string_view(value) == "0") return Validation::off;
+  return std::string_view(value) == "verbose" ? Validation::verbose : Validation::errors;
+}
+
+// Errors of the validation layer abort; the loader's own messages (type "general", e.g. a driver
+// file it cannot open, which vkray then reports in its own words) are shown in verbose mode only.
+VKAPI_ATTR VkBool32 VKAPI_CALL report_validation(VkDebugUtilsMessageSeverityFlagBitsEXT severity,
+                                                 VkDebugUtilsMessageTypeFlagsEXT types,
+                                                 const VkDebugUtilsMessengerCallbackDataEXT* data, void* /*user*/) {
+  const bool error = (severity & VK_DEBUG_UTILS_MESSAGE_SEVERITY_ERROR_BIT_EXT) != 0;
+  const bool from_layer = (types & VK_DEBUG_UTILS_MESSAGE_TYPE_GENERAL_BIT_EXT) == 0;
+  if (!from_layer && validation_mode() != Validation::verbose) return VK_FALSE;
+  std::fprintf(stderr, "vkray: Vulkan validation %s: %s\n", error ? "error" : "warning", data->pMessage);
+  if (error && from_layer) std::abort();
+  return VK_FALSE;
+}
+
+vk::DebugUtilsMessengerCreateInfoEXT messenger_info(Validation mode) {
+  vk::DebugUtilsMessageSeverityFlagsEXT severities = vk::DebugUtilsMessageSeverityFlagBitsEXT::eError;
+  if (mode == Validation::verbose) severities |= vk::DebugUtilsMessageSeverityFlagBitsEXT::eWarning;
+  return vk::DebugUtilsMessengerCreateInfoEXT(
+      {}, severities,
+      vk::DebugUtilsMessageTypeFlagBitsEXT::eGeneral | vk::DebugUtilsMessageTypeFlagBitsEXT::eValidation |
+          vk::DebugUtilsMessageTypeFlagBitsEXT::ePerformance,
+      report_validation);
+}
+
 vk::raii::Instance create_instance(const vk::raii::Context& context) {
   // 1.2 lets us query VkPhysicalDeviceDriverProperties on devices that have it; a 1.1 device still
   // works (describe() checks each device's own version).
   const vk::ApplicationInfo application("vkray", 1, "vkray", 1, VK_API_VERSION_1_2);
   try {
-    return vk::raii::Instance(context, vk::InstanceCreateInfo({}, &application));
+    const Validation mode = validation_mode();
+    if (mode == Validation::off) return vk::raii::Instance(context, vk::InstanceCreateInfo({}, &application));
+    const auto layers = context.enumerateInstanceLayerProperties();
+    const bool has_layer = std::any_of(layers.begin(), layers.end(), [](const vk::LayerProperties& layer) {
+      return std::string_view(layer.layerName.data()) == validation_layer;
+    });
+    if (!has_layer) {
+      throw GpuError("VKRAY_VALIDATION is set, but the Khronos validation layer is missing: on Debian, "
+                     "'apt-get install vulkan-validationlayers'");
+    }
+    const std::array enabled_features = {vk::ValidationFeatureEnableEXT::eSynchronizationValidation,
+                                         vk::ValidationFeatureEnableEXT::eBestPractices};
+    const char* layer_names[] = {validation_layer};
+    const char* extension_names[] = {VK_EXT_DEBUG_UTILS_EXTENSION_NAME};
+    // The messenger in the chain also reports what happens while the instance is created.
+    vk::StructureChain<vk::InstanceCreateInfo, vk::ValidationFeaturesEXT, vk::DebugUtilsMessengerCreateInfoEXT> chain(
+        vk::InstanceCreateInfo({}, &application, layer_names, extension_names),
+        vk::ValidationFeaturesEXT(enabled_features), messenger_info(mode));
+    return vk::raii::Instance(context, chain.get<vk::InstanceCreateInfo>());
   } catch (const vk::SystemError& error) {
     throw GpuError(std::string("cannot start Vulkan (") + error.what() + "): " + no_vulkan_fix);
   }
+}
+
+// The messenger for the whole life of the device (see create_instance); none without validation.
+vk::raii::DebugUtilsMessengerEXT create_validation_messenger(const vk::raii::Instance& instance) {
+  const Validation mode = validation_mode();
+  if (mode == Validation::off) return vk::raii::DebugUtilsMessengerEXT(nullptr);
+  return vk::raii::DebugUtilsMessengerEXT(instance, messenger_info(mode));
 }
 
 std::string type_name(vk::PhysicalDeviceType type) {
@@ -132,7 +203,7 @@ size_t choose_gpu_device(const std::vector<GpuDeviceInfo>& devices, std::string_
 }
 
 void VulkanContext::submit_and_wait(const std::function<void(const vk::raii::CommandBuffer&)>& record) {
-  command_buffer.reset();
+  command_pool.reset();  // the pool's one command buffer, recorded anew for every submission
   command_buffer.begin(vk::CommandBufferBeginInfo(vk::CommandBufferUsageFlagBits::eOneTimeSubmit));
   record(command_buffer);
   command_buffer.end();
@@ -148,6 +219,7 @@ GpuDevice::GpuDevice(std::string_view name_filter) : context_(std::make_unique<V
   with_vulkan_errors("opening the Vulkan device", [&] {
     VulkanContext& vk_context = *context_;
     vk_context.instance = create_instance(vk_context.context);
+    vk_context.validation_messenger = create_validation_messenger(vk_context.instance);
     vk::raii::PhysicalDevices physical_devices(vk_context.instance);
     std::vector<GpuDeviceInfo> infos;
     for (const auto& physical_device : physical_devices) infos.push_back(describe(physical_device));
@@ -163,8 +235,7 @@ GpuDevice::GpuDevice(std::string_view name_filter) : context_(std::make_unique<V
     vk_context.device = vk::raii::Device(vk_context.physical_device, vk::DeviceCreateInfo({}, queue_info));
     vk_context.queue = vk::raii::Queue(vk_context.device, vk_context.queue_family, 0);
     vk_context.command_pool = vk::raii::CommandPool(
-        vk_context.device,
-        vk::CommandPoolCreateInfo(vk::CommandPoolCreateFlagBits::eResetCommandBuffer, vk_context.queue_family));
+        vk_context.device, vk::CommandPoolCreateInfo(vk::CommandPoolCreateFlagBits::eTransient, vk_context.queue_family));
     vk_context.command_buffer = std::move(vk::raii::CommandBuffers(
         vk_context.device,
         vk::CommandBufferAllocateInfo(*vk_context.command_pool, vk::CommandBufferLevel::ePrimary, 1))[0]);

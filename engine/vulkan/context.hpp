@@ -13,6 +13,9 @@ namespace vkray {
 struct VulkanContext {
   vk::raii::Context context;
   vk::raii::Instance instance{nullptr};
+  // Only under VKRAY_VALIDATION (see create_instance): destroyed after the device, so it sees the
+  // device's destruction too.
+  vk::raii::DebugUtilsMessengerEXT validation_messenger{nullptr};
   vk::raii::PhysicalDevice physical_device{nullptr};
   GpuDeviceInfo info;
   vk::PhysicalDeviceLimits limits;
