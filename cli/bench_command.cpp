@@ -4,6 +4,7 @@
 #include "engine/bench.hpp"
 #include "engine/bench_plot.hpp"
 #include "engine/bench_report.hpp"
+#include "engine/image_io.hpp"
 
 #include <unistd.h>
 
@@ -58,23 +59,6 @@ std::vector<std::string> split_list(const std::string& list) {
   return items;
 }
 
-// Output folders are checked before the first frame, so a bad path fails at once, not after the run.
-void check_writable(const std::string& path, const char* option) {
-  if (path.empty()) return;
-  const std::filesystem::path folder = std::filesystem::path(path).parent_path();
-  const std::string shown = folder.empty() ? "." : folder.string();
-  if (!std::filesystem::is_directory(shown) || access(shown.c_str(), W_OK) != 0) {
-    throw InputError(std::string(option) + ": cannot write '" + path + "' (folder '" + shown +
-                     "' is missing or not writable)");
-  }
-}
-
-void write_text(const std::string& path, const std::string& text) {
-  std::ofstream file(path);
-  file << text;
-  if (!file.flush()) throw std::runtime_error("cannot write '" + path + "'");
-}
-
 int run_compare(const BenchOptions& options) {
   const BenchReport before = read_bench_json(options.compare[0]);
   const BenchReport after = read_bench_json(options.compare[1]);
@@ -93,7 +77,9 @@ int run_bench(const BenchOptions& options) {
 
   std::vector<BenchScene> scenes;
   if (!options.suite.empty()) {
-    scenes = bench_suite(options.suite, width, height, options.models);
+    std::vector<std::string> unreadable;
+    scenes = bench_suite(options.suite, width, height, options.models, &unreadable);
+    for (const auto& error : unreadable) std::fprintf(stderr, "vkray: skipped %s\n", error.c_str());
     if (scenes.empty()) {
       throw InputError("--suite models: no .obj files in '" + options.models + "' (name the folder with --models)");
     }
@@ -103,9 +89,10 @@ int run_bench(const BenchOptions& options) {
   }
   if (scenes.empty()) scenes.push_back({"default", load_scene_argument("", width, height)});
 
-  check_writable(options.json, "--json");
-  check_writable(options.csv, "--csv");
-  check_writable(options.plot, "--plot");
+  // Before any work: a bench must not run for minutes only to find it cannot be saved.
+  for (const std::string& path : {options.json, options.csv, options.plot}) {
+    if (!path.empty()) check_output_path(path);
+  }
 
   GpuDevice device(options.device);
   BenchReport report = new_bench_report(device.info(), options.suite, options.frames);
@@ -120,13 +107,13 @@ int run_bench(const BenchOptions& options) {
     std::fflush(stdout);
   }
 
-  if (!options.json.empty()) write_text(options.json, bench_json(report));
-  if (!options.csv.empty()) write_text(options.csv, bench_csv(report));
+  if (!options.json.empty()) write_text_file(options.json, bench_json(report));
+  if (!options.csv.empty()) write_text_file(options.csv, bench_csv(report));
   if (!options.plot.empty()) {
     std::string json_path = options.json;
     if (json_path.empty()) {  // the script reads the report from a file
       json_path = (std::filesystem::temp_directory_path() / ("vkray-bench-" + std::to_string(getpid()) + ".json")).string();
-      write_text(json_path, bench_json(report));
+      write_text_file(json_path, bench_json(report));
     }
     plot_bench(json_path, options.plot);
     if (options.json.empty()) std::filesystem::remove(json_path);

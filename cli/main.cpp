@@ -2,15 +2,39 @@
 // Exit codes: 0 success, 2 usage or input errors, 1 runtime failures (no Vulkan device, I/O).
 #include "cli/commands.hpp"
 #include "engine/gpu_device.hpp"
+#include "engine/image_io.hpp"
 #include "engine/scene.hpp"
 
+#include <unistd.h>
+
+#include <csignal>
 #include <iostream>
 
 #ifndef VKRAY_VERSION
 #error "VKRAY_VERSION comes from CMake"
 #endif
 
+namespace {
+
+// Ctrl-C (or a kill) ends vkray at once, wherever it is: only the temporary files of outputs being
+// written are removed, so no half-written image is left behind, and the exit code is 128 + the
+// signal (130 for Ctrl-C), as shells expect.
+extern "C" void end_on_signal(int signal) {
+  vkray::remove_partial_outputs();
+  _exit(128 + signal);
+}
+
+void install_signal_handlers() {
+  struct sigaction action {};
+  action.sa_handler = end_on_signal;
+  sigemptyset(&action.sa_mask);
+  for (int signal : {SIGINT, SIGTERM, SIGHUP}) sigaction(signal, &action, nullptr);
+}
+
+}  // namespace
+
 int main(int argc, char** argv) {
+  install_signal_handlers();
   CLI::App app("vkray: a Vulkan compute raycaster that writes per-pixel depth and normal images.", "vkray");
   app.set_version_flag("--version", "vkray " VKRAY_VERSION);
   app.require_subcommand(1);

@@ -90,6 +90,11 @@ int run_render(const RenderOptions& options) {
   Stopwatch stopwatch;
   const AovSet aovs = parse_aov_list(options.aovs);
   check_render_options(options, aovs);
+  const std::filesystem::path preview =
+      options.preview.value_or(std::filesystem::path(options.output).replace_extension(".png").string());
+  // Before any work: a render must not take minutes only to find it cannot be saved.
+  check_output_path(options.output);
+  if (!options.no_preview) check_output_path(preview);
   Scene scene = load_scene_argument(options.scene_path, options.width, options.height);
   if (options.camera) apply_camera_option(*options.camera, scene.camera);
   const double load_ms = stopwatch.lap_ms();
@@ -133,8 +138,6 @@ int run_render(const RenderOptions& options) {
   stopwatch.lap_ms();
 
   std::string written = options.output;
-  const std::filesystem::path preview =
-      options.preview.value_or(std::filesystem::path(options.output).replace_extension(".png").string());
   write_outputs(options.output, options.no_preview ? nullptr : &preview, frame, options.compression);
   if (!options.no_preview) written += " and " + preview.string();
   const double write_ms = stopwatch.lap_ms();

@@ -112,19 +112,24 @@ std::vector<BenchScene> stiff_suite(uint32_t width, uint32_t height) {
   return scenes;
 }
 
-std::vector<BenchScene> models_suite(uint32_t width, uint32_t height, const std::filesystem::path& models_dir) {
+std::vector<BenchScene> models_suite(uint32_t width, uint32_t height, const std::filesystem::path& models_dir,
+                                     std::vector<std::string>* skipped) {
   std::vector<std::filesystem::path> files;
-  std::error_code error;
-  for (const auto& entry : std::filesystem::directory_iterator(models_dir, error)) {
+  std::error_code listing_error;
+  for (const auto& entry : std::filesystem::directory_iterator(models_dir, listing_error)) {
     if (entry.path().extension() == ".obj") files.push_back(entry.path());
   }
   std::sort(files.begin(), files.end());
   std::vector<BenchScene> scenes;
   for (const auto& file : files) {
-    Scene scene = load_model_file(file);
-    scene.width = width;
-    scene.height = height;
-    scenes.push_back(framed(file.filename().string(), std::move(scene)));
+    try {
+      Scene scene = load_model_file(file);
+      scene.width = width;
+      scene.height = height;
+      scenes.push_back(framed(file.filename().string(), std::move(scene)));
+    } catch (const InputError& error) {  // one broken file does not end the suite
+      if (skipped) skipped->push_back(error.what());
+    }
   }
   return scenes;
 }
@@ -132,11 +137,11 @@ std::vector<BenchScene> models_suite(uint32_t width, uint32_t height, const std:
 }  // namespace
 
 std::vector<BenchScene> bench_suite(const std::string& suite, uint32_t width, uint32_t height,
-                                    const std::filesystem::path& models_dir) {
+                                    const std::filesystem::path& models_dir, std::vector<std::string>* skipped) {
   if (suite == "basic") return basic_suite(width, height);
   if (suite == "scaling") return scaling_suite(width, height);
   if (suite == "stiff") return stiff_suite(width, height);
-  if (suite == "models") return models_suite(width, height, models_dir);
+  if (suite == "models") return models_suite(width, height, models_dir, skipped);
   throw InputError("--suite: unknown suite '" + suite + "' (choose from " + bench_suite_names + ")");
 }
 

@@ -25,9 +25,11 @@ inline constexpr const char* bench_suite_names = "basic, scaling, stiff, models"
 //   grazing plane, a scene far from the origin, a camera looking straight up, a closed mesh 1e5
 //   from the origin);
 // - models: every .obj file in `models_dir`, framed to fill the image (none when the folder is
-//   absent; the caller says so).
+//   absent; the caller says so). A file that does not load is left out, its error added to
+//   `skipped` when given.
 // Throws InputError for an unknown suite name.
 std::vector<BenchScene> bench_suite(const std::string& suite, uint32_t width, uint32_t height,
-                                    const std::filesystem::path& models_dir);
+                                    const std::filesystem::path& models_dir,
+                                    std::vector<std::string>* skipped = nullptr);
 
 }  // namespace vkray

@@ -2,10 +2,18 @@
 
 #include <OpenImageIO/imageio.h>
 
+#include <unistd.h>
+
 #include <algorithm>
+#include <array>
+#include <atomic>
 #include <cmath>
+#include <cstdio>
+#include <cstring>
 #include <exception>
+#include <fstream>
 #include <future>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -13,21 +21,115 @@
 namespace vkray {
 namespace {
 
-void write_image(const std::filesystem::path& path, const OIIO::ImageSpec& spec, OIIO::TypeDesc type, const void* pixels) {
+// Temporary files being written, for remove_partial_outputs. A signal handler may read them at any
+// moment, so they live in fixed storage: a slot's path is complete before its flag is set.
+constexpr size_t max_partial_files = 8;
+constexpr size_t max_partial_path = 4096;
+std::array<std::array<char, max_partial_path>, max_partial_files> partial_paths;
+std::array<std::atomic<bool>, max_partial_files> partial_in_use;
+std::atomic<unsigned> partial_counter{0};
+
+// A file written under a temporary name beside `target`, renamed onto it by commit() and removed
+// if never committed.
+class PartialFile {
+ public:
+  explicit PartialFile(const std::filesystem::path& target) : target_(target) {
+    // The extension stays last: OpenImageIO picks the format by it.
+    temp_ = target.parent_path() / ("." + target.stem().string() + ".vkray-" + std::to_string(getpid()) + "-" +
+                                    std::to_string(partial_counter++) + target.extension().string());
+    const std::string text = temp_.string();
+    for (size_t k = 0; k < max_partial_files && text.size() < max_partial_path; ++k) {
+      bool expected = false;
+      if (partial_in_use[k].load()) continue;
+      std::memcpy(partial_paths[k].data(), text.c_str(), text.size() + 1);
+      if (partial_in_use[k].compare_exchange_strong(expected, true)) {
+        slot_ = k;
+        break;
+      }
+    }
+  }
+  ~PartialFile() {
+    if (!committed_) std::remove(temp_.c_str());
+    if (slot_ < max_partial_files) partial_in_use[slot_].store(false);
+  }
+  PartialFile(const PartialFile&) = delete;
+  PartialFile& operator=(const PartialFile&) = delete;
+
+  const std::filesystem::path& path() const { return temp_; }
+  void commit() {
+    std::error_code error;
+    std::filesystem::rename(temp_, target_, error);
+    if (error) throw std::runtime_error(target_.string() + ": cannot write: " + error.message());
+    committed_ = true;
+  }
+
+ private:
+  std::filesystem::path target_, temp_;
+  size_t slot_ = max_partial_files;
+  bool committed_ = false;
+};
+
+void write_image(const std::filesystem::path& path, const OIIO::ImageSpec& spec, OIIO::TypeDesc type, const void* pixels,
+                 const std::filesystem::path& shown_path) {
   auto output = OIIO::ImageOutput::create(path.string());
-  if (!output) throw std::runtime_error(path.string() + ": cannot write: " + OIIO::geterror());
+  if (!output) throw std::runtime_error(shown_path.string() + ": cannot write: " + OIIO::geterror());
   if (!output->open(path.string(), spec) || !output->write_image(type, pixels) || !output->close()) {
-    throw std::runtime_error(path.string() + ": cannot write: " + output->geterror());
+    throw std::runtime_error(shown_path.string() + ": cannot write: " + output->geterror());
   }
 }
 
+void write_exr_to(const PartialFile& file, const std::filesystem::path& target, const Frame& frame,
+                  std::string_view compression);
+void write_preview_png_to(const PartialFile& file, const std::filesystem::path& target, const Frame& frame);
+
 }  // namespace
+
+void check_output_path(const std::filesystem::path& path) {
+  const std::filesystem::path folder = path.parent_path().empty() ? "." : path.parent_path();
+  if (!std::filesystem::is_directory(folder)) {
+    throw std::runtime_error(path.string() + ": cannot write: folder '" + folder.string() + "' does not exist");
+  }
+  if (access(folder.c_str(), W_OK) != 0) {
+    throw std::runtime_error(path.string() + ": cannot write: folder '" + folder.string() + "' is not writable");
+  }
+  if (std::filesystem::is_directory(path)) throw std::runtime_error(path.string() + ": cannot write: it is a folder");
+}
+
+void write_text_file(const std::filesystem::path& path, std::string_view text) {
+  PartialFile file(path);
+  std::ofstream stream(file.path(), std::ios::binary);
+  stream.write(text.data(), static_cast<std::streamsize>(text.size()));
+  if (!stream.flush()) throw std::runtime_error(path.string() + ": cannot write");
+  stream.close();
+  file.commit();
+}
+
+void remove_partial_outputs() noexcept {
+  for (size_t k = 0; k < max_partial_files; ++k) {
+    if (partial_in_use[k].load()) unlink(partial_paths[k].data());
+  }
+}
 
 bool is_exr_compression(std::string_view name) {
   return std::find(std::begin(exr_compressions), std::end(exr_compressions), name) != std::end(exr_compressions);
 }
 
 void write_exr(const std::filesystem::path& path, const Frame& frame, std::string_view compression) {
+  PartialFile file(path);
+  write_exr_to(file, path, frame, compression);
+  file.commit();
+}
+
+void write_preview_png(const std::filesystem::path& path, const Frame& frame) {
+  PartialFile file(path);
+  write_preview_png_to(file, path, frame);
+  file.commit();
+}
+
+namespace {
+
+void write_exr_to(const PartialFile& file, const std::filesystem::path& path, const Frame& frame,
+                  std::string_view compression) {
   if (!is_exr_compression(compression)) throw std::invalid_argument("unknown EXR compression " + std::string(compression));
   const bool has_hits = frame.aovs.needs_rays();
   std::vector<std::string> names;
@@ -60,10 +162,10 @@ void write_exr(const std::filesystem::path& path, const Frame& frame, std::strin
   spec.z_channel = frame.aovs.has(Aov::depth) ? 0 : -1;
   spec.attribute("compression", std::string(compression));
   spec.attribute("Software", "vkray");
-  write_image(path, spec, OIIO::TypeDesc::FLOAT, pixels.data());
+  write_image(file.path(), spec, OIIO::TypeDesc::FLOAT, pixels.data(), path);
 }
 
-void write_preview_png(const std::filesystem::path& path, const Frame& frame) {
+void write_preview_png_to(const PartialFile& file, const std::filesystem::path& path, const Frame& frame) {
   const size_t panels = (frame.aovs.has(Aov::depth) ? 1 : 0) + (frame.aovs.has(Aov::normal) ? 1 : 0) +
                         (frame.aovs.has(Aov::uv) ? 1 : 0);
   if (panels == 0) throw std::runtime_error(path.string() + ": no outputs to preview");
@@ -109,16 +211,21 @@ void write_preview_png(const std::filesystem::path& path, const Frame& frame) {
   }
 
   OIIO::ImageSpec spec(static_cast<int>(row_width), static_cast<int>(height), 3, OIIO::TypeDesc::UINT8);
-  write_image(path, spec, OIIO::TypeDesc::UINT8, rgb.data());
+  write_image(file.path(), spec, OIIO::TypeDesc::UINT8, rgb.data(), path);
 }
+
+}  // namespace
 
 void write_outputs(const std::filesystem::path& exr, const std::filesystem::path* preview, const Frame& frame,
                    std::string_view compression) {
+  PartialFile exr_file(exr);
+  std::optional<PartialFile> png_file;
+  if (preview) png_file.emplace(*preview);
   std::future<void> png;
-  if (preview) png = std::async(std::launch::async, [&] { write_preview_png(*preview, frame); });
+  if (preview) png = std::async(std::launch::async, [&] { write_preview_png_to(*png_file, *preview, frame); });
   std::exception_ptr exr_failure;
   try {
-    write_exr(exr, frame, compression);
+    write_exr_to(exr_file, exr, frame, compression);
   } catch (...) {
     exr_failure = std::current_exception();
   }
@@ -128,9 +235,12 @@ void write_outputs(const std::filesystem::path& exr, const std::filesystem::path
   } catch (...) {
     png_failure = std::current_exception();
   }
-  // The EXR is the output asked for: its failure is the one to report.
+  // The EXR is the output asked for: its failure is the one to report. Neither file replaces an
+  // older one unless both are complete.
   if (exr_failure) std::rethrow_exception(exr_failure);
   if (png_failure) std::rethrow_exception(png_failure);
+  exr_file.commit();
+  if (png_file) png_file->commit();
 }
 
 }  // namespace vkray

@@ -1,4 +1,4 @@
-// Writing render results: OpenEXR with the output contract's channels, and a PNG preview.
+// Writing results: OpenEXR with the output contract's channels, a PNG preview, and text files.
 #pragma once
 
 #include "engine/frame.hpp"
@@ -16,6 +16,21 @@ inline constexpr const char* exr_compressions[] = {"zip", "zips", "piz", "rle", 
 inline constexpr const char* default_exr_compression = "zip";
 bool is_exr_compression(std::string_view name);
 
+// Every file is written to a temporary file beside its target (".NAME.vkray-PID-N.EXT") and renamed
+// into place once complete, so a failed or interrupted write never leaves a truncated file where a
+// good one was.
+
+// Throws std::runtime_error naming the path when it cannot be written: its folder is missing or not
+// writable, or it is a folder. For checking outputs before any work is done.
+void check_output_path(const std::filesystem::path& path);
+
+// A text file (the bench's JSON and CSV), written the same way. Throws std::runtime_error.
+void write_text_file(const std::filesystem::path& path, std::string_view text);
+
+// Removes the temporary files of writes in progress. Async-signal-safe: for signal handlers, which
+// then end the process (see cli/main.cpp).
+void remove_partial_outputs() noexcept;
+
 // float32 channels, by output: depth -> Z; normal -> N.X N.Y N.Z; uv -> U V; and A (1 on a hit,
 // 0 on a miss) whenever depth or normal is present. Throws std::runtime_error naming the file.
 void write_exr(const std::filesystem::path& path, const Frame& frame, std::string_view compression = default_exr_compression);
@@ -26,7 +41,8 @@ void write_exr(const std::filesystem::path& path, const Frame& frame, std::strin
 void write_preview_png(const std::filesystem::path& path, const Frame& frame);
 
 // The EXR and, when `preview` is set, the PNG preview, written at the same time on two threads
-// (each takes about as long at 1920x1080). Throws the EXR's failure, else the PNG's.
+// (each takes about as long at 1920x1080), and renamed into place only when both are complete.
+// Throws the EXR's failure, else the PNG's.
 void write_outputs(const std::filesystem::path& exr, const std::filesystem::path* preview, const Frame& frame,
                    std::string_view compression = default_exr_compression);
 

@@ -834,8 +834,8 @@ TEST_F(CliTest, BenchPrintsTimesBesideErrors) {
   expect_error(vkray({"bench", "--suite", "models", "--models", "/nonexistent/vkray-models"}), 2,
                {"--suite models", "/nonexistent/vkray-models"});
   // Output paths are checked before any rendering.
-  expect_error(vkray({"bench", "--json", "/nonexistent/vkray/bench.json"}), 2, {"--json", "/nonexistent/vkray"});
-  expect_error(vkray({"bench", "--csv", "missing/bench.csv"}), 2, {"--csv", "missing"});
+  expect_error(vkray({"bench", "--json", "/nonexistent/vkray/bench.json"}), 1, {"/nonexistent/vkray/bench.json"});
+  expect_error(vkray({"bench", "--csv", "missing/bench.csv"}), 1, {"missing/bench.csv", "does not exist"});
 }
 
 // The basic suite's JSON: every field of every row present and sane. Times are only required to be
@@ -912,6 +912,23 @@ TEST_F(CliTest, BenchBasicSuiteJsonHasEveryFieldAndSaneFigures) {
   EXPECT_NE(compare.out.find("1.000"), std::string::npos) << compare.out;
   expect_error(vkray({"bench", "--compare", "bench.json", "absent.json"}), 2, {"absent.json"});
   expect_error(vkray({"bench", "--compare", "bench.json", "bench.csv"}), 2, {"bench.csv"});
+}
+
+// Ctrl-C ends vkray promptly with 130 and leaves nothing half-written: the older output is intact
+// and no temporary file remains. The scaling suite runs for minutes on any machine (it generates a
+// 4M-triangle mesh first), so the signal, sent after 2 s, always finds it working.
+TEST_F(CliTest, InterruptExits130AndKeepsTheOlderOutput) {
+  const auto old_json = write("bench.json", "older contents\n");
+  const std::string command = "cd " + shell_quote(dir_.string()) + " && timeout -s INT --preserve-status 2 " +
+                              shell_quote(VKRAY_BINARY) + " bench --suite scaling --frames 1 --json bench.json" +
+                              " >/dev/null 2>&1 </dev/null";
+  const int status = std::system(command.c_str());
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 130);
+  EXPECT_EQ(read_text(old_json), "older contents\n");
+  for (const auto& entry : fs::directory_iterator(dir_)) {
+    EXPECT_EQ(entry.path().filename().string().find(".vkray-"), std::string::npos) << entry.path() << " left behind";
+  }
 }
 
 // --plot runs the embedded matplotlib script on the report; it needs Debian's python3-matplotlib

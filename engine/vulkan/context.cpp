@@ -167,6 +167,22 @@ GpuDeviceInfo describe(const vk::raii::PhysicalDevice& physical_device) {
 
 }  // namespace
 
+std::string describe_vulkan_failure(const vk::SystemError& error) {
+  const auto result = static_cast<vk::Result>(error.code().value());
+  switch (result) {
+    case vk::Result::eErrorOutOfDeviceMemory:
+    case vk::Result::eErrorOutOfHostMemory:
+      return std::string("out of ") + (result == vk::Result::eErrorOutOfDeviceMemory ? "device" : "host") +
+             " memory: the scene or the image is too large for this device; try a smaller image (--width, "
+             "--height) or another device (--device) (" + error.what() + ")";
+    case vk::Result::eErrorDeviceLost:
+      return std::string("the device was lost (its driver reset it or it stopped responding); run again, or "
+                         "use another device (--device) (") + error.what() + ")";
+    default:
+      return error.what();
+  }
+}
+
 std::vector<GpuDeviceInfo> list_gpu_devices() {
   return with_vulkan_errors("listing Vulkan devices", [] {
     vk::raii::Context context;

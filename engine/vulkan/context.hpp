@@ -31,13 +31,17 @@ struct VulkanContext {
   void submit_and_wait(const std::function<void(const vk::raii::CommandBuffer&)>& record);
 };
 
+// What went wrong, in words, with the advice that fits: out of memory, a lost device, or Vulkan's
+// own text for the rest.
+std::string describe_vulkan_failure(const vk::SystemError& error);
+
 // Runs `body`, turning Vulkan's exceptions into GpuError with `what` as context.
 template <typename Body>
 auto with_vulkan_errors(const char* what, Body&& body) {
   try {
     return body();
   } catch (const vk::SystemError& error) {
-    throw GpuError(std::string(what) + ": " + error.what());
+    throw GpuError(std::string(what) + ": " + describe_vulkan_failure(error));
   }
 }
 
