@@ -1,8 +1,9 @@
 #!/bin/sh
-# Installs the Debian packages listed in cmake/debian-packages.txt that are not installed yet.
-# Idempotent, never prompts; runs apt-get directly as root and through sudo otherwise.
+# Installs the Debian packages listed in cmake/debian-packages.txt (or in the list file given as
+# the argument) that are not installed yet. Idempotent, never prompts; runs apt-get directly as
+# root and through sudo otherwise.
 set -eu
-list="$(dirname "$0")/debian-packages.txt"
+list="${1:-$(dirname "$0")/debian-packages.txt}"
 missing=""
 for package in $(sed 's/#.*//' "$list"); do
   status=$(dpkg-query -W -f='${db:Status-Status}' "$package" 2>/dev/null || true)

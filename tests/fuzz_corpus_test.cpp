@@ -1,0 +1,62 @@
+// Every input in the fuzzers' corpus (tests/fuzz/corpus: seeds, and each finding of a fuzz run,
+// added there as a regression test) goes through the loaders in the ordinary suite too: it must be
+// accepted or rejected with InputError, nothing else.
+#include "engine/obj_loader.hpp"
+#include "engine/scene_loader.hpp"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <functional>
+#include <fstream>
+#include <sstream>
+
+#ifndef VKRAY_FUZZ_CORPUS_DIR
+#error "VKRAY_FUZZ_CORPUS_DIR comes from CMake"
+#endif
+
+namespace vkray {
+namespace {
+
+const std::filesystem::path corpus = VKRAY_FUZZ_CORPUS_DIR;
+
+std::string read(const std::filesystem::path& path) {
+  std::ifstream file(path, std::ios::binary);
+  std::ostringstream text;
+  text << file.rdbuf();
+  return text.str();
+}
+
+size_t for_each_input(const char* kind, const std::function<void(const std::string&, const std::string&)>& parse) {
+  size_t inputs = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(corpus / kind)) {
+    SCOPED_TRACE(entry.path().string());
+    ++inputs;
+    try {
+      parse(read(entry.path()), entry.path().filename().string());
+    } catch (const InputError&) {
+    }
+  }
+  return inputs;
+}
+
+TEST(FuzzCorpus, SceneInputsAreAcceptedOrRejectedCleanly) {
+  const Mesh cube = load_obj_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n", "cube.obj");
+  const size_t inputs = for_each_input("scene", [&](const std::string& text, const std::string& name) {
+    parse_scene(text, name, "/nonexistent", [&](const std::filesystem::path&) { return cube; });
+  });
+  EXPECT_GE(inputs, 4u);
+}
+
+TEST(FuzzCorpus, ObjInputsAreAcceptedOrRejectedCleanly) {
+  const size_t inputs = for_each_input("obj", [](const std::string& text, const std::string& name) {
+    const Mesh mesh = load_obj_text(text, name);
+    for (const auto& triangle : mesh.triangles) {
+      for (uint32_t index : triangle) EXPECT_LT(index, mesh.positions.size());
+    }
+  });
+  EXPECT_GE(inputs, 3u);
+}
+
+}  // namespace
+}  // namespace vkray
