@@ -22,11 +22,13 @@ namespace vkray {
 namespace {
 
 // Temporary files being written, for remove_partial_outputs. A signal handler may read them at any
-// moment, so they live in fixed storage: a slot's path is complete before its flag is set.
+// moment, so they live in fixed storage, and a slot is claimed before its path is written and
+// marked ready after: the handler only reads ready slots.
 constexpr size_t max_partial_files = 8;
 constexpr size_t max_partial_path = 4096;
+enum SlotState : int { slot_free, slot_claimed, slot_ready };
 std::array<std::array<char, max_partial_path>, max_partial_files> partial_paths;
-std::array<std::atomic<bool>, max_partial_files> partial_in_use;
+std::array<std::atomic<int>, max_partial_files> partial_states;
 std::atomic<unsigned> partial_counter{0};
 
 // A file written under a temporary name beside `target`, renamed onto it by commit() and removed
@@ -38,19 +40,19 @@ class PartialFile {
     temp_ = target.parent_path() / ("." + target.stem().string() + ".vkray-" + std::to_string(getpid()) + "-" +
                                     std::to_string(partial_counter++) + target.extension().string());
     const std::string text = temp_.string();
-    for (size_t k = 0; k < max_partial_files && text.size() < max_partial_path; ++k) {
-      bool expected = false;
-      if (partial_in_use[k].load()) continue;
+    if (text.size() >= max_partial_path) return;  // not removed on a signal; still never a truncated target
+    for (size_t k = 0; k < max_partial_files; ++k) {
+      int expected = slot_free;
+      if (!partial_states[k].compare_exchange_strong(expected, slot_claimed)) continue;
       std::memcpy(partial_paths[k].data(), text.c_str(), text.size() + 1);
-      if (partial_in_use[k].compare_exchange_strong(expected, true)) {
-        slot_ = k;
-        break;
-      }
+      partial_states[k].store(slot_ready);
+      slot_ = k;
+      break;
     }
   }
   ~PartialFile() {
     if (!committed_) std::remove(temp_.c_str());
-    if (slot_ < max_partial_files) partial_in_use[slot_].store(false);
+    if (slot_ < max_partial_files) partial_states[slot_].store(slot_free);
   }
   PartialFile(const PartialFile&) = delete;
   PartialFile& operator=(const PartialFile&) = delete;
@@ -106,7 +108,7 @@ void write_text_file(const std::filesystem::path& path, std::string_view text) {
 
 void remove_partial_outputs() noexcept {
   for (size_t k = 0; k < max_partial_files; ++k) {
-    if (partial_in_use[k].load()) unlink(partial_paths[k].data());
+    if (partial_states[k].load() == slot_ready) unlink(partial_paths[k].data());
   }
 }
 
