@@ -73,6 +73,10 @@ int run_bench(const BenchOptions& options) {
   settings.variants = split_list(options.variants);
   for (const auto& name : settings.variants) find_bench_variant(name);  // unknown names fail before any work
   settings.embree = !options.no_embree;
+  // Before any work: a bench must not run for minutes only to find it cannot be saved.
+  for (const std::string& path : {options.json, options.csv, options.plot}) {
+    if (!path.empty()) check_output_path(path);
+  }
 
   std::vector<BenchScene> scenes;
   if (!options.suite.empty()) {
@@ -87,11 +91,6 @@ int run_bench(const BenchOptions& options) {
     scenes.push_back({std::filesystem::path(path).filename().string(), load_scene_argument(path, width, height)});
   }
   if (scenes.empty()) scenes.push_back({"default", load_scene_argument("", width, height)});
-
-  // Before any work: a bench must not run for minutes only to find it cannot be saved.
-  for (const std::string& path : {options.json, options.csv, options.plot}) {
-    if (!path.empty()) check_output_path(path);
-  }
 
   GpuDevice device(options.device);
   BenchReport report = new_bench_report(device.info(), options.suite, options.frames);
@@ -108,14 +107,15 @@ int run_bench(const BenchOptions& options) {
 
   if (!options.json.empty()) write_text_file(options.json, bench_json(report));
   if (!options.csv.empty()) write_text_file(options.csv, bench_csv(report));
-  if (!options.plot.empty()) {
-    std::string json_path = options.json;
-    if (json_path.empty()) {  // the script reads the report from a file
-      json_path = (std::filesystem::temp_directory_path() / ("vkray-bench-" + std::to_string(getpid()) + ".json")).string();
-      write_text_file(json_path, bench_json(report));
-    }
+  if (!options.plot.empty() && !options.json.empty()) plot_bench(options.json, options.plot);
+  if (!options.plot.empty() && options.json.empty()) {  // the script reads the report from a file
+    const auto json_path = std::filesystem::temp_directory_path() / ("vkray-bench-" + std::to_string(getpid()) + ".json");
+    struct RemoveOnExit {
+      std::filesystem::path path;
+      ~RemoveOnExit() { std::filesystem::remove(path); }
+    } remove_report{json_path};
+    write_text_file(json_path, bench_json(report));
     plot_bench(json_path, options.plot);
-    if (options.json.empty()) std::filesystem::remove(json_path);
   }
   return 0;
 }

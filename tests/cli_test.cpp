@@ -945,6 +945,7 @@ TEST_F(CliTest, BenchPlotWritesAPng) {
   EXPECT_EQ(png.substr(0, 8), std::string("\x89PNG\r\n\x1a\n", 8));
   for (const auto& entry : fs::directory_iterator(dir_)) {  // the report the script read is gone again
     EXPECT_NE(entry.path().extension(), ".json") << entry.path();
+    EXPECT_EQ(entry.path().filename().string().find(".vkray-"), std::string::npos) << entry.path() << " left behind";
   }
 }
 
