@@ -1,25 +1,36 @@
-# vkray_embed_shaders(TARGET <name> SHADERS <file.comp>...)
+# vkray_embed_shaders(TARGET <name> SHADERS <file.comp>[:<DEFINE>]...)
 # Compiles GLSL compute shaders to SPIR-V with glslangValidator at build time and embeds each as a
-# uint32_t array named after the file (raycast.comp -> raycast_comp) in a generated header
-# <file>.spv.h, so the binary needs no shader files at run time. glslang writes a depfile, so
-# editing any #included file recompiles the shader. <name> is an interface library that carries the
-# include path and the build order.
+# uint32_t array in a generated header, so the binary needs no shader files at run time:
+# raycast.comp -> raycast_comp in raycast.comp.spv.h; raycast.comp:VKRAY_FLOAT64 compiles the same
+# file with VKRAY_FLOAT64 defined -> raycast_comp_VKRAY_FLOAT64 in raycast.comp.VKRAY_FLOAT64.spv.h.
+# glslang writes a depfile, so editing any #included file recompiles the shader. <name> is an
+# interface library that carries the include path and the build order.
 function(vkray_embed_shaders)
   cmake_parse_arguments(ARG "" "TARGET" "SHADERS" ${ARGN})
   set(out_dir ${CMAKE_CURRENT_BINARY_DIR}/generated)
   set(headers)
-  foreach(shader IN LISTS ARG_SHADERS)
-    string(MAKE_C_IDENTIFIER ${shader} array_name)
+  foreach(entry IN LISTS ARG_SHADERS)
+    string(REPLACE ":" ";" parts ${entry})
+    list(GET parts 0 shader)
+    set(name ${shader})
+    set(define_flags)
+    list(LENGTH parts part_count)
+    if(part_count GREATER 1)
+      list(GET parts 1 define)
+      set(name ${shader}.${define})
+      set(define_flags -D${define})
+    endif()
+    string(MAKE_C_IDENTIFIER ${name} array_name)
     set(source ${CMAKE_CURRENT_SOURCE_DIR}/${shader})
-    set(header ${out_dir}/${shader}.spv.h)
+    set(header ${out_dir}/${name}.spv.h)
     add_custom_command(
       OUTPUT ${header}
       COMMAND ${CMAKE_COMMAND} -E make_directory ${out_dir}
-      COMMAND ${GLSLANG_VALIDATOR} --quiet --target-env vulkan1.1 --vn ${array_name}
+      COMMAND ${GLSLANG_VALIDATOR} --quiet --target-env vulkan1.1 ${define_flags} --vn ${array_name}
               --depfile ${header}.d -o ${header} ${source}
       DEPENDS ${source}
       DEPFILE ${header}.d
-      COMMENT "Compiling ${shader} to SPIR-V"
+      COMMENT "Compiling ${name} to SPIR-V"
       VERBATIM)
     list(APPEND headers ${header})
   endforeach()

@@ -65,10 +65,16 @@ BenchRow run_variant(GpuDevice& device, const Scene& scene, const BenchVariant& 
 const std::vector<BenchVariant>& bench_variants() {
   auto has_spheres = [](const Scene& scene) { return !scene.spheres.empty(); };
   auto has_triangles = [](const Scene& scene) { return scene.triangle_count() > 0; };
-  ShaderVariant naive_sphere, moller_trumbore, generic;
+  ShaderVariant naive_sphere, moller_trumbore, generic, scene_anchor, absolute, float64, naive;
   naive_sphere.sphere_formula = VKRAY_SPHERE_NAIVE;
   moller_trumbore.triangle_test = VKRAY_TRIANGLE_MOLLER_TRUMBORE;
   generic.generic = true;
+  scene_anchor.coordinates = VKRAY_COORDINATES_SCENE_ANCHOR;
+  absolute.coordinates = VKRAY_COORDINATES_ABSOLUTE;
+  float64.precision = Precision::float64;
+  naive.sphere_formula = VKRAY_SPHERE_NAIVE;
+  naive.triangle_test = VKRAY_TRIANGLE_MOLLER_TRUMBORE;
+  naive.coordinates = VKRAY_COORDINATES_ABSOLUTE;
   static const std::vector<BenchVariant> variants = {
       shader_variant("default", "what vkray render uses", ShaderVariant{}),
       search_variant("brute-force", "every primitive tested, no tree", PrimitiveSearch::brute_force,
@@ -81,6 +87,11 @@ const std::vector<BenchVariant>& bench_variants() {
       shader_variant("wg-64x1", "64x1 workgroups", with_workgroup(64, 1, false)),
       shader_variant("naive-sphere", "textbook ray/sphere (b^2 - c)", naive_sphere, has_spheres),
       shader_variant("moller-trumbore", "Moeller-Trumbore triangles (not watertight)", moller_trumbore, has_triangles),
+      shader_variant("scene-anchor", "float32 positions relative to the scene's centre, not the camera", scene_anchor),
+      shader_variant("absolute", "float32 world coordinates", absolute),
+      shader_variant("naive", "every textbook choice: b^2 - c spheres, Moeller-Trumbore, float32 world coordinates",
+                     naive),
+      shader_variant("float64", "the shader in double precision (--precision double)", float64),
   };
   return variants;
 }

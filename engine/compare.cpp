@@ -18,7 +18,8 @@ double angle_between(const glm::dvec3& a, const glm::dvec3& b) {
 FrameError measure_error(const Frame& frame, const std::vector<ReferenceHit>& reference) {
   FrameError error;
   error.pixels = frame.pixel_count();
-  std::vector<double> depth_errors, normal_errors;
+  std::vector<double> depth_errors, depth_ulps, normal_errors;
+  const bool doubles = !frame.depth64.empty() || !frame.normal64.empty();
   for (size_t p = 0; p < error.pixels; ++p) {
     const bool reference_hit = reference[p].kind != PrimitiveKind::none;
     if (frame.hit(p) != reference_hit) {
@@ -27,9 +28,15 @@ FrameError measure_error(const Frame& frame, const std::vector<ReferenceHit>& re
     }
     if (!reference_hit) continue;
     ++error.both_hit;
-    if (frame.aovs.has(Aov::depth)) depth_errors.push_back(std::abs(frame.depth[p] - reference[p].t) / reference[p].t);
+    if (frame.aovs.has(Aov::depth)) {
+      const double difference = std::abs((doubles ? frame.depth64[p] : frame.depth[p]) - reference[p].t);
+      depth_errors.push_back(difference / reference[p].t);
+      depth_ulps.push_back(difference / std::ldexp(1.0, std::ilogb(reference[p].t) - 23));
+    }
     if (frame.aovs.has(Aov::normal)) {
-      const glm::dvec3 normal(frame.normal_at(p));
+      const size_t n = frame.pixel_count();
+      const glm::dvec3 normal = doubles ? glm::dvec3(frame.normal64[p], frame.normal64[n + p], frame.normal64[2 * n + p])
+                                        : glm::dvec3(frame.normal_at(p));
       normal_errors.push_back(angle_between(normal, reference[p].normal) * 180.0 / std::numbers::pi);
     }
   }
@@ -37,6 +44,9 @@ FrameError measure_error(const Frame& frame, const std::vector<ReferenceHit>& re
   error.normal_deg_max = normal_errors.empty() ? 0.0 : *std::max_element(normal_errors.begin(), normal_errors.end());
   error.depth_p50 = percentile(depth_errors, 0.5);
   error.depth_p99 = percentile(depth_errors, 0.99);
+  error.depth_ulp_max = depth_ulps.empty() ? 0.0 : *std::max_element(depth_ulps.begin(), depth_ulps.end());
+  error.depth_ulp_p50 = percentile(depth_ulps, 0.5);
+  error.depth_ulp_p99 = percentile(depth_ulps, 0.99);
   error.normal_deg_p50 = percentile(normal_errors, 0.5);
   error.normal_deg_p99 = percentile(normal_errors, 0.99);
   return error;

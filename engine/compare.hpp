@@ -18,6 +18,9 @@ struct FrameError {
   // both hit; percentiles by nearest rank.
   double depth_p50 = 0, depth_p99 = 0, depth_max = 0;
   double normal_deg_p50 = 0, normal_deg_p99 = 0, normal_deg_max = 0;
+  // The depth error in float32 ulps of the reference depth (ulp(z) = 2^(floor(log2 z) - 23)): a
+  // correctly rounded float32 is within 0.5.
+  double depth_ulp_p50 = 0, depth_ulp_p99 = 0, depth_ulp_max = 0;
 
   double mismatch_fraction() const { return pixels ? static_cast<double>(hit_mismatches) / static_cast<double>(pixels) : 0.0; }
   std::string summary() const;  // one line
@@ -27,7 +30,8 @@ struct FrameError {
 // acos(a.b) is not.
 double angle_between(const glm::dvec3& a, const glm::dvec3& b);
 
-// Compares the depth and normal outputs that `frame` has with the reference hits of the same size.
+// Compares the depth and normal outputs that `frame` has with the reference hits of the same size
+// (the double ones where the frame has them: the float64 shader's).
 FrameError measure_error(const Frame& frame, const std::vector<ReferenceHit>& reference);
 
 }  // namespace vkray

@@ -130,7 +130,7 @@ EmbreeResult trace_with_embree(const Scene& scene, uint32_t width, uint32_t heig
   EmbreeResult result;
   result.build_ms = embree.build_ms;
   result.threads = std::max(1u, std::thread::hardware_concurrency());
-  result.frame = Frame{width, height, {Aov::depth, Aov::normal}, {}, {}, {}};
+  result.frame = Frame(width, height, {Aov::depth, Aov::normal});
   result.frame.allocate();
   Frame& frame = result.frame;
 

@@ -1,5 +1,6 @@
 #include "engine/frame.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 namespace vkray {
@@ -29,10 +30,17 @@ std::optional<Aov> aov_from_name(std::string_view name) {
   return std::nullopt;
 }
 
-void Frame::allocate() {
+void Frame::allocate(bool doubles) {
   depth.assign(aovs.has(Aov::depth) ? pixel_count() : 0, 0.0f);
   normal.assign(aovs.has(Aov::normal) ? 3 * pixel_count() : 0, 0.0f);
   uv.assign(aovs.has(Aov::uv) ? 2 * pixel_count() : 0, 0.0f);
+  depth64.assign(doubles ? depth.size() : 0, 0.0);
+  normal64.assign(doubles ? normal.size() : 0, 0.0);
+}
+
+void Frame::round_doubles() {
+  if (!depth64.empty()) std::copy(depth64.begin(), depth64.end(), depth.begin());
+  if (!normal64.empty()) std::copy(normal64.begin(), normal64.end(), normal.begin());
 }
 
 bool Frame::hit(size_t pixel) const {

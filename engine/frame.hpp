@@ -40,16 +40,26 @@ inline constexpr const char* aov_names_help = "depth, normal, uv";
 // Multi-component outputs are stored as planes (all x, then all y, ...), the layout the shader
 // writes: neighbouring invocations then store to neighbouring addresses.
 struct Frame {
+  Frame() = default;
+  Frame(uint32_t frame_width, uint32_t frame_height, AovSet frame_aovs)
+      : width(frame_width), height(frame_height), aovs(frame_aovs) {}
+
   uint32_t width = 0;
   uint32_t height = 0;
   AovSet aovs;
   std::vector<float> depth;   // distance along the primary ray, +inf on a miss
   std::vector<float> normal;  // 3 planes: unit geometric normal facing the ray, 0 on a miss
   std::vector<float> uv;      // 2 planes: image-plane coordinates of the pixel centre
+  // The float64 shader's depth and normals before rounding (empty otherwise): what its agreement
+  // with the reference is measured on. depth and normal then hold them rounded.
+  std::vector<double> depth64;
+  std::vector<double> normal64;
 
   size_t pixel_count() const { return size_t{width} * height; }
-  // Sizes the buffers of the outputs in `aovs` for width x height.
-  void allocate();
+  // Sizes the buffers of the outputs in `aovs` for width x height, with the double ones if asked.
+  void allocate(bool doubles = false);
+  // depth and normal from depth64 and normal64, where those are there.
+  void round_doubles();
   glm::vec3 normal_at(size_t pixel) const {
     return {normal[pixel], normal[pixel_count() + pixel], normal[2 * pixel_count() + pixel]};
   }

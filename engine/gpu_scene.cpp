@@ -4,14 +4,30 @@
 
 #include <glm/geometric.hpp>
 
+#include <array>
+#include <bit>
 #include <chrono>
 #include <cmath>
+#include <cstring>
 #include <limits>
 
 namespace vkray {
 namespace {
 
 glm::vec4 to_float4(const glm::dvec3& v, double w = 0.0) { return glm::vec4(glm::dvec4(v, w)); }
+
+// `value` (relative to the anchor) as the shader of `precision` reads it: see GpuPoint.
+gpu::GpuPoint encode_point(const glm::dvec4& value, Precision precision) {
+  gpu::GpuPoint point;
+  if (precision == Precision::float64) {
+    static_assert(sizeof(point) == sizeof(value));
+    std::memcpy(&point, &value, sizeof(point));
+    return point;
+  }
+  point.first = glm::vec4(value);
+  point.second = glm::vec4(value - glm::dvec4(point.first));  // exact in double, then rounded
+  return point;
+}
 
 struct Bounds {
   glm::dvec3 lower{std::numeric_limits<double>::infinity()};
@@ -41,18 +57,18 @@ FloatBox widened(const FloatBox& box) {
           {step_up(box.upper.x), step_up(box.upper.y), step_up(box.upper.z)}};
 }
 
-// The float box of a primitive as the shader tests it: a triangle's float vertices; a sphere's
-// float centre plus or minus its float radius, rounded outward.
-FloatBox primitive_box(const gpu::GpuPrimitive& primitive) {
-  if (primitive.b.w == VKRAY_SPHERE_MARK) {
-    const glm::dvec3 centre(primitive.a);
-    const double radius = primitive.a.w;
-    return {{float_below(centre.x - radius), float_below(centre.y - radius), float_below(centre.z - radius)},
-            {float_above(centre.x + radius), float_above(centre.y + radius), float_above(centre.z + radius)}};
-  }
-  const glm::vec3 a(primitive.a), b(primitive.b), c(primitive.c);
-  return {glm::min(a, glm::min(b, c)), glm::max(a, glm::max(b, c))};
+FloatBox outward(const glm::dvec3& lower, const glm::dvec3& upper) {
+  return {{float_below(lower.x), float_below(lower.y), float_below(lower.z)},
+          {float_above(upper.x), float_above(upper.y), float_above(upper.z)}};
 }
+
+// A triangle or sphere relative to the anchor, encoded, with its float box rounded outward from
+// the exact (double) primitive: it holds both the double and the float32 hi/lo primitive up to
+// the one-step widening of every node box (widened).
+struct EncodedPrimitive {
+  gpu::GpuPrimitive primitive;
+  FloatBox box;
+};
 
 // Brute force beats the tree up to about this many triangles and spheres on lavapipe. Measured
 // with `vkray bench --size 640x480 --variants brute-force,bvh-per-ray` (best of 5 frames):
@@ -85,16 +101,20 @@ PrimitiveSearch choose_search(size_t triangle_count, size_t sphere_count) {
                                                                      : PrimitiveSearch::bvh_per_ray;
 }
 
-GpuScene make_gpu_scene(const Scene& scene, const GpuSceneOptions& options) {
+GpuScene make_gpu_scene(const Scene& scene, const GpuSceneOptions& options, const ShaderVariant& shader) {
   GpuScene gpu;
-  gpu.anchor = scene_anchor(scene);
+  gpu.precision = shader.precision;
+  const bool world_origin = shader.precision == Precision::float64 || shader.coordinates == VKRAY_COORDINATES_ABSOLUTE;
+  gpu.anchor = world_origin ? glm::dvec3(0.0) : scene_anchor(scene);
+  auto encode = [&](const glm::dvec3& position, double w) { return encode_point(glm::dvec4(position, w), gpu.precision); };
   for (const auto& plane : scene.planes) {
-    gpu.planes.push_back({to_float4(plane.normal, glm::dot(plane.normal, plane.point - gpu.anchor))});
+    gpu.planes.push_back({encode(plane.normal, glm::dot(plane.normal, plane.point - gpu.anchor)),
+                          encode(plane.point - gpu.anchor, 0.0)});
   }
 
-  // Triangles relative to the anchor; each vertex is rounded to float from the same double in every
-  // triangle that shares it, so they see bit-identical floats: the watertight test needs that.
-  std::vector<gpu::GpuPrimitive> triangles;
+  // Triangles relative to the anchor; each vertex is encoded from the same double in every
+  // triangle that shares it, so they see bit-identical values: the watertight test needs that.
+  std::vector<EncodedPrimitive> triangles;
   for (const auto& mesh : scene.meshes) {
     for (const auto& corners : mesh.triangles) {
       const glm::dvec3 v0 = mesh.positions[corners[0]] - gpu.anchor;
@@ -103,7 +123,8 @@ GpuScene make_gpu_scene(const Scene& scene, const GpuSceneOptions& options) {
       const glm::dvec3 cross = glm::cross(v1 - v0, v2 - v0);
       if (cross == glm::dvec3(0.0)) continue;
       const glm::dvec3 normal = unit_vector(cross);
-      triangles.push_back({to_float4(v0, normal.x), to_float4(v1, normal.y), to_float4(v2, normal.z)});
+      triangles.push_back({{encode(v0, normal.x), encode(v1, normal.y), encode(v2, normal.z)},
+                           outward(glm::min(v0, glm::min(v1, v2)), glm::max(v0, glm::max(v1, v2)))});
     }
   }
   gpu.triangle_count = static_cast<uint32_t>(triangles.size());
@@ -112,34 +133,31 @@ GpuScene make_gpu_scene(const Scene& scene, const GpuSceneOptions& options) {
   if (triangles.empty() && scene.spheres.empty()) gpu.search = PrimitiveSearch::brute_force;
 
   if (gpu.search == PrimitiveSearch::brute_force) {
-    for (const auto& sphere : scene.spheres) gpu.spheres.push_back({to_float4(sphere.center - gpu.anchor, sphere.radius)});
-    gpu.primitives = std::move(triangles);
+    for (const auto& sphere : scene.spheres) gpu.spheres.push_back({encode(sphere.center - gpu.anchor, sphere.radius)});
+    for (const auto& triangle : triangles) gpu.primitives.push_back(triangle.primitive);
     gpu.primitives.resize((gpu.primitives.size() + VKRAY_TRIANGLE_BATCH - 1) / VKRAY_TRIANGLE_BATCH * VKRAY_TRIANGLE_BATCH,
                           gpu::GpuPrimitive{});
     return gpu;
   }
 
   const auto start = std::chrono::steady_clock::now();
-  std::vector<gpu::GpuPrimitive> unordered = std::move(triangles);
+  std::vector<EncodedPrimitive> unordered = std::move(triangles);
   for (const auto& sphere : scene.spheres) {
-    const glm::vec4 centre = to_float4(sphere.center - gpu.anchor);
-    unordered.push_back({glm::vec4(glm::vec3(centre), static_cast<float>(sphere.radius)),
-                         glm::vec4(glm::vec3(centre), VKRAY_SPHERE_MARK), glm::vec4(glm::vec3(centre), 0.0f)});
+    const glm::dvec3 centre = sphere.center - gpu.anchor;
+    unordered.push_back({{encode(centre, sphere.radius), encode(centre, VKRAY_SPHERE_MARK), encode(centre, 0.0)},
+                         outward(centre - sphere.radius, centre + sphere.radius)});
   }
   gpu.tree_has_triangles = gpu.triangle_count > 0;
   gpu.tree_has_spheres = !scene.spheres.empty();
   std::vector<Box> boxes;
   boxes.reserve(unordered.size());
-  for (const auto& primitive : unordered) {
-    const FloatBox box = primitive_box(primitive);
-    boxes.push_back({glm::dvec3(box.lower), glm::dvec3(box.upper)});
-  }
+  for (const auto& primitive : unordered) boxes.push_back({glm::dvec3(primitive.box.lower), glm::dvec3(primitive.box.upper)});
   const Bvh bvh = build_bvh(boxes, options.bvh);
   gpu.primitives.reserve(unordered.size() + VKRAY_BVH_MAX_LEAF_SIZE);
-  for (uint32_t i : bvh.primitive_order) gpu.primitives.push_back(unordered[i]);
-  // Boxes of the float32 primitives the shader tests, so each box holds its primitives exactly,
-  // then widened (see safe_inverse in shaders/intersect.glsl).
-  const auto bounds = child_bounds<FloatBox>(bvh, [&](uint32_t slot) { return primitive_box(gpu.primitives[slot]); });
+  for (uint32_t i : bvh.primitive_order) gpu.primitives.push_back(unordered[i].primitive);
+  // Node boxes hold their primitives' boxes, then are widened (see safe_inverse in
+  // shaders/intersect.glsl).
+  const auto bounds = child_bounds<FloatBox>(bvh, [&](uint32_t slot) { return unordered[bvh.primitive_order[slot]].box; });
   gpu.bvh_nodes.resize(bvh.nodes.size());
   for (size_t n = 0; n < bvh.nodes.size(); ++n) {
     const FloatBox first = widened(bounds[n][0]);
@@ -172,12 +190,26 @@ glm::uvec4 run_time_counts(const GpuScene& scene) {
           scene.brute_force_triangle_slots(), scene.search_mode()};
 }
 
-gpu::RayGenParams make_ray_gen_params(const CameraBasis& camera, const glm::dvec3& anchor, uint32_t width,
+gpu::RayGenParams make_ray_gen_params(const CameraBasis& camera, const glm::dvec3& anchor, Precision precision, uint32_t width,
                                       uint32_t height, uint32_t first_row, uint32_t row_count,
                                       const glm::uvec4& counts) {
-  return {to_float4(camera.origin - anchor), to_float4(camera.right),
-          to_float4(camera.up),              to_float4(-camera.plane_distance * camera.forward),
-          glm::uvec4(width, height, first_row, row_count), counts};
+  gpu::RayGenParams params{};
+  const glm::dvec3 origin = camera.origin - anchor;
+  const glm::dvec3 forward_scaled = -camera.plane_distance * camera.forward;
+  if (precision == Precision::float64) {
+    const std::array<double, 12> values{origin.x,  origin.y,  origin.z,  camera.right.x,   camera.right.y,   camera.right.z,
+                                        camera.up.x, camera.up.y, camera.up.z, forward_scaled.x, forward_scaled.y, forward_scaled.z};
+    static_assert(sizeof(values) == sizeof(params.camera));
+    std::memcpy(params.camera, values.data(), sizeof(values));
+  } else {
+    const gpu::GpuPoint split = encode_point(glm::dvec4(origin, 0.0), Precision::float32);
+    const glm::vec4 words[] = {split.first, split.second, to_float4(camera.right), to_float4(camera.up),
+                               to_float4(forward_scaled)};
+    for (size_t k = 0; k < std::size(words); ++k) params.camera[k] = std::bit_cast<glm::uvec4>(words[k]);
+  }
+  params.image = glm::uvec4(width, height, first_row, row_count);
+  params.counts = counts;
+  return params;
 }
 
 }  // namespace vkray

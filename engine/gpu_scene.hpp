@@ -4,6 +4,7 @@
 #include "engine/bvh.hpp"
 #include "engine/camera.hpp"
 #include "engine/scene.hpp"
+#include "engine/shader_variant.hpp"
 #include "shaders/gpu_layout.h"
 
 #include <vector>
@@ -25,10 +26,11 @@ struct GpuSceneOptions {
 };
 
 struct GpuScene {
-  // Every position on the GPU is stored relative to this point. float32 has ~7 digits: a scene at
-  // x = 1e6 stored as is would lose everything below 0.06 units, while positions relative to a
-  // point inside the scene keep their precision (the offset is taken in double, then rounded).
+  // Every position on the GPU is stored relative to this point (see GpuPoint in gpu_layout.h): the
+  // centre of the scene's box, so that the split into hi and lo float parts covers the scene with
+  // the fewest bits; the world origin for float64 shaders and the absolute-coordinates variant.
   glm::dvec3 anchor{0.0};
+  Precision precision = Precision::float32;
   std::vector<gpu::GpuPlane> planes;
   std::vector<gpu::GpuSphere> spheres;  // spheres tested one by one (brute force only)
   // With the tree: every triangle and sphere in leaf order. Without: the triangles, padded to whole
@@ -61,13 +63,14 @@ glm::dvec3 scene_anchor(const Scene& scene);
 // brute_force for scenes of a handful of triangles and spheres, bvh_per_ray otherwise.
 PrimitiveSearch choose_search(size_t triangle_count, size_t sphere_count);
 
-GpuScene make_gpu_scene(const Scene& scene, const GpuSceneOptions& options = {});
+// Positions encoded for `shader`'s precision and coordinates.
+GpuScene make_gpu_scene(const Scene& scene, const GpuSceneOptions& options = {}, const ShaderVariant& shader = {});
 
 // RayGenParams.counts: what the generic shader variant reads instead of specialization constants.
 glm::uvec4 run_time_counts(const GpuScene& scene);
 
 // Push constants for one tile of rows of a width x height image.
-gpu::RayGenParams make_ray_gen_params(const CameraBasis& camera, const glm::dvec3& anchor, uint32_t width,
+gpu::RayGenParams make_ray_gen_params(const CameraBasis& camera, const glm::dvec3& anchor, Precision precision, uint32_t width,
                                       uint32_t height, uint32_t first_row, uint32_t row_count,
                                       const glm::uvec4& counts);
 

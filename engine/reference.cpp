@@ -1,6 +1,7 @@
 #include "engine/reference.hpp"
 
 #include "engine/unit_vector.hpp"
+#include "shaders/gpu_layout.h"
 
 #include <glm/geometric.hpp>
 
@@ -191,12 +192,17 @@ void ReferenceScene::nearest_in_tree(const glm::dvec3& origin, const glm::dvec3&
 }
 
 // Planes first, then spheres and triangles, in the shader's order (the first of equal distances
-// wins, but for the triangles' tie-break).
+// wins, but for the triangles' tie-break), up to VKRAY_PRIMITIVE_T_MAX behind the nearest plane:
+// the shader's rule for coincident surfaces (shaders/gpu_layout.h).
 ReferenceHit ReferenceScene::trace_with(const glm::dvec3& origin, const glm::dvec3& dir, bool brute_force) const {
-  ReferenceHit hit;
+  ReferenceHit plane_hit;
   for (uint32_t i = 0; i < planes_.size(); ++i) {
-    const double t = intersect_plane(planes_[i].normal, planes_[i].point, origin, dir, hit.t);
-    if (t < hit.t) hit = {t, planes_[i].normal, PrimitiveKind::plane, i};
+    const double t = intersect_plane(planes_[i].normal, planes_[i].point, origin, dir, plane_hit.t);
+    if (t < plane_hit.t) plane_hit = {t, planes_[i].normal, PrimitiveKind::plane, i};
+  }
+  ReferenceHit hit;
+  if (plane_hit.kind != PrimitiveKind::none) {
+    hit.t = VKRAY_PRIMITIVE_T_MAX(plane_hit.t, std::abs(glm::dot(plane_hit.normal, dir)));
   }
   if (brute_force) {
     for (uint32_t i = 0; i < spheres_.size(); ++i) test_sphere(i, origin, dir, hit);
@@ -204,6 +210,7 @@ ReferenceHit ReferenceScene::trace_with(const glm::dvec3& origin, const glm::dve
   } else if (!nodes_.empty()) {
     nearest_in_tree(origin, dir, hit);
   }
+  if (hit.kind == PrimitiveKind::none) hit = plane_hit;
   if (hit.kind != PrimitiveKind::none) {
     hit.normal = glm::normalize(hit.normal);
     if (glm::dot(hit.normal, dir) > 0.0) hit.normal = -hit.normal;
@@ -240,13 +247,17 @@ std::vector<ReferenceHit> render_reference_hits(const ReferenceScene& scene, con
 
 void store_reference_hit(Frame& frame, size_t pixel, const ReferenceHit& hit) {
   if (frame.aovs.has(Aov::depth)) frame.depth[pixel] = static_cast<float>(hit.t);
+  if (!frame.depth64.empty()) frame.depth64[pixel] = hit.t;
   if (frame.aovs.has(Aov::normal)) {
     for (size_t c = 0; c < 3; ++c) frame.normal[c * frame.pixel_count() + pixel] = static_cast<float>(hit.normal[int(c)]);
+  }
+  if (!frame.normal64.empty()) {
+    for (size_t c = 0; c < 3; ++c) frame.normal64[c * frame.pixel_count() + pixel] = hit.normal[int(c)];
   }
 }
 
 Frame reference_frame(const std::vector<ReferenceHit>& hits, uint32_t width, uint32_t height, AovSet aovs) {
-  Frame frame{width, height, aovs, {}, {}, {}};
+  Frame frame(width, height, aovs);
   frame.allocate();
   const size_t pixels = frame.pixel_count();
   for (uint32_t j = 0; j < height; ++j) {

@@ -42,9 +42,10 @@ uint32_t checked_count(size_t count, const char* what) {
   return static_cast<uint32_t>(count);
 }
 
-// Bytes per pixel of each output buffer.
-constexpr vk::DeviceSize depth_bytes = sizeof(float);
-constexpr vk::DeviceSize normal_bytes = 3 * sizeof(float);
+// Bytes per pixel of each output buffer: depth and normal components are floats, or doubles with
+// the float64 shader.
+vk::DeviceSize depth_bytes(Precision precision) { return precision == Precision::float64 ? sizeof(double) : sizeof(float); }
+vk::DeviceSize normal_bytes(Precision precision) { return 3 * depth_bytes(precision); }
 constexpr vk::DeviceSize uv_bytes = 2 * sizeof(float);
 
 // One output of one tile: the buffer the shader writes and, where that buffer is not host-visible,
@@ -96,6 +97,8 @@ struct Renderer::Impl {
   TileOutputs tile;
   RenderTimings timings;
 
+  Precision precision() const { return options.shader.precision; }
+
   OutputBuffer make_output(vk::DeviceSize bytes) {
     OutputBuffer output{create_storage_buffer(context, bytes,
                                               vk::BufferUsageFlagBits::eTransferSrc | vk::BufferUsageFlagBits::eTransferDst),
@@ -108,22 +111,29 @@ struct Renderer::Impl {
     if (tile.width == width && tile.rows == rows && tile.aov_bits == aovs.bits()) return;
     tile = TileOutputs{width, rows, aovs.bits(), {}, {}, {}, {}};
     const vk::DeviceSize pixels = vk::DeviceSize{width} * rows;
-    if (aovs.has(Aov::depth)) tile.depth = make_output(pixels * depth_bytes);
-    if (aovs.has(Aov::normal)) tile.normal = make_output(pixels * normal_bytes);
+    if (aovs.has(Aov::depth)) tile.depth = make_output(pixels * depth_bytes(precision()));
+    if (aovs.has(Aov::normal)) tile.normal = make_output(pixels * normal_bytes(precision()));
     if (aovs.has(Aov::uv)) tile.uv = make_output(pixels * uv_bytes);
     if (stats.loop_budget > 0 && aovs.needs_rays()) tile.overflow = make_output((pixels + 1) * sizeof(uint32_t));
     auto floats = [&](const std::optional<TexelBuffer>& texels) {
       return *(texels ? texels->floats : placeholder_texels.floats);
     };
+    auto uints = [&](const std::optional<TexelBuffer>& texels) {
+      return *(texels ? texels->uints : placeholder_texels.uints);
+    };
+    // float64 shaders read the geometry's doubles as pairs of 32-bit words (see GpuPoint).
+    auto geometry = [&](const std::optional<TexelBuffer>& texels) {
+      return precision() == Precision::float64 ? uints(texels) : floats(texels);
+    };
     auto output = [&](const std::optional<OutputBuffer>& buffer) {
       return buffer ? *buffer->written.buffer : *placeholder.buffer;
     };
     RaycastPipeline::Resources resources{};
-    resources.texel_views[VKRAY_BINDING_SPHERES] = floats(spheres);
-    resources.texel_views[VKRAY_BINDING_PLANES] = floats(planes);
-    resources.texel_views[VKRAY_BINDING_PRIMITIVES] = floats(primitives);
+    resources.texel_views[VKRAY_BINDING_SPHERES] = geometry(spheres);
+    resources.texel_views[VKRAY_BINDING_PLANES] = geometry(planes);
+    resources.texel_views[VKRAY_BINDING_PRIMITIVES] = geometry(primitives);
     resources.texel_views[VKRAY_BINDING_BVH_BOUNDS] = floats(bvh_nodes);
-    resources.texel_views[VKRAY_BINDING_BVH_LINKS] = *(bvh_nodes ? bvh_nodes->uints : placeholder_texels.uints);
+    resources.texel_views[VKRAY_BINDING_BVH_LINKS] = uints(bvh_nodes);
     resources.buffers[VKRAY_BINDING_DEPTH] = output(tile.depth);
     resources.buffers[VKRAY_BINDING_NORMAL] = output(tile.normal);
     resources.buffers[VKRAY_BINDING_UV] = output(tile.uv);
@@ -154,8 +164,8 @@ struct Renderer::Impl {
   // caller's cap), and the workgroup count within the device's limit.
   uint32_t rows_per_tile(uint32_t width, uint32_t height, AovSet aovs) const {
     vk::DeviceSize largest = 0;
-    if (aovs.has(Aov::depth)) largest = std::max(largest, depth_bytes);
-    if (aovs.has(Aov::normal)) largest = std::max(largest, normal_bytes);
+    if (aovs.has(Aov::depth)) largest = std::max(largest, depth_bytes(precision()));
+    if (aovs.has(Aov::normal)) largest = std::max(largest, normal_bytes(precision()));
     if (aovs.has(Aov::uv)) largest = std::max(largest, uv_bytes);
     vk::DeviceSize limit = context.limits.maxStorageBufferRange;
     if (options.max_tile_bytes > 0) limit = std::min<vk::DeviceSize>(limit, options.max_tile_bytes);
@@ -174,7 +184,7 @@ Renderer::Renderer(GpuDevice& device, const Scene& scene, RendererOptions option
   with_vulkan_errors("uploading the scene", [&] {
     const auto start = Clock::now();
     Impl& r = *impl_;
-    const GpuScene gpu_scene = make_gpu_scene(scene, options.scene);
+    const GpuScene gpu_scene = make_gpu_scene(scene, options.scene, options.shader);
     const vk::DeviceSize buffer_limit = std::min<vk::DeviceSize>(
         vk::DeviceSize{r.context.limits.maxTexelBufferElements} * texel_bytes, r.context.info.max_allocation_bytes);
     auto upload = [&]<typename T>(const std::vector<T>& items, const char* what) -> std::optional<TexelBuffer> {
@@ -258,8 +268,8 @@ Frame Renderer::render(const Camera& camera, uint32_t width, uint32_t height, Ao
   check_image_size(width, height);
   Impl& r = *impl_;
   if (r.options.shader.generic) aovs = AovSet{Aov::depth, Aov::normal, Aov::uv};  // it writes them all
-  Frame frame{width, height, aovs, {}, {}, {}};
-  frame.allocate();
+  Frame frame(width, height, aovs);
+  frame.allocate(r.precision() == Precision::float64);
   r.timings = RenderTimings{r.timings.upload_ms, r.timings.bvh_build_ms, 0.0, *r.timestamps != vk::QueryPool(),
                             0.0, 0.0, 0, 0, 0.0};
   if (aovs.empty()) return frame;
@@ -272,7 +282,7 @@ Frame Renderer::render(const Camera& camera, uint32_t width, uint32_t height, Ao
 
     for (uint32_t first_row = 0; first_row < height; first_row += tile_rows) {
       const uint32_t rows = std::min(tile_rows, height - first_row);
-      const gpu::RayGenParams params = make_ray_gen_params(basis, r.anchor, width, height, first_row, rows, r.counts);
+      const gpu::RayGenParams params = make_ray_gen_params(basis, r.anchor, r.precision(), width, height, first_row, rows, r.counts);
       r.context.submit_and_wait([&](const vk::raii::CommandBuffer& commands) {
         if (*r.timestamps) {
           commands.resetQueryPool(*r.timestamps, 0, 3);
@@ -324,22 +334,28 @@ Frame Renderer::render(const Camera& camera, uint32_t width, uint32_t height, Ao
       // lands in the same plane of the frame.
       const size_t first_pixel = size_t{first_row} * width;
       const size_t tile_pixels = size_t{rows} * width;
-      auto copy_planes = [&](const std::optional<OutputBuffer>& output, std::vector<float>& target, size_t planes) {
+      auto copy_planes = [&]<typename T>(const std::optional<OutputBuffer>& output, std::vector<T>& target, size_t planes) {
         if (!output) return;
-        const auto* source = static_cast<const float*>(output->host());
+        const auto* source = static_cast<const T*>(output->host());
         for (size_t plane = 0; plane < planes; ++plane) {
           std::memcpy(target.data() + plane * frame.pixel_count() + first_pixel,
-                      source + plane * tile_pixels, tile_pixels * sizeof(float));
+                      source + plane * tile_pixels, tile_pixels * sizeof(T));
         }
       };
-      copy_planes(r.tile.depth, frame.depth, 1);
-      copy_planes(r.tile.normal, frame.normal, 3);
+      if (r.precision() == Precision::float64) {
+        copy_planes(r.tile.depth, frame.depth64, 1);
+        copy_planes(r.tile.normal, frame.normal64, 3);
+      } else {
+        copy_planes(r.tile.depth, frame.depth, 1);
+        copy_planes(r.tile.normal, frame.normal, 3);
+      }
       copy_planes(r.tile.uv, frame.uv, 2);
       r.timings.readback_ms += elapsed_ms(copy_start);
       if (r.tile.overflow) r.finish_unfinished_rays(frame, basis, first_row);
       ++r.timings.tiles;
     }
   });
+  frame.round_doubles();
   return frame;
 }
 

@@ -9,7 +9,16 @@
 
 namespace vkray {
 
+// float32: the default. float64 (`--precision double`): the same shader compiled with doubles,
+// geometry and camera in world coordinates as doubles, depth and normals written as doubles; it
+// needs a device with shaderFloat64.
+enum class Precision : uint32_t { float32, float64 };
+
 struct ShaderVariant {
+  Precision precision = Precision::float32;
+  // How float32 shaders hold positions (VKRAY_COORDINATES_*): camera-relative by default; the
+  // others exist to measure what that buys.
+  uint32_t coordinates = VKRAY_COORDINATES_CAMERA_RELATIVE;
   uint32_t sphere_formula = VKRAY_SPHERE_STABLE;         // VKRAY_SPHERE_*
   uint32_t triangle_test = VKRAY_TRIANGLE_WATERTIGHT;    // VKRAY_TRIANGLE_*
   uint32_t workgroup_width = VKRAY_WORKGROUP_X;

@@ -69,43 +69,67 @@ using uvec4 = glm::uvec4;
 // Every primitive type's code compiled in, with counts and search mode read from the push
 // constants (RayGenParams.counts) instead of specialized: what a shader not built for its scene costs.
 #define VKRAY_SPEC_GENERIC 15
-#define VKRAY_SPEC_COUNT 16
+#define VKRAY_SPEC_COORDINATES 16           // VKRAY_COORDINATES_* (float32 shaders)
+#define VKRAY_SPEC_COUNT 17
 
 #define VKRAY_SPHERE_STABLE 0               // Ray Tracing Gems ch. 7 (intersect.glsl)
 #define VKRAY_SPHERE_NAIVE 1                // the textbook b^2 - c
 #define VKRAY_TRIANGLE_WATERTIGHT 0         // Woop, Benthin and Wald 2013
 #define VKRAY_TRIANGLE_MOLLER_TRUMBORE 1    // Moeller and Trumbore 1997
+#define VKRAY_COORDINATES_CAMERA_RELATIVE 0 // hi and lo parts (GpuPoint): float32 relative to the camera
+#define VKRAY_COORDINATES_SCENE_ANCHOR 1    // hi parts alone: float32 relative to the scene's centre
+#define VKRAY_COORDINATES_ABSOLUTE 2        // hi parts alone, anchor at the world origin: plain float32
 
-// All positions on the GPU are relative to the scene's anchor point (see engine/gpu_scene.cpp), so
-// float32 keeps its precision for scenes far from the world origin.
+// Positions. Every position on the GPU is stored relative to the scene's anchor (the centre of its
+// box; see engine/gpu_scene.cpp) as a GpuPoint: the position and one more number in two texels. How
+// the shader reads them depends on its precision:
+// - float32 shaders: `first` is the position (xyz, w) rounded to float ("hi"), `second` what that
+//   rounding left out, rounded to float ("lo"): together ~48 significant bits. The camera comes in
+//   the same split, and the shader subtracts hi from hi and lo from lo before adding: the difference
+//   is then accurate to float32 relative to the distance from the camera, not to the distance from
+//   the anchor (relative-to-eye rendering, as planet renderers do it; Cozzi and Ring, "3D Engine
+//   Design for Virtual Globes", 2011, ch. 5). Precision follows the camera without re-uploading
+//   anything when it moves.
+// - float64 shaders (`--precision double`): the anchor is the world origin, and `first` holds x and y,
+//   `second` z and w, each double as two 32-bit words (read through the RGBA32UI view).
+struct GpuPoint {
+  vec4 first;
+  vec4 second;
+};
+VKRAY_CHECK_SIZE(GpuPoint, 32);
 
-// center.xyz relative to the anchor, radius in w.
+// A sphere tested one by one: centre, radius in w.
 struct GpuSphere {
-  vec4 center_radius;
+  GpuPoint center_radius;
 };
-VKRAY_CHECK_SIZE(GpuSphere, 16);
+VKRAY_CHECK_SIZE(GpuSphere, 32);
 
-// Unit normal in xyz; w = dot(normal, point - anchor), computed in double on the host.
+// A plane: unit normal and w = dot(normal, point - anchor), both in double on the host; then the
+// point itself, which only float64 shaders read (they evaluate dot(normal, point - origin) in
+// double, exactly as the reference does).
 struct GpuPlane {
-  vec4 normal_offset;
+  GpuPoint normal_offset;
+  GpuPoint point;
 };
-VKRAY_CHECK_SIZE(GpuPlane, 16);
+VKRAY_CHECK_SIZE(GpuPlane, 64);
 
-// A primitive the tree holds (or a triangle tested by brute force): three texels.
-// - Triangle: its vertices relative to the anchor in xyz, and its unit geometric normal spread over
-//   the three w components. The normal is computed in double on the host, so needle triangles get an
-//   accurate one; the shader reads it only for the winning triangle.
-// - Sphere: (centre relative to the anchor, radius), then (centre, VKRAY_SPHERE_MARK) and (centre,
-//   0). The mark tells it from a triangle (normal components are within [-1, 1]); read as a
-//   triangle, its three equal vertices have a zero determinant and are never hit.
+// A primitive the tree holds (or a triangle tested by brute force): three GpuPoints.
+// - Triangle: its vertices, and its unit geometric normal spread over their three w components. The
+//   normal is computed in double on the host, so needle triangles get an accurate one; the shader
+//   reads it only for the winning triangle.
+// - Sphere: (centre, radius), then (centre, VKRAY_SPHERE_MARK), then (centre, 0). The mark tells it
+//   from a triangle (normal components are within [-1, 1]); read as a triangle, its three equal
+//   vertices have a zero determinant and are never hit.
 // Primitives are stored in the order of the BVH's leaves, so a leaf is a contiguous range, and
-// triangles pre-gathered rather than indexed: three fetches a triangle instead of four dependent ones.
+// triangles pre-gathered rather than indexed.
 struct GpuPrimitive {
-  vec4 a;
-  vec4 b;
-  vec4 c;
+  GpuPoint a;
+  GpuPoint b;
+  GpuPoint c;
 };
-VKRAY_CHECK_SIZE(GpuPrimitive, 48);
+VKRAY_CHECK_SIZE(GpuPrimitive, 96);
+#define VKRAY_TEXELS_PER_POINT 2
+#define VKRAY_TEXELS_PER_PRIMITIVE 6
 #define VKRAY_SPHERE_MARK 4.0
 
 // The brute-force path tests triangles in batches of this many, padded with all-zero triangles
@@ -116,7 +140,7 @@ VKRAY_CHECK_SIZE(GpuPrimitive, 48);
 // BVH: binary, with both children's boxes stored in their parent, so one node fetch gives a ray
 // both slab tests and the nearer child. 64 bytes, one cache line. Per axis: (lower of child 0,
 // lower of child 1, upper of child 0, upper of child 1). Boxes are float32, relative to the anchor,
-// and hold the float32 primitives exactly.
+// rounded outward from the primitives in double.
 struct GpuBvhNode {
   vec4 bounds_x;
   vec4 bounds_y;
@@ -140,17 +164,31 @@ VKRAY_CHECK_SIZE(GpuBvhNode, 64);
 // across many scales drove Embree's builder into its depth limit at 64 (tests/bvh_test.cpp).
 #define VKRAY_BVH_MAX_DEPTH 128
 
-// Per-dispatch camera and image parameters (push constants). The camera basis is computed in
-// double on the host; the shader only evaluates direction = x*right + y*up + forward_scaled.
+// Coincident surfaces. A sphere or triangle wins over the nearest plane only where its hit point
+// lies off the plane by more than VKRAY_COINCIDENT_GAP of its own distance: where a triangle lies in
+// a plane or a sphere touches one, the two distances differ only by rounding, and without this
+// rule whichever rounding favours would win, pixel by pixel. The shader and the reference
+// (engine/reference.cpp) both apply it, so the plane wins on every pixel in both. The rounding of
+// either hit point off the plane is within a few float32 ulps of the distance at any angle (the
+// error of n.d scales t, not the height), so 2^-20 (16 ulps) separates rounding from real gaps.
+// VKRAY_PRIMITIVE_T_MAX is then the bound for spheres and triangles behind a plane hit at t with
+// slope |n.d|: (t - t_primitive) * slope <= gap * t_primitive.
+#define VKRAY_COINCIDENT_GAP (1.0 / 1048576.0)
+#define VKRAY_PRIMITIVE_T_MAX(t, slope) ((t) * (slope) / ((slope) + VKRAY_COINCIDENT_GAP))
+
+// Per-dispatch camera and image parameters (push constants; 128 bytes, the least every Vulkan
+// device offers). The camera basis is computed in double on the host; the shader only evaluates
+// direction = x*right + y*up + forward_scaled. `camera` holds 32-bit words:
+// - float32 shaders: origin hi, origin lo (relative to the anchor, split as in GpuPoint), right,
+//   up, forward_scaled (= -plane_distance * forward) as floats; the sixth is unused.
+// - float64 shaders: the twelve doubles origin.xyz, right.xyz, up.xyz, forward_scaled.xyz.
+#define VKRAY_CAMERA_WORDS 6
 struct RayGenParams {
-  vec4 origin;          // camera position relative to the anchor
-  vec4 right;           // unit right vector
-  vec4 up;              // unit up vector (forward x right)
-  vec4 forward_scaled;  // -plane_distance * forward
-  uvec4 image;          // width, height, first row of this tile, rows in this tile
-  uvec4 counts;         // read by the generic variant only: spheres, planes, triangle slots, search mode
+  uvec4 camera[VKRAY_CAMERA_WORDS];
+  uvec4 image;   // width, height, first row of this tile, rows in this tile
+  uvec4 counts;  // read by the generic variant only: spheres, planes, triangle slots, search mode
 };
-VKRAY_CHECK_SIZE(RayGenParams, 96);
+VKRAY_CHECK_SIZE(RayGenParams, 128);
 
 #ifdef __cplusplus
 }  // namespace vkray::gpu

@@ -1,180 +1,341 @@
-// Ray/primitive intersection in float32. Each routine returns the ray parameter t of the nearest
-// hit with 0 < t < t_max, or t_max when there is none. Rays are normalized, so t is a distance.
-// The double-precision reference (engine/reference.cpp) evaluates the same formulas in double.
+// Ray/primitive intersection. Each routine returns the ray parameter t of the nearest hit with
+// 0 < t < t_max, or t_max when there is none. Rays are normalized, so t is a distance.
+// float32 shaders evaluate the formulas below with the compensations each explains; float64 shaders
+// (VKRAY_FLOAT64, `--precision double`) evaluate the reference's formulas (engine/reference.cpp) in
+// double: the exact, slow end of the error-against-time curve.
 #ifndef VKRAY_INTERSECT_GLSL
 #define VKRAY_INTERSECT_GLSL
 
 #include "gpu_layout.h"
 
+#ifdef VKRAY_FLOAT64
+#define real double
+#define real2 dvec2
+#define real3 dvec3
+#define real4 dvec4
+#else
+#define real float
+#define real2 vec2
+#define real3 vec3
+#define real4 vec4
+#endif
+
 layout(constant_id = VKRAY_SPEC_SPHERE_FORMULA) const uint SPHERE_FORMULA = VKRAY_SPHERE_STABLE;
 layout(constant_id = VKRAY_SPEC_TRIANGLE_TEST) const uint TRIANGLE_TEST = VKRAY_TRIANGLE_WATERTIGHT;
+layout(constant_id = VKRAY_SPEC_COORDINATES) const uint COORDINATES = VKRAY_COORDINATES_CAMERA_RELATIVE;
 
+// The ray's origin: the camera, split into hi and lo parts relative to the anchor in float32
+// shaders (see GpuPoint in gpu_layout.h), in world coordinates in float64 shaders.
+struct Origin {
+#ifdef VKRAY_FLOAT64
+  dvec3 position;
+#else
+  vec3 hi;
+  vec3 lo;
+#endif
+};
+
+#ifndef VKRAY_FLOAT64
+// Error-free transformations. Vulkan lets a compiler fuse a * b + c into an fma or not (lavapipe
+// does not), so they are written with plain operations marked `precise`, which forbids both fusing
+// and reassociation. One body for float and vec3 (component-wise).
 // s + e == a + b exactly (Knuth's TwoSum).
-void two_sum(float a, float b, out float s, out float e) {
-  precise float sum = a + b;
-  precise float b_virtual = sum - a;
-  precise float a_virtual = sum - b_virtual;
-  precise float error = (a - a_virtual) + (b - b_virtual);
-  s = sum;
-  e = error;
+#define VKRAY_DEFINE_TWO_SUM(T)                      \
+  void two_sum(T a, T b, out T s, out T e) {         \
+    precise T sum = a + b;                           \
+    precise T b_virtual = sum - a;                   \
+    precise T a_virtual = sum - b_virtual;           \
+    precise T error = (a - a_virtual) + (b - b_virtual); \
+    s = sum;                                         \
+    e = error;                                       \
+  }
+// p + e == a * b exactly (Dekker's TwoProduct with Veltkamp's split: 2^12 + 1 splits a float's
+// 24-bit significand into 12 + 12 bits).
+#define VKRAY_DEFINE_TWO_PRODUCT(T)                  \
+  void two_product(T a, T b, out T p, out T e) {     \
+    const float splitter = 4097.0;                   \
+    precise T a_big = splitter * a;                  \
+    precise T a_hi = a_big - (a_big - a);            \
+    precise T a_lo = a - a_hi;                       \
+    precise T b_big = splitter * b;                  \
+    precise T b_hi = b_big - (b_big - b);            \
+    precise T b_lo = b - b_hi;                       \
+    precise T product = a * b;                       \
+    precise T error = ((a_hi * b_hi - product) + a_hi * b_lo + a_lo * b_hi) + a_lo * b_lo; \
+    p = product;                                     \
+    e = error;                                       \
+  }
+VKRAY_DEFINE_TWO_SUM(float)
+VKRAY_DEFINE_TWO_SUM(vec3)
+VKRAY_DEFINE_TWO_PRODUCT(float)
+VKRAY_DEFINE_TWO_PRODUCT(vec3)
+
+// dot(a, b) as an unevaluated sum: the sum of the rounded products plus everything their rounding
+// and summation left out (Ogita, Rump and Oishi, "Accurate Sum and Dot Product", SIAM J. Sci.
+// Comput. 26(6), 2005, algorithm Dot2): as accurate as if computed in twice the precision.
+void dot2(vec3 a, vec3 b, out float sum, out float error) {
+  vec3 products, product_errors;
+  two_product(a, b, products, product_errors);
+  float e1, e2;
+  two_sum(products.x, products.y, sum, e1);
+  two_sum(sum, products.z, sum, e2);
+  precise float total = (e1 + e2) + (product_errors.x + product_errors.y + product_errors.z);
+  error = total;
 }
 
-// p + e == a * b exactly (Dekker's TwoProduct with Veltkamp's split). It is written with plain
-// products and sums rather than fma, because Vulkan lets fma be evaluated unfused (lavapipe does).
-void two_product(float a, float b, out float p, out float e) {
-  const float splitter = 4097.0;  // 2^12 + 1 splits a float's 24-bit significand into 12 + 12 bits
-  precise float a_big = splitter * a;
-  precise float a_hi = a_big - (a_big - a);
-  precise float a_lo = a - a_hi;
-  precise float b_big = splitter * b;
-  precise float b_hi = b_big - (b_big - b);
-  precise float b_lo = b - b_hi;
-  precise float product = a * b;
-  precise float error = ((a_hi * b_hi - product) + a_hi * b_lo + a_lo * b_hi) + a_lo * b_lo;
-  p = product;
-  e = error;
+// A position relative to the camera, from its GpuPoint parts and the camera's (see gpu_layout.h):
+// hi - hi and lo - lo first, so the result is accurate to float32 relative to its own size. With
+// plain float coordinates the lo parts are left out.
+vec3 relative_to_camera(vec3 hi, vec3 lo, vec3 origin_hi, vec3 origin_lo) {
+  precise vec3 difference = hi - origin_hi;
+  if (COORDINATES != VKRAY_COORDINATES_CAMERA_RELATIVE) return difference;
+  precise vec3 sum = difference + (lo - origin_lo);
+  return sum;
 }
 
-// |f|^2 - r^2 as if computed in twice the float precision, then rounded: products and sums are
-// split into exact value and error terms (Ogita, Rump and Oishi, "Accurate Sum and Dot
-// Product", SIAM J. Sci. Comput. 26(6), 2005, algorithm Dot2). Plain float loses all digits when
-// the camera is near the surface of a sphere much larger than that distance (a planet as ground).
-// Only rays that pass the discriminant test get here, so the cost is one call per hit candidate.
-// Adds a * b to the running sum and its error term (one step of Dot2).
-void dot2_step(float a, float b, inout float sum, inout float error) {
-  float product, product_error, sum_error;
-  two_product(a, b, product, product_error);
-  two_sum(sum, product, sum, sum_error);
-  precise float total_error = error + (sum_error + product_error);
-  error = total_error;
+// f = origin - center as an unevaluated sum f_hi + f_lo (f_lo = 0 with plain float coordinates).
+void sphere_offset(vec3 center_hi, vec3 center_lo, vec3 origin_hi, vec3 origin_lo, out vec3 f_hi, out vec3 f_lo) {
+  if (COORDINATES != VKRAY_COORDINATES_CAMERA_RELATIVE) {
+    f_hi = origin_hi - center_hi;
+    f_lo = vec3(0.0);
+    return;
+  }
+  vec3 error;
+  two_sum(origin_hi, -center_hi, f_hi, error);
+  precise vec3 lo = error + (origin_lo - center_lo);
+  f_lo = lo;
 }
 
-float sphere_c(vec3 f, float radius) {
+// c = |f|^2 - r^2 from f = f_hi + f_lo and r = r_hi + r_lo, as accurate as if computed in twice the
+// precision (Dot2 above). Plain float loses all digits near the surface of a sphere much larger
+// than the camera's height above it (a planet as ground): c = 2 r h there, a difference of two
+// numbers near r^2. Only rays that pass the discriminant test compute it.
+float sphere_c(vec3 f_hi, vec3 f_lo, float r_hi, float r_lo) {
   float sum, error;
-  two_product(f.x, f.x, sum, error);
-  dot2_step(f.y, f.y, sum, error);
-  dot2_step(f.z, f.z, sum, error);
-  dot2_step(radius, -radius, sum, error);
-  precise float c = sum + error;
+  dot2(f_hi, f_hi, sum, error);
+  float square, square_error;
+  two_product(r_hi, -r_hi, square, square_error);
+  float total_error;
+  two_sum(sum, square, sum, total_error);
+  precise float small_terms = 2.0 * (dot(f_hi, f_lo) - r_hi * r_lo);
+  precise float c = sum + (((error + square_error) + total_error) + small_terms);
   return c;
+}
+
+// The part of f = f_hi + f_lo orthogonal to dir, given b = f.dir / dir.dir: f - b dir with the
+// products and the subtraction error-free, then what is left along dir (from b's own rounding)
+// projected out. Accurate to float32 relative to |f_perp|, which is at most the radius for a hit,
+// even when |f| is 1e7 times larger: this is what keeps a small sphere far away round.
+vec3 perpendicular_part(vec3 f_hi, vec3 f_lo, float b_over_a, vec3 dir) {
+  vec3 products, product_errors;
+  two_product(vec3(b_over_a), dir, products, product_errors);
+  vec3 sums, sum_errors;
+  two_sum(f_hi, -products, sums, sum_errors);
+  precise vec3 f_perp = sums + ((sum_errors - product_errors) + f_lo);
+  return f_perp - (dot(f_perp, dir) / dot(dir, dir)) * dir;
 }
 
 // Ray/sphere after Haines, Guenther and Akenine-Moeller, "Precision Improvements for Ray/Sphere
 // Intersection", Ray Tracing Gems (2019), ch. 7:
-// - the discriminant is r^2 - |f_perp|^2, with f_perp the part of (origin - center) orthogonal to
-//   the ray, instead of b^2 - c, which cancels catastrophically for small spheres far away;
+// - the discriminant is r^2 - |f_perp|^2, with f_perp the part of f = origin - center orthogonal
+//   to the ray (perpendicular_part), instead of b^2 - c, which cancels catastrophically for small
+//   spheres far away;
 // - the two roots come from q = -(b + sign(b) sqrt(disc)) as c/q and q/a, so neither root is a
 //   difference of nearly equal numbers; c itself comes from sphere_c.
-// The textbook form, kept as a benchmark variant (VKRAY_SPHERE_NAIVE) to show what the stable one
-// buys: b^2 - c cancels when the sphere is small against its distance, -b + sqrt(disc) when the
-// camera is inside, and c = |f|^2 - r^2 loses everything near a large sphere's surface.
-float intersect_sphere_naive(vec3 f, float radius, vec3 dir, float t_max) {
+// `normal` receives the hit point minus the centre over the radius, from the same quantities (see
+// the end): for a small sphere far away the hit is f_perp -+ sqrt(disc / a) dir from the centre
+// (minus for the near root), not the rounded difference f + t dir of two long vectors.
+// The textbook form, kept as a benchmark variant (VKRAY_SPHERE_NAIVE) to show what this buys:
+// b^2 - c cancels when the sphere is small against its distance, -b + sqrt(disc) when the camera is
+// inside, c = |f|^2 - r^2 near a large sphere's surface, and f + t dir for any small sphere far away.
+float intersect_sphere_naive(vec3 f, float radius, vec3 dir, float t_max, out vec3 normal) {
   float b = dot(f, dir);
   float disc = b * b - (dot(f, f) - radius * radius);
+  normal = vec3(0.0);
   if (disc < 0.0) return t_max;
   float root = sqrt(disc);
   float t = -b - root > 0.0 ? -b - root : -b + root;
+  normal = (f + t * dir) / radius;
   return (t > 0.0 && t < t_max) ? t : t_max;
 }
 
-float intersect_sphere(vec3 f, float radius, vec3 dir, float t_max) {
-  if (SPHERE_FORMULA == VKRAY_SPHERE_NAIVE) return intersect_sphere_naive(f, radius, dir, t_max);
+float intersect_sphere(vec3 f_hi, vec3 f_lo, float r_hi, float r_lo, vec3 dir, float t_max, out vec3 normal) {
+  if (SPHERE_FORMULA == VKRAY_SPHERE_NAIVE) return intersect_sphere_naive(f_hi + f_lo, r_hi, dir, t_max, normal);
+  normal = vec3(0.0);
   float a = dot(dir, dir);
-  float b = dot(f, dir);
-  vec3 f_perp = f - (b / a) * dir;
-  float disc = radius * radius - dot(f_perp, f_perp);
+  float b = dot(f_hi + f_lo, dir);
+  vec3 f_perp = perpendicular_part(f_hi, f_lo, b / a, dir);
+  // disc = r^2 - |f_perp|^2 = b^2 / a - c: two forms of one number, each exact where the other
+  // cancels. r^2 - |f_perp|^2 rounds at the scale of r^2, b^2 / a - c at the scale of b^2: the
+  // first keeps small spheres far away (|b| >> r), the second large spheres seen from near their
+  // surface (|b| < r: a planet's horizon, where |f_perp| is within a few units of r = 1e6), with b
+  // and c error-free sums there.
+  float disc, c;
+  bool near_surface = b * b < a * r_hi * r_hi;
+  if (near_surface) {
+    float sum, error;
+    dot2(f_hi, dir, sum, error);
+    b = sum + (error + dot(f_lo, dir));
+    c = sphere_c(f_hi, f_lo, r_hi, r_lo);
+    disc = (b * b) / a - c;
+  } else {
+    disc = r_hi * r_hi - dot(f_perp, f_perp);
+  }
   if (disc < 0.0) return t_max;
-  float c = sphere_c(f, radius);
-  float q = -(b + (b >= 0.0 ? 1.0 : -1.0) * sqrt(a * disc));
+  if (!near_surface) c = sphere_c(f_hi, f_lo, r_hi, r_lo);
+  float root = sqrt(a * disc);
+  float q = -(b + (b >= 0.0 ? root : -root));
   if (q == 0.0) return t_max;  // origin on the surface and tangent ray: no hit in front
   float t0 = c / q;
   float t1 = q / a;
   float t_near = min(t0, t1);
-  float t_far = max(t0, t1);
-  float t = t_near > 0.0 ? t_near : t_far;  // camera inside the sphere: the far root
+  bool near = t_near > 0.0;
+  float t = near ? t_near : max(t0, t1);  // camera inside the sphere: the far root
+  // The hit relative to the centre, in whichever of two exact forms rounds less here:
+  // f_perp -+ sqrt(disc / a) dir carries the error of sqrt(disc), ~eps r^2 / root (large where the
+  // ray grazes: the discriminant cancels); f + t dir, evaluated error-free, carries the error of t,
+  // ~eps t (large for a small sphere far away: Ray Tracing Gems ch. 7).
+  if (r_hi * r_hi < t * root) {
+    normal = (f_perp + ((near ? -root : root) / a) * dir) / r_hi;
+  } else {
+    vec3 products, product_errors, sums, sum_errors;
+    two_product(vec3(t), dir, products, product_errors);
+    two_sum(f_hi, products, sums, sum_errors);
+    precise vec3 offset = sums + ((sum_errors + product_errors) + f_lo);
+    normal = offset / r_hi;
+  }
   return (t > 0.0 && t < t_max) ? t : t_max;
 }
 
-// Ray/plane: t = (offset - n.o) / (n.d). A ray parallel to the plane (n.d == 0) never hits it,
-// which the explicit test states instead of relying on inf/NaN comparisons.
-float intersect_plane(vec4 normal_offset, vec3 origin, vec3 dir, float t_max) {
-  float denom = dot(normal_offset.xyz, dir);
+// Ray/plane: t = height / (n.d), with height = w - n.o the plane's signed offset from the camera
+// along n (see GpuPlane). With camera-relative coordinates w and n come split into hi and lo parts
+// and n.o_hi is evaluated with Dot2, so height is accurate to float32 relative to itself plus
+// ~2^-48 of the camera's distance from the anchor: a ground plane one unit below a camera 1e6 from
+// the scene's centre keeps 7 digits, where plain float keeps none. A ray parallel to the plane
+// (n.d == 0) never hits it, which the explicit test states instead of relying on inf/NaN.
+float plane_height(vec4 normal_offset_hi, vec4 normal_offset_lo, vec3 origin_hi, vec3 origin_lo) {
+  vec3 normal = normal_offset_hi.xyz;
+  if (COORDINATES != VKRAY_COORDINATES_CAMERA_RELATIVE) return normal_offset_hi.w - dot(normal, origin_hi);
+  float product, product_error;
+  dot2(normal, origin_hi, product, product_error);
+  float height, height_error;
+  two_sum(normal_offset_hi.w, -product, height, height_error);
+  precise float small_terms = (normal_offset_lo.w - product_error) -
+                              (dot(normal, origin_lo) + dot(normal_offset_lo.xyz, origin_hi));
+  precise float total = height + (height_error + small_terms);
+  return total;
+}
+
+float intersect_plane(vec3 normal, float height, vec3 dir, float t_max) {
+  float denom = dot(normal, dir);
   if (denom == 0.0) return t_max;
-  float t = (normal_offset.w - dot(normal_offset.xyz, origin)) / denom;
+  float t = height / denom;
   return (t > 0.0 && t < t_max) ? t : t_max;
 }
+
+#else  // VKRAY_FLOAT64: the reference's formulas, in double
+
+double intersect_sphere(dvec3 f, double radius, dvec3 dir, double t_max, out dvec3 normal) {
+  normal = dvec3(0.0);
+  double a = dot(dir, dir);
+  double b = dot(f, dir);
+  dvec3 f_perp = f - (b / a) * dir;
+  double disc = radius * radius - dot(f_perp, f_perp);
+  if (disc < 0.0) return t_max;
+  double c = dot(f, f) - radius * radius;
+  double root = sqrt(a * disc);
+  double q = -(b + (b >= 0.0 ? root : -root));
+  if (q == 0.0) return t_max;
+  double t0 = c / q;
+  double t1 = q / a;
+  double t = min(t0, t1) > 0.0 ? min(t0, t1) : max(t0, t1);
+  normal = (f + t * dir) / radius;
+  return (t > 0.0 && t < t_max) ? t : t_max;
+}
+
+double intersect_plane(dvec3 normal, dvec3 point, dvec3 origin, dvec3 dir, double t_max) {
+  double denom = dot(normal, dir);
+  if (denom == 0.0) return t_max;
+  double t = dot(normal, point - origin) / denom;
+  return (t > 0.0 && t < t_max) ? t : t_max;
+}
+
+#endif  // VKRAY_FLOAT64
 
 // Watertight ray/triangle test of Woop, Benthin and Wald, "Watertight Ray/Triangle Intersection",
-// JCGT 2(1), 2013. The vertices are moved into a ray-aligned frame in which the ray is the +z axis;
-// the 2D edge functions U, V, W then decide inside/outside. Two triangles sharing an edge evaluate
-// the same edge function with opposite sign from bit-identical inputs, so a ray through a shared
-// edge hits at least one of them: no cracks between the triangles of a mesh (Moeller-Trumbore
-// computes barycentrics per triangle and can miss both). `precise` forbids the compiler from
-// fusing these products into FMAs differently per triangle, which would break that symmetry.
+// JCGT 2(1), 2013. The vertices, already relative to the ray's origin, are moved into a ray-aligned
+// frame in which the ray is the +z axis; the 2D edge functions U, V, W then decide inside/outside.
+// Two triangles sharing an edge evaluate the same edge function with opposite sign from
+// bit-identical inputs (a shared vertex is stored once per triangle with the same bits, and made
+// relative to the camera by the same operations), so a ray through a shared edge hits at least one
+// of them: no cracks between the triangles of a mesh (Moeller-Trumbore computes barycentrics per
+// triangle and can miss both). `precise` forbids the compiler from fusing these products into FMAs
+// differently per triangle, which would break that symmetry.
 struct RayFrame {
   int kz;       // dominant axis of the direction: the ray frame's z
   bool swap_xy; // keeps the winding of the projected triangle when dir[kz] < 0
-  vec3 shear;   // Sx, Sy, Sz
+  real3 shear;  // Sx, Sy, Sz
 };
 
 // (p[kx], p[ky], p[kz]) with kx = (kz + 1) % 3, ky = (kx + 1) % 3, swapped when the frame says so.
 // Written with selects, not dynamic component indexing, which compilers turn into memory accesses.
-vec3 permute(RayFrame frame, vec3 p) {
-  vec3 q = frame.kz == 0 ? p.yzx : (frame.kz == 1 ? p.zxy : p);
+real3 permute(RayFrame frame, real3 p) {
+  real3 q = frame.kz == 0 ? p.yzx : (frame.kz == 1 ? p.zxy : p);
   return frame.swap_xy ? q.yxz : q;
 }
 
-RayFrame make_ray_frame(vec3 dir) {
-  vec3 ad = abs(dir);
+RayFrame make_ray_frame(real3 dir) {
+  real3 ad = abs(dir);
   RayFrame frame;
   frame.kz = (ad.x > ad.y) ? (ad.x > ad.z ? 0 : 2) : (ad.y > ad.z ? 1 : 2);
   frame.swap_xy = false;
   frame.swap_xy = permute(frame, dir).z < 0.0;
-  vec3 d = permute(frame, dir);
-  frame.shear = vec3(d.x / d.z, d.y / d.z, 1.0 / d.z);
+  real3 d = permute(frame, dir);
+  frame.shear = real3(d.x / d.z, d.y / d.z, 1.0 / d.z);
   return frame;
 }
 
-// Vertex relative to the ray origin, in the ray frame (z not yet scaled by Sz).
-vec3 to_ray_frame(RayFrame frame, vec3 vertex, vec3 origin) {
-  precise vec3 p = permute(frame, vertex - origin);
-  precise float px = p.x - frame.shear.x * p.z;
-  precise float py = p.y - frame.shear.y * p.z;
-  return vec3(px, py, p.z);
+// A vertex relative to the ray origin, in the ray frame (z not yet scaled by Sz).
+real3 to_ray_frame(RayFrame frame, real3 vertex) {
+  precise real3 p = permute(frame, vertex);
+  precise real px = p.x - frame.shear.x * p.z;
+  precise real py = p.y - frame.shear.y * p.z;
+  return real3(px, py, p.z);
 }
 
 // Moeller and Trumbore, "Fast, Minimum Storage Ray/Triangle Intersection", JGT 2(1), 1997: a
 // benchmark variant (VKRAY_TRIANGLE_MOLLER_TRUMBORE). Barycentrics are computed per triangle, so a
-// ray through an edge shared by two triangles can miss both.
-float intersect_triangle_moller_trumbore(vec3 origin, vec3 dir, vec3 v0, vec3 v1, vec3 v2, float t_max) {
-  vec3 e1 = v1 - v0;
-  vec3 e2 = v2 - v0;
-  vec3 p = cross(dir, e2);
-  float det = dot(e1, p);
+// ray through an edge shared by two triangles can miss both. Vertices relative to the ray origin.
+real intersect_triangle_moller_trumbore(real3 dir, real3 v0, real3 v1, real3 v2, real t_max) {
+  real3 e1 = v1 - v0;
+  real3 e2 = v2 - v0;
+  real3 p = cross(dir, e2);
+  real det = dot(e1, p);
   if (det == 0.0) return t_max;
-  float inv_det = 1.0 / det;
-  vec3 s = origin - v0;
-  float u = dot(s, p) * inv_det;
+  real inv_det = 1.0 / det;
+  real3 s = -v0;
+  real u = dot(s, p) * inv_det;
   if (u < 0.0 || u > 1.0) return t_max;
-  vec3 q = cross(s, e1);
-  float v = dot(dir, q) * inv_det;
+  real3 q = cross(s, e1);
+  real v = dot(dir, q) * inv_det;
   if (v < 0.0 || u + v > 1.0) return t_max;
-  float t = dot(e2, q) * inv_det;
+  real t = dot(e2, q) * inv_det;
   return (t > 0.0 && t < t_max) ? t : t_max;
 }
 
-float intersect_triangle(RayFrame frame, vec3 origin, vec3 dir, vec3 v0, vec3 v1, vec3 v2, float t_max) {
-  if (TRIANGLE_TEST == VKRAY_TRIANGLE_MOLLER_TRUMBORE) return intersect_triangle_moller_trumbore(origin, dir, v0, v1, v2, t_max);
-  vec3 a = to_ray_frame(frame, v0, origin);
-  vec3 b = to_ray_frame(frame, v1, origin);
-  vec3 c = to_ray_frame(frame, v2, origin);
-  precise float u = c.x * b.y - c.y * b.x;
-  precise float v = a.x * c.y - a.y * c.x;
-  precise float w = b.x * a.y - b.y * a.x;
+// Vertices relative to the ray origin.
+real intersect_triangle(RayFrame frame, real3 dir, real3 v0, real3 v1, real3 v2, real t_max) {
+  if (TRIANGLE_TEST == VKRAY_TRIANGLE_MOLLER_TRUMBORE) return intersect_triangle_moller_trumbore(dir, v0, v1, v2, t_max);
+  real3 a = to_ray_frame(frame, v0);
+  real3 b = to_ray_frame(frame, v1);
+  real3 c = to_ray_frame(frame, v2);
+  precise real u = c.x * b.y - c.y * b.x;
+  precise real v = a.x * c.y - a.y * c.x;
+  precise real w = b.x * a.y - b.y * a.x;
   if ((u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0)) return t_max;
-  float det = u + v + w;
+  real det = u + v + w;
   if (det == 0.0) return t_max;  // ray in the triangle's plane, or a degenerate projection
-  float t = frame.shear.z * (u * a.z + v * b.z + w * c.z) / det;
+  real t = frame.shear.z * (u * a.z + v * b.z + w * c.z) / det;
   return (t > 0.0 && t < t_max) ? t : t_max;
 }
 
@@ -185,32 +346,34 @@ float intersect_triangle(RayFrame frame, vec3 origin, vec3 dir, vec3 v0, vec3 v1
 // slab both ends are at least 1e-20 * 3.4e38 away, beyond any hit (coordinates stay within 1e15);
 // when it lies outside, the interval is empty or starts beyond any hit; and a ray exactly in the
 // plane of a face can meet nothing in the box.
-vec3 safe_inverse(vec3 dir) {
-  const float tiny = 1e-37;
-  const float largest = 3.4028235e38;
-  bvec3 parallel = lessThan(abs(dir), vec3(tiny));
-  vec3 signed_largest = mix(vec3(largest), vec3(-largest), lessThan(dir, vec3(0.0)));
-  return mix(1.0 / mix(dir, vec3(1.0), parallel), signed_largest, parallel);
+real3 safe_inverse(real3 dir) {
+  const real tiny = 1e-37;
+  const real largest = 3.4028235e38;
+  bvec3 parallel = lessThan(abs(dir), real3(tiny));
+  real3 signed_largest = mix(real3(largest), real3(-largest), lessThan(dir, real3(0.0)));
+  return mix(1.0 / mix(dir, real3(1.0), parallel), signed_largest, parallel);
 }
 
 // Slab tests of a ray against two boxes at once (a BVH node's children; see GpuBvhNode for the
 // layout), conservative under rounding: the far distance is enlarged by 1 + 2 gamma(3),
 // gamma(n) = n u / (1 - n u), u = 2^-24, which covers the error of the three operations behind
-// each slab distance (Ize, "Robust BVH Ray Traversal", JCGT 2(2), 2013). A ray that meets a box is
-// never rejected, so culling by box can not open holes in a mesh. Likewise the near distance is
-// shrunk by 1 - 2 gamma(3) before it is compared with t_max, so a box entered at the nearest hit so
-// far up to rounding is still visited. `enter` is where the ray enters each box (0 when it starts
-// inside). See safe_inverse for rays parallel to a slab.
-bvec2 ray_hits_boxes(vec4 bounds_x, vec4 bounds_y, vec4 bounds_z, vec3 origin, vec3 inv_dir, float t_max,
-                     out vec2 enter) {
-  vec4 tx = (bounds_x - origin.x) * inv_dir.x;
-  vec4 ty = (bounds_y - origin.y) * inv_dir.y;
-  vec4 tz = (bounds_z - origin.z) * inv_dir.z;
-  vec2 near = max(max(min(tx.xy, tx.zw), min(ty.xy, ty.zw)), max(min(tz.xy, tz.zw), vec2(0.0)));
-  const float gamma3 = 1.7881396e-7;  // 3 * 2^-24 / (1 - 3 * 2^-24), rounded up
-  vec2 far = min(min(max(tx.xy, tx.zw), max(ty.xy, ty.zw)), max(tz.xy, tz.zw)) * (1.0 + 2.0 * gamma3);
+// each slab distance (Ize, "Robust BVH Ray Traversal", JCGT 2(2), 2013; in double it is more than
+// needed). A ray that meets a box is never rejected, so culling by box can not open holes in a
+// mesh. Likewise the near distance is shrunk by 1 - 2 gamma(3) before it is compared with t_max, so
+// a box entered at the nearest hit so far up to rounding is still visited. `enter` is where the ray
+// enters each box (0 when it starts inside). `origin` is the camera's hi part in float32 shaders:
+// every box is widened by `margin` = |lo| per axis, so it holds what it holds relative to the
+// exact camera. See safe_inverse for rays parallel to a slab.
+bvec2 ray_hits_boxes(vec4 bounds_x, vec4 bounds_y, vec4 bounds_z, real3 origin, vec3 margin, real3 inv_dir,
+                     real t_max, out real2 enter) {
+  real4 tx = (real4(bounds_x + vec4(-margin.x, -margin.x, margin.x, margin.x)) - origin.x) * inv_dir.x;
+  real4 ty = (real4(bounds_y + vec4(-margin.y, -margin.y, margin.y, margin.y)) - origin.y) * inv_dir.y;
+  real4 tz = (real4(bounds_z + vec4(-margin.z, -margin.z, margin.z, margin.z)) - origin.z) * inv_dir.z;
+  real2 near = max(max(min(tx.xy, tx.zw), min(ty.xy, ty.zw)), max(min(tz.xy, tz.zw), real2(0.0)));
+  const real gamma3 = 1.7881396e-7;  // 3 * 2^-24 / (1 - 3 * 2^-24), rounded up
+  real2 far = min(min(max(tx.xy, tx.zw), max(ty.xy, ty.zw)), max(tz.xy, tz.zw)) * (1.0 + 2.0 * gamma3);
   enter = near;
-  vec2 near_low = near * (1.0 - 2.0 * gamma3);
+  real2 near_low = near * (1.0 - 2.0 * gamma3);
   return bvec2(near.x <= far.x && near_low.x < t_max, near.y <= far.y && near_low.y < t_max);
 }
 

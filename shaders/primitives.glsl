@@ -22,42 +22,117 @@ layout(constant_id = VKRAY_SPEC_GENERIC) const bool GENERIC = false;
 const bool TREE_TRIANGLES = GENERIC || TREE_HAS_TRIANGLES;
 const bool TREE_SPHERES = GENERIC || TREE_HAS_SPHERES;
 
-layout(binding = VKRAY_BINDING_SPHERES) uniform samplerBuffer spheres;        // GpuSphere
-layout(binding = VKRAY_BINDING_PRIMITIVES) uniform samplerBuffer primitives;  // GpuPrimitive: 3 texels
-layout(binding = VKRAY_BINDING_BVH_BOUNDS) uniform samplerBuffer bvh_bounds;  // GpuBvhNode: 4 texels
-layout(binding = VKRAY_BINDING_BVH_LINKS) uniform usamplerBuffer bvh_links;   // the same, as uints
+#ifdef VKRAY_FLOAT64
+#define GeometryTexels usamplerBuffer
+#else
+#define GeometryTexels samplerBuffer
+#endif
+layout(binding = VKRAY_BINDING_SPHERES) uniform GeometryTexels spheres;        // GpuSphere
+layout(binding = VKRAY_BINDING_PRIMITIVES) uniform GeometryTexels primitives;  // GpuPrimitive
+layout(binding = VKRAY_BINDING_BVH_BOUNDS) uniform samplerBuffer bvh_bounds;   // GpuBvhNode: 4 texels
+layout(binding = VKRAY_BINDING_BVH_LINKS) uniform usamplerBuffer bvh_links;    // the same, as uints
+
+// A GpuPoint as stored: hi and lo parts in float32 shaders, the position and w in float64 shaders.
+struct Point {
+#ifdef VKRAY_FLOAT64
+  dvec4 value;
+#else
+  vec4 hi;
+  vec4 lo;
+#endif
+};
+
+Point fetch_point(GeometryTexels texels, int point) {
+  int texel = VKRAY_TEXELS_PER_POINT * point;
+#ifdef VKRAY_FLOAT64
+  uvec4 first = texelFetch(texels, texel);
+  uvec4 second = texelFetch(texels, texel + 1);
+  return Point(dvec4(packDouble2x32(first.xy), packDouble2x32(first.zw), packDouble2x32(second.xy),
+                     packDouble2x32(second.zw)));
+#else
+  return Point(texelFetch(texels, texel), COORDINATES == VKRAY_COORDINATES_CAMERA_RELATIVE ? texelFetch(texels, texel + 1) : vec4(0.0));
+#endif
+}
+
+// The point's position relative to the ray origin, and its w.
+real3 point_from_origin(Point point, Origin origin) {
+#ifdef VKRAY_FLOAT64
+  return point.value.xyz - origin.position;
+#else
+  return relative_to_camera(point.hi.xyz, point.lo.xyz, origin.hi, origin.lo);
+#endif
+}
+
+real point_w(Point point) {
+#ifdef VKRAY_FLOAT64
+  return point.value.w;
+#else
+  return point.hi.w;
+#endif
+}
+
+// A sphere given as (centre, radius): `normal` receives (hit - centre) / radius.
+real intersect_sphere_point(Point sphere, Origin origin, real3 dir, real t_max, out real3 normal) {
+#ifdef VKRAY_FLOAT64
+  return intersect_sphere(origin.position - sphere.value.xyz, sphere.value.w, dir, t_max, normal);
+#else
+  vec3 f_hi, f_lo;
+  sphere_offset(sphere.hi.xyz, sphere.lo.xyz, origin.hi, origin.lo, f_hi, f_lo);
+  return intersect_sphere(f_hi, f_lo, sphere.hi.w, sphere.lo.w, dir, t_max, normal);
+#endif
+}
 
 const uint no_primitive = 0xffffffffu;
 
 struct PrimitiveHit {
-  float t;          // t_max when nothing nearer was found
-  vec3 normal;      // unit geometric normal (not yet facing the ray)
+  real t;           // t_max when nothing nearer was found
+  real3 normal;     // geometric normal, not yet unit length or facing the ray
   bool unfinished;  // the walk ran out of LOOP_BUDGET: the host must finish this ray
 };
 
-// The nearest hit among primitive slots so far; the normal is read once, for the winner.
+// The nearest hit among primitive slots so far; the normal is computed once, for the winner.
 struct SlotHit {
-  float t;
+  real t;
   uint slot;
 };
 
-void test_triangle(RayFrame frame, vec3 origin, vec3 dir, vec3 v0, vec3 v1, vec3 v2, uint slot, inout SlotHit hit) {
-  float t = intersect_triangle(frame, origin, dir, v0, v1, v2, hit.t);
+// The vertices of a triangle relative to the ray origin and its normal (w of its three points).
+void fetch_triangle(int slot, Origin origin, out real3 v0, out real3 v1, out real3 v2, out real3 normal) {
+  int point = 3 * slot;
+  Point a = fetch_point(primitives, point);
+  Point b = fetch_point(primitives, point + 1);
+  Point c = fetch_point(primitives, point + 2);
+  v0 = point_from_origin(a, origin);
+  v1 = point_from_origin(b, origin);
+  v2 = point_from_origin(c, origin);
+  normal = real3(point_w(a), point_w(b), point_w(c));
+}
+
+void test_triangle(RayFrame frame, Origin origin, real3 dir, uint slot, inout SlotHit hit) {
+  real3 v0, v1, v2, normal;
+  fetch_triangle(int(slot), origin, v0, v1, v2, normal);
+  real t = intersect_triangle(frame, dir, v0, v1, v2, hit.t);
   if (t < hit.t) {
     hit.t = t;
     hit.slot = slot;
   }
 }
 
+// Whether the slot's second point carries VKRAY_SPHERE_MARK (trees of both kinds only).
+bool is_sphere(int slot) {
+  if (!TREE_TRIANGLES) return true;
+  if (!TREE_SPHERES) return false;
+  return point_w(fetch_point(primitives, 3 * slot + 1)) == VKRAY_SPHERE_MARK;
+}
+
 // One primitive slot. Specialized on what the tree holds: a tree of triangles alone has no sphere
 // code, and the other way round.
-void test_primitive(RayFrame frame, vec3 origin, vec3 dir, uint slot, inout SlotHit hit) {
-  int texel = 3 * int(slot);
-  vec4 a = texelFetch(primitives, texel);
-  vec4 b = TREE_TRIANGLES ? texelFetch(primitives, texel + 1) : vec4(0.0);
-  if (TREE_TRIANGLES) test_triangle(frame, origin, dir, a.xyz, b.xyz, texelFetch(primitives, texel + 2).xyz, slot, hit);
-  if (TREE_SPHERES && (!TREE_TRIANGLES || b.w == VKRAY_SPHERE_MARK)) {
-    float t = intersect_sphere(origin - a.xyz, a.w, dir, hit.t);
+void test_primitive(RayFrame frame, Origin origin, real3 dir, uint slot, inout SlotHit hit) {
+  bool sphere = is_sphere(int(slot));
+  if (TREE_TRIANGLES && !sphere) test_triangle(frame, origin, dir, slot, hit);
+  if (TREE_SPHERES && sphere) {
+    real3 normal;
+    real t = intersect_sphere_point(fetch_point(primitives, 3 * int(slot)), origin, dir, hit.t, normal);
     if (t < hit.t) {
       hit.t = t;
       hit.slot = slot;
@@ -65,36 +140,35 @@ void test_primitive(RayFrame frame, vec3 origin, vec3 dir, uint slot, inout Slot
   }
 }
 
-vec3 primitive_normal(uint slot, vec3 origin, vec3 dir, float t) {
-  int texel = 3 * int(slot);
-  vec4 a = texelFetch(primitives, texel);
-  vec4 b = texelFetch(primitives, texel + 1);
-  if (TREE_SPHERES && (!TREE_TRIANGLES || b.w == VKRAY_SPHERE_MARK)) return (origin - a.xyz + t * dir) / a.w;
-  return vec3(a.w, b.w, texelFetch(primitives, texel + 2).w);
+// The winner's normal: a sphere's is computed again from its intersection (once per ray).
+real3 primitive_normal(uint slot, Origin origin, real3 dir) {
+  real3 normal;
+  if (TREE_SPHERES && is_sphere(int(slot))) {
+    intersect_sphere_point(fetch_point(primitives, 3 * int(slot)), origin, dir, uintBitsToFloat(0x7f800000u), normal);
+    return normal;
+  }
+  real3 v0, v1, v2;
+  fetch_triangle(int(slot), origin, v0, v1, v2, normal);
+  return normal;
 }
 
 // Every sphere, then every triangle in batches of VKRAY_TRIANGLE_BATCH (one loop iteration each).
-PrimitiveHit nearest_primitive_brute_force(RayFrame frame, vec3 origin, vec3 dir, float t_max, uint sphere_count,
+PrimitiveHit nearest_primitive_brute_force(RayFrame frame, Origin origin, real3 dir, real t_max, uint sphere_count,
                                            uint triangle_slots) {
-  PrimitiveHit result = PrimitiveHit(t_max, vec3(0.0), false);
+  PrimitiveHit result = PrimitiveHit(t_max, real3(0.0), false);
   for (uint i = 0; i < sphere_count; ++i) {
-    vec4 sphere = texelFetch(spheres, int(i));
-    vec3 f = origin - sphere.xyz;
-    float t = intersect_sphere(f, sphere.w, dir, result.t);
+    real3 normal;
+    real t = intersect_sphere_point(fetch_point(spheres, int(i)), origin, dir, result.t, normal);
     if (t < result.t) {
       result.t = t;
-      result.normal = (f + t * dir) / sphere.w;
+      result.normal = normal;
     }
   }
   SlotHit hit = SlotHit(result.t, no_primitive);
   for (uint batch = 0; batch < triangle_slots; batch += VKRAY_TRIANGLE_BATCH) {
-    [[unroll]] for (uint k = 0; k < VKRAY_TRIANGLE_BATCH; ++k) {
-      int texel = 3 * int(batch + k);
-      test_triangle(frame, origin, dir, texelFetch(primitives, texel).xyz, texelFetch(primitives, texel + 1).xyz,
-                    texelFetch(primitives, texel + 2).xyz, batch + k, hit);
-    }
+    [[unroll]] for (uint k = 0; k < VKRAY_TRIANGLE_BATCH; ++k) test_triangle(frame, origin, dir, batch + k, hit);
   }
-  if (hit.slot != no_primitive) result = PrimitiveHit(hit.t, primitive_normal(hit.slot, origin, dir, hit.t), false);
+  if (hit.slot != no_primitive) result = PrimitiveHit(hit.t, primitive_normal(hit.slot, origin, dir), false);
   return result;
 }
 
@@ -110,8 +184,15 @@ const uint no_node = 0x7fffffffu;  // `current` once the stack has run dry; no n
 // walk together, as Embree's packets do on the CPU: one node at a time for all of them, descending
 // where any ray's box test passes, nearer child first by majority; every value steering the walk is
 // uniform across the subgroup, so the lanes never diverge and share one stack's contents.
-PrimitiveHit nearest_primitive_in_tree(RayFrame frame, vec3 origin, vec3 dir, float t_max, const bool packet) {
-  vec3 inv_dir = safe_inverse(dir);
+PrimitiveHit nearest_primitive_in_tree(RayFrame frame, Origin origin, real3 dir, real t_max, const bool packet) {
+  real3 inv_dir = safe_inverse(dir);
+#ifdef VKRAY_FLOAT64
+  dvec3 box_origin = origin.position;
+  vec3 box_margin = vec3(0.0);
+#else
+  vec3 box_origin = origin.hi;
+  vec3 box_margin = abs(origin.lo);
+#endif
   SlotHit hit = SlotHit(t_max, no_primitive);
   bool unfinished = false;
   uint stack[VKRAY_BVH_MAX_DEPTH];
@@ -137,9 +218,10 @@ PrimitiveHit nearest_primitive_in_tree(RayFrame frame, vec3 origin, vec3 dir, fl
         pop = true;
       }
     } else if (current != no_node) {
-      vec2 enter;
+      real2 enter;
       bvec2 hits = ray_hits_boxes(texelFetch(bvh_bounds, 4 * int(current)), texelFetch(bvh_bounds, 4 * int(current) + 1),
-                                  texelFetch(bvh_bounds, 4 * int(current) + 2), origin, inv_dir, hit.t, enter);
+                                  texelFetch(bvh_bounds, 4 * int(current) + 2), box_origin, box_margin, inv_dir,
+                                  hit.t, enter);
       uvec2 children = texelFetch(bvh_links, 4 * int(current) + 3).xy;
       bool prefers_second = hits.y && (!hits.x || enter.y < enter.x);
       bool second_first = prefers_second;
@@ -160,13 +242,13 @@ PrimitiveHit nearest_primitive_in_tree(RayFrame frame, vec3 origin, vec3 dir, fl
     }
     if (pop) current = stack_size > 0 ? stack[--stack_size] : no_node;
   }
-  PrimitiveHit result = PrimitiveHit(hit.t, vec3(0.0), unfinished);
-  if (hit.slot != no_primitive) result.normal = primitive_normal(hit.slot, origin, dir, hit.t);
+  PrimitiveHit result = PrimitiveHit(hit.t, real3(0.0), unfinished);
+  if (hit.slot != no_primitive) result.normal = primitive_normal(hit.slot, origin, dir);
   return result;
 }
 
 // `counts`: RayGenParams.counts, read only by the generic variant.
-PrimitiveHit nearest_primitive(vec3 origin, vec3 dir, float t_max, uvec4 counts) {
+PrimitiveHit nearest_primitive(Origin origin, real3 dir, real t_max, uvec4 counts) {
   RayFrame frame = make_ray_frame(dir);
   uint search_mode = GENERIC ? counts.w : SEARCH_MODE;
   if (search_mode == VKRAY_SEARCH_BRUTE_FORCE) {

@@ -1,6 +1,8 @@
 #version 460
 // One primary ray per pixel through the pixel centre; the nearest hit over every primitive wins.
-// Writes the requested outputs (depth, normal, uv) for one tile of rows of the image.
+// Writes the requested outputs (depth, normal, uv) for one tile of rows of the image. Compiled
+// twice: float32, and float64 with VKRAY_FLOAT64 defined (`--precision double`), which writes depth
+// and normals as doubles.
 #extension GL_GOOGLE_include_directive : require
 
 #include "gpu_layout.h"
@@ -18,9 +20,9 @@ layout(constant_id = VKRAY_SPEC_MORTON_ORDER) const bool MORTON_ORDER = true;
 
 layout(push_constant) uniform PushConstants { RayGenParams params; };
 
-layout(binding = VKRAY_BINDING_PLANES) uniform samplerBuffer planes;    // GpuPlane
-layout(std430, binding = VKRAY_BINDING_DEPTH) writeonly buffer DepthOut { float depth_out[]; };
-layout(std430, binding = VKRAY_BINDING_NORMAL) writeonly buffer NormalOut { float normal_out[]; };
+layout(binding = VKRAY_BINDING_PLANES) uniform GeometryTexels planes;    // GpuPlane
+layout(std430, binding = VKRAY_BINDING_DEPTH) writeonly buffer DepthOut { real depth_out[]; };
+layout(std430, binding = VKRAY_BINDING_NORMAL) writeonly buffer NormalOut { real normal_out[]; };
 layout(std430, binding = VKRAY_BINDING_UV) writeonly buffer UvOut { float uv_out[]; };
 // Rays that ran out of LOOP_BUDGET: their count, then their pixels' indices within the tile.
 layout(std430, binding = VKRAY_BINDING_OVERFLOW) buffer Overflow { uint overflow_count; uint overflow_pixels[]; };
@@ -54,32 +56,59 @@ void main() {
   // numerators are small integers, exact in float; the division is the only rounding (within
   // 2.5 ulp by Vulkan's precision rules).
   float shorter = float(min(width, height));
-  vec2 uv = vec2(float(2 * tile_pixel.x + 1) - float(width),
-                 float(height) - float(2 * row + 1)) / shorter;
+  vec2 uv_numerator = vec2(float(2 * tile_pixel.x + 1) - float(width), float(height) - float(2 * row + 1));
+  vec2 uv = uv_numerator / shorter;
   if (WRITE_UV && inside) {
     uv_out[out_index] = uv.x;
     uv_out[plane_size + out_index] = uv.y;
   }
   if (!WRITE_DEPTH && !WRITE_NORMAL) return;
 
-  vec3 origin = params.origin.xyz;
-  vec3 dir = normalize(uv.x * params.right.xyz + uv.y * params.up.xyz + params.forward_scaled.xyz);
+#ifdef VKRAY_FLOAT64
+  dvec3 camera[4];  // origin, right, up, forward_scaled
+  for (int k = 0; k < 4; ++k) {
+    uvec4 first = params.camera[(3 * k) / 2];
+    uvec4 second = params.camera[(3 * k + 2) / 2];
+    uvec2 x = k % 2 == 0 ? first.xy : first.zw;
+    uvec2 y = k % 2 == 0 ? first.zw : second.xy;
+    uvec2 z = k % 2 == 0 ? second.xy : second.zw;
+    camera[k] = dvec3(packDouble2x32(x), packDouble2x32(y), packDouble2x32(z));
+  }
+  Origin origin = Origin(camera[0]);
+  dvec3 dir = normalize(double(uv_numerator.x) / shorter * camera[1] + double(uv_numerator.y) / shorter * camera[2] +
+                        camera[3]);
+#else
+  Origin origin = Origin(uintBitsToFloat(params.camera[0].xyz), uintBitsToFloat(params.camera[1].xyz));
+  vec3 dir = normalize(uv.x * uintBitsToFloat(params.camera[2].xyz) + uv.y * uintBitsToFloat(params.camera[3].xyz) +
+                       uintBitsToFloat(params.camera[4].xyz));
+#endif
 
-  const float no_hit = uintBitsToFloat(0x7f800000u);  // +infinity
-  float t_best = inside ? no_hit : 0.0;
-  vec3 normal = vec3(0.0);
+  const real no_hit = uintBitsToFloat(0x7f800000u);  // +infinity
+  real t_best = inside ? no_hit : 0.0;
+  real3 normal = real3(0.0);
 
+  // Planes first; spheres and triangles then search up to VKRAY_PRIMITIVE_T_MAX (coincident
+  // surfaces: the plane wins; see gpu_layout.h).
+  real primitive_t_max = t_best;
   uint plane_count = GENERIC ? params.counts.y : PLANE_COUNT;
   for (uint i = 0; i < plane_count; ++i) {
-    vec4 plane = texelFetch(planes, int(i));
-    float t = intersect_plane(plane, origin, dir, t_best);
+    Point normal_offset = fetch_point(planes, 2 * int(i));
+#ifdef VKRAY_FLOAT64
+    real3 plane_normal = normal_offset.value.xyz;
+    real t = intersect_plane(plane_normal, fetch_point(planes, 2 * int(i) + 1).value.xyz, origin.position, dir, t_best);
+#else
+    real3 plane_normal = normal_offset.hi.xyz;
+    real t = intersect_plane(plane_normal, plane_height(normal_offset.hi, normal_offset.lo, origin.hi, origin.lo), dir,
+                             t_best);
+#endif
     if (t < t_best) {
       t_best = t;
-      normal = plane.xyz;
+      normal = plane_normal;
+      primitive_t_max = VKRAY_PRIMITIVE_T_MAX(t, abs(dot(plane_normal, dir)));
     }
   }
-  PrimitiveHit hit = nearest_primitive(origin, dir, t_best, params.counts);
-  if (hit.t < t_best) {
+  PrimitiveHit hit = nearest_primitive(origin, dir, primitive_t_max, params.counts);
+  if (hit.t < primitive_t_max) {
     t_best = hit.t;
     normal = hit.normal;
   }

@@ -27,7 +27,7 @@ std::vector<ReferenceHit> reference_hits() {
 
 // A frame equal to the reference, in float.
 Frame matching_frame() {
-  Frame frame{side, side, {Aov::depth, Aov::normal}, {}, {}, {}};
+  Frame frame(side, side, {Aov::depth, Aov::normal});
   frame.allocate();
   for (size_t p = 0; p < pixels; ++p) {
     frame.depth[p] = static_cast<float>(true_depth);

@@ -14,7 +14,7 @@ namespace {
 class ImageIoTest : public test::TempDirTest {
  protected:
   static Frame frame(float depth) {
-    Frame result{8, 6, {Aov::depth, Aov::normal}, {}, {}, {}};
+    Frame result(8, 6, {Aov::depth, Aov::normal});
     result.allocate();
     for (auto& z : result.depth) z = depth;
     return result;

@@ -248,7 +248,11 @@ GpuDevice::GpuDevice(std::string_view name_filter) : context_(std::make_unique<V
 
     const float priority = 1.0f;
     const vk::DeviceQueueCreateInfo queue_info({}, vk_context.queue_family, 1, &priority);
-    vk_context.device = vk::raii::Device(vk_context.physical_device, vk::DeviceCreateInfo({}, queue_info));
+    // float64 arithmetic, where the device has it, for the `--precision double` shader.
+    vk::PhysicalDeviceFeatures features;
+    features.shaderFloat64 = vk_context.physical_device.getFeatures().shaderFloat64;
+    vk_context.device =
+        vk::raii::Device(vk_context.physical_device, vk::DeviceCreateInfo({}, queue_info, {}, {}, &features));
     vk_context.queue = vk::raii::Queue(vk_context.device, vk_context.queue_family, 0);
     vk_context.command_pool = vk::raii::CommandPool(
         vk_context.device, vk::CommandPoolCreateInfo(vk::CommandPoolCreateFlagBits::eTransient, vk_context.queue_family));

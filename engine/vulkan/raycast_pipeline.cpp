@@ -1,5 +1,6 @@
 #include "engine/vulkan/raycast_pipeline.hpp"
 
+#include "raycast.comp.VKRAY_FLOAT64.spv.h"
 #include "raycast.comp.spv.h"
 
 #include <chrono>
@@ -18,7 +19,13 @@ RaycastPipeline::RaycastPipeline(VulkanContext& context, PipelineSpecialization 
   const vk::PushConstantRange push_range(vk::ShaderStageFlagBits::eCompute, 0, sizeof(gpu::RayGenParams));
   const vk::DescriptorSetLayout set_layout = *set_layout_;
   layout_ = vk::raii::PipelineLayout(context.device, vk::PipelineLayoutCreateInfo({}, set_layout, push_range));
-  shader_ = vk::raii::ShaderModule(context.device, vk::ShaderModuleCreateInfo({}, sizeof(raycast_comp), raycast_comp));
+  const bool float64 = specialization.variant.precision == Precision::float64;
+  if (float64 && !context.info.shader_float64) {
+    throw GpuError(context.info.name + " has no float64 arithmetic in shaders (shaderFloat64); use --precision float");
+  }
+  shader_ = float64 ? vk::raii::ShaderModule(context.device, vk::ShaderModuleCreateInfo({}, sizeof(raycast_comp_VKRAY_FLOAT64),
+                                                                                        raycast_comp_VKRAY_FLOAT64))
+                    : vk::raii::ShaderModule(context.device, vk::ShaderModuleCreateInfo({}, sizeof(raycast_comp), raycast_comp));
 
   const std::array pool_sizes{
       vk::DescriptorPoolSize(vk::DescriptorType::eStorageBuffer, storage_buffers),
@@ -52,6 +59,7 @@ const vk::raii::Pipeline& RaycastPipeline::pipeline(AovSet aovs, double& created
   values[VKRAY_SPEC_WORKGROUP_Y] = variant.workgroup_height;
   values[VKRAY_SPEC_MORTON_ORDER] = variant.morton_order ? 1u : 0u;
   values[VKRAY_SPEC_GENERIC] = variant.generic ? 1u : 0u;
+  values[VKRAY_SPEC_COORDINATES] = variant.coordinates;
   std::array<vk::SpecializationMapEntry, values.size()> entries;
   for (uint32_t id = 0; id < entries.size(); ++id) entries[id] = vk::SpecializationMapEntry(id, id * 4u, 4u);
   const vk::SpecializationInfo specialization(entries, vk::ArrayProxyNoTemporaries<const uint32_t>(values));
