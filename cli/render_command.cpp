@@ -33,6 +33,7 @@ struct RenderOptions {
   bool check = false;
   bool reference = false;
   std::string compression = default_exr_compression;
+  std::string precision = "float";
 };
 
 AovSet parse_aov_list(const std::string& list) {
@@ -126,6 +127,7 @@ int run_render(const RenderOptions& options) {
     ProgressLine progress("building the BVH");
     RendererOptions renderer_options;
     renderer_options.scene.bvh.progress = progress.callback();
+    if (options.precision == "double") renderer_options.shader.precision = Precision::float64;
     Renderer renderer(device, scene, renderer_options);
     frame = renderer.render(scene.camera, scene.width, scene.height, aovs);
     gpu_timings = renderer.timings();
@@ -202,6 +204,11 @@ Action add_render_command(CLI::App& app) {
   command->add_option("--compression", options->compression,
                       "OpenEXR compression, all lossless: zip (default), zips, piz, rle, none (fastest, largest)");
   command->add_option("--device", options->device, "Use the Vulkan device whose name contains this text");
+  command->add_option("--precision", options->precision,
+                      "Shader arithmetic: float (float32, camera-relative) or double (float64: exact, slower; needs "
+                      "shaderFloat64)")
+      ->check(CLI::IsMember({"float", "double"}))
+      ->capture_default_str();
   command->add_flag("--timings", options->timings, "Print where the time went");
   command->add_flag("--check", options->check,
                     "Also render the double-precision CPU reference and print the GPU's error against it");

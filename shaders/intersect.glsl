@@ -93,17 +93,20 @@ vec3 relative_to_camera(vec3 hi, vec3 lo, vec3 origin_hi, vec3 origin_lo) {
   return sum;
 }
 
-// f = origin - center as an unevaluated sum f_hi + f_lo (f_lo = 0 with plain float coordinates).
+// f = origin - center as an unevaluated sum f_hi + f_lo, |f_lo| <= ulp(f_hi) / 2 (f_lo = 0 with
+// plain float coordinates).
 void sphere_offset(vec3 center_hi, vec3 center_lo, vec3 origin_hi, vec3 origin_lo, out vec3 f_hi, out vec3 f_lo) {
   if (COORDINATES != VKRAY_COORDINATES_CAMERA_RELATIVE) {
     f_hi = origin_hi - center_hi;
     f_lo = vec3(0.0);
     return;
   }
-  vec3 error;
-  two_sum(origin_hi, -center_hi, f_hi, error);
+  vec3 difference, error;
+  two_sum(origin_hi, -center_hi, difference, error);
   precise vec3 lo = error + (origin_lo - center_lo);
-  f_lo = lo;
+  // Renormalized, so that |f_lo| <= ulp(f_hi) / 2 as sphere_c assumes: when the centre is near the
+  // camera, difference is exact but short (its bits above the anchor's ulp), and lo as large.
+  two_sum(difference, lo, f_hi, f_lo);
 }
 
 // c = |f|^2 - r^2 from f = f_hi + f_lo and r = r_hi + r_lo, as accurate as if computed in twice the
@@ -329,9 +332,28 @@ real intersect_triangle(RayFrame frame, real3 dir, real3 v0, real3 v1, real3 v2,
   real3 a = to_ray_frame(frame, v0);
   real3 b = to_ray_frame(frame, v1);
   real3 c = to_ray_frame(frame, v2);
-  precise real u = c.x * b.y - c.y * b.x;
-  precise real v = a.x * c.y - a.y * c.x;
-  precise real w = b.x * a.y - b.y * a.x;
+  // Edge functions (u, v, w) = left - right, one per edge.
+  real3 left_x = real3(c.x, a.x, b.x), left_y = real3(b.y, c.y, a.y);
+  real3 right_x = real3(c.y, a.y, b.y), right_y = real3(b.x, c.x, a.x);
+  precise real3 left = left_x * left_y;
+  precise real3 right = right_x * right_y;
+  precise real3 uvw = left - right;
+#ifndef VKRAY_FLOAT64
+  // A triangle much smaller than its distance from the ray (1e-4 across, 500 to the side) has edge
+  // functions below their rounding error, 2 eps (|left| + |right|) with eps = 2^-24: their signs are
+  // noise, and all three may agree, a hit far from the triangle. Where any is that small, all three
+  // are evaluated again error-free (TwoProduct; the difference of the products is then exact by
+  // Sterbenz's lemma). The same inputs give the same decision for the two triangles of an edge, and
+  // the exact values are exact negatives, so the test stays watertight. Rare: ~never on meshes seen
+  // at their own scale.
+  if (any(lessThan(abs(uvw), 2.5e-7 * (abs(left) + abs(right))))) {
+    vec3 left_error, right_error;
+    two_product(left_x, left_y, left, left_error);
+    two_product(right_x, right_y, right, right_error);
+    uvw = (left - right) + (left_error - right_error);
+  }
+#endif
+  real u = uvw.x, v = uvw.y, w = uvw.z;
   if ((u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0)) return t_max;
   real det = u + v + w;
   if (det == 0.0) return t_max;  // ray in the triangle's plane, or a degenerate projection

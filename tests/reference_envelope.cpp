@@ -4,19 +4,25 @@
 // - Direction. The GPU rounds the pixel's uv (one division, within 2.5 ulp), the camera basis (1 per component),
 //   forms x*right + y*up + forward_scaled (2 products, 2 sums) and normalizes (~3 roundings): its
 //   ray is within an angle of about 8 eps of the exact one. We take eta = 16 eps.
-// - Positions. Camera and geometry are stored relative to the scene anchor and rounded once, and
-//   the intersectors subtract them once more: absolute position error <= ~4 eps R, where R bounds
-//   the distance of anything in the scene from the anchor.
+// - Positions. Geometry and camera are stored relative to the scene anchor, split into hi and lo
+//   floats (~48 bits: within 2^-48 R of exact, R bounding the distance of anything from the
+//   anchor), and the shader subtracts the camera's parts from a point's before adding them, so a
+//   point relative to the camera is within ~2 eps of its distance from the camera, plus the
+//   2^-47 R of the split. The primitive hit therefore moves by up to ~4 eps E + 2^-46 R, where E is
+//   the distance from the camera of the farthest point that defines it: a sphere's far side
+//   (|c - o| + r), a triangle's farthest vertex, a plane's foot point (its height, computed with
+//   Dot2). We take 16 eps E + 2^-44 R.
 //
 // The reference therefore traces five rays per pixel: the exact one and four turned by eta towards
 // +-right and +-up. Where all five hit the same primitive (or all miss), the pixel is "stable" and
 // the GPU must agree closely:
 // - hit/miss identical;
 // - depth within [min, max] of the five depths, widened by the position error seen along the ray:
-//   16 eps (t + R) / cos(theta), theta the angle of incidence (a surface shifted by d moves the hit
-//   by d / cos(theta) along the ray);
-// - normal within the spread of the five normals plus 16 eps (1 + (R + t) / rho), rho the radius
-//   of curvature (a sphere's radius; planes and triangles have constant normals, rounded once).
+//   (16 eps (t + E) + 2^-44 R) / cos(theta), theta the angle of incidence (a surface shifted by d
+//   moves the hit by d / cos(theta) along the ray);
+// - normal within the spread of the five normals plus 16 eps (1 + E / rho) + 2^-44 R / rho, rho
+//   the radius of curvature (a sphere's radius; planes and triangles have constant normals,
+//   computed in double and rounded once).
 // Elsewhere the pixel lies on a silhouette or an edge between primitives, where which primitive is
 // hit legitimately depends on rounding. There the GPU must reproduce one of the five outcomes: miss
 // only if a sample missed; a depth inside the samples' range widened by sqrt(2 eta) relative (the
@@ -41,6 +47,34 @@ constexpr double eps = 0x1p-24;
 constexpr double eta = 16 * eps;
 
 bool same_primitive(const ReferenceHit& a, const ReferenceHit& b) { return a.kind == b.kind && a.index == b.index; }
+
+// The distance from the camera of the farthest point that defines `hit`'s primitive (E above).
+// `triangle_reach` holds it for every triangle, numbered as the reference numbers them.
+double primitive_reach(const Scene& scene, const std::vector<double>& triangle_reach, const ReferenceHit& hit) {
+  const glm::dvec3& origin = scene.camera.from;
+  switch (hit.kind) {
+    case PrimitiveKind::sphere:
+      return glm::length(scene.spheres[hit.index].center - origin) + scene.spheres[hit.index].radius;
+    case PrimitiveKind::plane:
+      return std::abs(glm::dot(scene.planes[hit.index].normal, scene.planes[hit.index].point - origin));
+    case PrimitiveKind::triangle:
+      return triangle_reach[hit.index];
+    default:
+      return 0.0;
+  }
+}
+
+std::vector<double> triangle_reaches(const Scene& scene) {
+  std::vector<double> reach;
+  for (const auto& mesh : scene.meshes) {
+    for (const auto& corners : mesh.triangles) {
+      double farthest = 0.0;
+      for (uint32_t corner : corners) farthest = std::max(farthest, glm::length(mesh.positions[corner] - scene.camera.from));
+      reach.push_back(farthest);
+    }
+  }
+  return reach;
+}
 
 // Bound on the distance from the GPU anchor of everything the rays can meet or start from.
 double scene_radius(const Scene& scene, const glm::dvec3& anchor) {
@@ -72,6 +106,8 @@ EnvelopeReport check_against_reference(const Scene& scene, const Frame& frame) {
   const ReferenceScene reference(scene);
   const CameraBasis camera = make_camera_basis(scene.camera, width, height);
   const double radius = scene_radius(scene, scene_anchor(scene));
+  const double split_error = 0x1p-44 * radius;  // the hi/lo split's 2^-46 R, times 4
+  const std::vector<double> triangle_reach = triangle_reaches(scene);
 
   std::vector<PixelSamples> samples(frame.pixel_count());
   const unsigned workers = std::max(1u, std::thread::hardware_concurrency());
@@ -128,7 +164,8 @@ EnvelopeReport check_against_reference(const Scene& scene, const Frame& frame) {
       const ReferenceHit& main = s.hits[0].kind != PrimitiveKind::none ? s.hits[0] : *std::find_if(std::begin(s.hits), std::end(s.hits), [](const ReferenceHit& h) { return h.kind != PrimitiveKind::none; });
       if (main.kind == PrimitiveKind::sphere) curvature_radius = scene.spheres[main.index].radius;
       const double cos_theta = std::max(std::abs(glm::dot(main.normal, s.dir)), 1e-12);
-      const double position_slack = 16 * eps * (main.t + radius) / cos_theta;
+      const double reach = primitive_reach(scene, triangle_reach, main);
+      const double position_slack = (16 * eps * (main.t + reach) + split_error) / cos_theta;
       const double grazing = stable ? 0.0 : std::sqrt(2 * eta);
       const double depth_lo = lo * (1 - grazing) - position_slack, depth_hi = hi * (1 + grazing) + position_slack;
       if (has_depth && !(gpu_depth >= depth_lo && gpu_depth <= depth_hi)) {
@@ -137,7 +174,7 @@ EnvelopeReport check_against_reference(const Scene& scene, const Frame& frame) {
                       depth_hi, main.t);
         failure = text;
       }
-      const double normal_slack = 16 * eps * (1 + (radius + main.t) / curvature_radius);
+      const double normal_slack = 16 * eps * (1 + reach / curvature_radius) + split_error / curvature_radius;
       double best = INFINITY;
       for (const auto& h : s.hits) {
         if (h.kind != PrimitiveKind::none) best = std::min(best, angle_between(gpu_normal, h.normal));
