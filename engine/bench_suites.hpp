@@ -15,15 +15,18 @@ struct BenchScene {
   Scene scene;
 };
 
-// "basic, scaling, stiff, models": for help texts and error messages.
-inline constexpr const char* bench_suite_names = "basic, scaling, stiff, models";
+// "basic, scaling, stiff, accuracy, models": for help texts and error messages.
+inline constexpr const char* bench_suite_names = "basic, scaling, stiff, accuracy, models";
+// The real mesh the accuracy suite adds from the models folder, when it is there.
+inline constexpr const char* accuracy_model = "stanford-bunny.obj";
 
 // The scenes of one suite at width x height:
 // - basic: the built-in scene, one sphere, spheres on a ground plane, a closed mesh;
 // - scaling: closed meshes of 1k to 4M triangles, sphere fields of 1 to 10k spheres;
-// - stiff: the numerically hard cases (a small sphere far away, a huge sphere as the ground, a
-//   grazing plane, a scene far from the origin, a camera looking straight up, a closed mesh 1e5
-//   from the origin);
+// - stiff: the numerically hard cases of engine/stiff_cases.hpp (cases about image sizes keep
+//   theirs);
+// - accuracy: the stiff cases, then the basic suite and the Stanford bunny (accuracy_model, when
+//   `models_dir` has it): what docs/accuracy.md tabulates;
 // - models: every .obj file in `models_dir`, framed to fill the image (none when the folder is
 //   absent; the caller says so). A file that does not load is left out, its error added to
 //   `skipped` when given.

@@ -4,12 +4,14 @@
 
 #include <glm/geometric.hpp>
 
+#include <algorithm>
 #include <array>
 #include <bit>
 #include <chrono>
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <tuple>
 
 namespace vkray {
 namespace {
@@ -117,9 +119,16 @@ GpuScene make_gpu_scene(const Scene& scene, const GpuSceneOptions& options, cons
   std::vector<EncodedPrimitive> triangles;
   for (const auto& mesh : scene.meshes) {
     for (const auto& corners : mesh.triangles) {
-      const glm::dvec3 v0 = mesh.positions[corners[0]] - gpu.anchor;
-      const glm::dvec3 v1 = mesh.positions[corners[1]] - gpu.anchor;
-      const glm::dvec3 v2 = mesh.positions[corners[2]] - gpu.anchor;
+      // Vertices in a canonical order (lexicographic): the shader's normal faces the ray whatever
+      // the winding, and the watertight test accepts either orientation, so the order is free, and
+      // fixing it makes copies of a triangle with another winding or starting vertex give
+      // bit-identical distances: coincident copies tie exactly (see VKRAY_COINCIDENT_GAP).
+      std::array<glm::dvec3, 3> v = {mesh.positions[corners[0]] - gpu.anchor, mesh.positions[corners[1]] - gpu.anchor,
+                                     mesh.positions[corners[2]] - gpu.anchor};
+      std::sort(v.begin(), v.end(), [](const glm::dvec3& a, const glm::dvec3& b) {
+        return std::tie(a.x, a.y, a.z) < std::tie(b.x, b.y, b.z);
+      });
+      const auto& [v0, v1, v2] = v;
       const glm::dvec3 cross = glm::cross(v1 - v0, v2 - v0);
       if (cross == glm::dvec3(0.0)) continue;
       const glm::dvec3 normal = unit_vector(cross);

@@ -15,7 +15,7 @@ namespace vkray {
 // Same formulation as shaders/intersect.glsl (Ray Tracing Gems ch. 7): discriminant from the
 // perpendicular offset and roots without cancellation. Double precision makes even the
 // tiny-far-sphere case exact to ~1e-16 relative.
-double intersect_sphere(const glm::dvec3& f, double radius, const glm::dvec3& dir, double t_max) {
+double intersect_sphere(const glm::dvec3& f, double radius, const glm::dvec3& dir, double t_max, bool* near) {
   const double a = glm::dot(dir, dir);
   const double b = glm::dot(f, dir);
   const glm::dvec3 f_perp = f - (b / a) * dir;
@@ -26,7 +26,9 @@ double intersect_sphere(const glm::dvec3& f, double radius, const glm::dvec3& di
   if (q == 0.0) return t_max;
   const double t0 = c / q;
   const double t1 = q / a;
-  const double t = std::min(t0, t1) > 0.0 ? std::min(t0, t1) : std::max(t0, t1);
+  const bool near_root = std::min(t0, t1) > 0.0;
+  const double t = near_root ? std::min(t0, t1) : std::max(t0, t1);
+  if (near) *near = near_root;
   return (t > 0.0 && t < t_max) ? t : t_max;
 }
 
@@ -111,8 +113,10 @@ ReferenceScene::ReferenceScene(const Scene& scene) : spheres_(scene.spheres), pl
 
 void ReferenceScene::test_sphere(uint32_t index, const glm::dvec3& origin, const glm::dvec3& dir, ReferenceHit& hit) const {
   const glm::dvec3 f = origin - spheres_[index].center;
-  const double t = intersect_sphere(f, spheres_[index].radius, dir, hit.t);
-  if (t < hit.t) hit = {t, (f + t * dir) / spheres_[index].radius, PrimitiveKind::sphere, index};
+  bool near = false;
+  const double t = intersect_sphere(f, spheres_[index].radius, dir, hit.t, &near);
+  // Facing the ray by the root, as the shader does: outward where the ray enters, inward from inside.
+  if (t < hit.t) hit = {t, (near ? 1.0 : -1.0) * (f + t * dir) / spheres_[index].radius, PrimitiveKind::sphere, index};
 }
 
 void ReferenceScene::test_triangle(const Triangle& triangle, const glm::dvec3& origin, const glm::dvec3& dir,
@@ -213,7 +217,7 @@ ReferenceHit ReferenceScene::trace_with(const glm::dvec3& origin, const glm::dve
   if (hit.kind == PrimitiveKind::none) hit = plane_hit;
   if (hit.kind != PrimitiveKind::none) {
     hit.normal = glm::normalize(hit.normal);
-    if (glm::dot(hit.normal, dir) > 0.0) hit.normal = -hit.normal;
+    if (hit.kind != PrimitiveKind::sphere && glm::dot(hit.normal, dir) > 0.0) hit.normal = -hit.normal;
   }
   return hit;
 }

@@ -21,7 +21,9 @@ inline constexpr double no_hit = std::numeric_limits<double>::infinity();
 
 // The individual intersectors, in the same form as shaders/intersect.glsl. Each returns the ray
 // parameter of the nearest hit in (0, t_max), else t_max.
-double intersect_sphere(const glm::dvec3& origin_minus_center, double radius, const glm::dvec3& dir, double t_max);
+// `near`, when given, receives whether the hit is the near root (the ray enters the sphere there).
+double intersect_sphere(const glm::dvec3& origin_minus_center, double radius, const glm::dvec3& dir, double t_max,
+                        bool* near = nullptr);
 double intersect_plane(const glm::dvec3& normal, const glm::dvec3& point, const glm::dvec3& origin,
                        const glm::dvec3& dir, double t_max);
 double intersect_triangle(const glm::dvec3& v0, const glm::dvec3& v1, const glm::dvec3& v2, const glm::dvec3& origin,

@@ -147,7 +147,9 @@ vec3 perpendicular_part(vec3 f_hi, vec3 f_lo, float b_over_a, vec3 dir) {
 //   difference of nearly equal numbers; c itself comes from sphere_c.
 // `normal` receives the hit point minus the centre over the radius, from the same quantities (see
 // the end): for a small sphere far away the hit is f_perp -+ sqrt(disc / a) dir from the centre
-// (minus for the near root), not the rounded difference f + t dir of two long vectors.
+// (minus for the near root), not the rounded difference f + t dir of two long vectors. It faces the
+// ray by which root was taken (outward for the near root, inward from inside), not by the sign of
+// its dot product with the ray, which rounding decides at the silhouette, where it is 0.
 // The textbook form, kept as a benchmark variant (VKRAY_SPHERE_NAIVE) to show what this buys:
 // b^2 - c cancels when the sphere is small against its distance, -b + sqrt(disc) when the camera is
 // inside, c = |f|^2 - r^2 near a large sphere's surface, and f + t dir for any small sphere far away.
@@ -157,8 +159,9 @@ float intersect_sphere_naive(vec3 f, float radius, vec3 dir, float t_max, out ve
   normal = vec3(0.0);
   if (disc < 0.0) return t_max;
   float root = sqrt(disc);
-  float t = -b - root > 0.0 ? -b - root : -b + root;
-  normal = (f + t * dir) / radius;
+  bool near = -b - root > 0.0;
+  float t = near ? -b - root : -b + root;
+  normal = (near ? 1.0 : -1.0) * (f + t * dir) / radius;
   return (t > 0.0 && t < t_max) ? t : t_max;
 }
 
@@ -198,15 +201,17 @@ float intersect_sphere(vec3 f_hi, vec3 f_lo, float r_hi, float r_lo, vec3 dir, f
   // f_perp -+ sqrt(disc / a) dir carries the error of sqrt(disc), ~eps r^2 / root (large where the
   // ray grazes: the discriminant cancels); f + t dir, evaluated error-free, carries the error of t,
   // ~eps t (large for a small sphere far away: Ray Tracing Gems ch. 7).
+  vec3 offset;
   if (r_hi * r_hi < t * root) {
-    normal = (f_perp + ((near ? -root : root) / a) * dir) / r_hi;
+    offset = f_perp + ((near ? -root : root) / a) * dir;
   } else {
     vec3 products, product_errors, sums, sum_errors;
     two_product(vec3(t), dir, products, product_errors);
     two_sum(f_hi, products, sums, sum_errors);
-    precise vec3 offset = sums + ((sum_errors + product_errors) + f_lo);
-    normal = offset / r_hi;
+    precise vec3 exact_offset = sums + ((sum_errors + product_errors) + f_lo);
+    offset = exact_offset;
   }
+  normal = (near ? offset : -offset) / r_hi;  // facing the ray (see the header comment)
   return (t > 0.0 && t < t_max) ? t : t_max;
 }
 
@@ -251,8 +256,9 @@ double intersect_sphere(dvec3 f, double radius, dvec3 dir, double t_max, out dve
   if (q == 0.0) return t_max;
   double t0 = c / q;
   double t1 = q / a;
-  double t = min(t0, t1) > 0.0 ? min(t0, t1) : max(t0, t1);
-  normal = (f + t * dir) / radius;
+  bool near = min(t0, t1) > 0.0;
+  double t = near ? min(t0, t1) : max(t0, t1);
+  normal = (near ? 1.0 : -1.0) * (f + t * dir) / radius;
   return (t > 0.0 && t < t_max) ? t : t_max;
 }
 

@@ -86,7 +86,7 @@ const uint no_primitive = 0xffffffffu;
 
 struct PrimitiveHit {
   real t;           // t_max when nothing nearer was found
-  real3 normal;     // geometric normal, not yet unit length or facing the ray
+  real3 normal;     // geometric normal facing the ray, not yet unit length
   bool unfinished;  // the walk ran out of LOOP_BUDGET: the host must finish this ray
 };
 
@@ -140,7 +140,8 @@ void test_primitive(RayFrame frame, Origin origin, real3 dir, uint slot, inout S
   }
 }
 
-// The winner's normal: a sphere's is computed again from its intersection (once per ray).
+// The winner's normal, facing the ray: a sphere's is computed again from its intersection (once
+// per ray).
 real3 primitive_normal(uint slot, Origin origin, real3 dir) {
   real3 normal;
   if (TREE_SPHERES && is_sphere(int(slot))) {
@@ -149,7 +150,7 @@ real3 primitive_normal(uint slot, Origin origin, real3 dir) {
   }
   real3 v0, v1, v2;
   fetch_triangle(int(slot), origin, v0, v1, v2, normal);
-  return normal;
+  return dot(normal, dir) > 0.0 ? -normal : normal;
 }
 
 // Every sphere, then every triangle in batches of VKRAY_TRIANGLE_BATCH (one loop iteration each).

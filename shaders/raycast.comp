@@ -103,7 +103,7 @@ void main() {
 #endif
     if (t < t_best) {
       t_best = t;
-      normal = plane_normal;
+      normal = dot(plane_normal, dir) > 0.0 ? -plane_normal : plane_normal;
       primitive_t_max = VKRAY_PRIMITIVE_T_MAX(t, abs(dot(plane_normal, dir)));
     }
   }
@@ -117,9 +117,8 @@ void main() {
 
   if (WRITE_DEPTH) depth_out[out_index] = t_best;
   if (WRITE_NORMAL) {
-    // Unit length again (the sphere normal carries rounding) and turned to face the ray.
+    // Unit length again (the sphere normal carries rounding); every kind turned it to face the ray.
     if (t_best < no_hit) normal = normalize(normal);
-    if (dot(normal, dir) > 0.0) normal = -normal;
     normal_out[out_index] = normal.x;
     normal_out[plane_size + out_index] = normal.y;
     normal_out[2 * plane_size + out_index] = normal.z;

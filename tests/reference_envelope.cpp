@@ -1,9 +1,14 @@
 // How far may a float32 GPU pixel be from the double-precision reference?
 //
 // Error model (eps = 2^-24, the float32 unit roundoff):
-// - Direction. The GPU rounds the pixel's uv (one division, within 2.5 ulp), the camera basis (1 per component),
-//   forms x*right + y*up + forward_scaled (2 products, 2 sums) and normalizes (~3 roundings): its
-//   ray is within an angle of about 8 eps of the exact one. We take eta = 16 eps.
+// - Direction. The GPU rounds the pixel's uv (one division, within 2.5 ulp), the camera basis (1 per
+//   component), forms x*right + y*up + forward_scaled (2 products, 2 sums) and normalizes (~3
+//   roundings). Each rounding is relative to the component it rounds, so the error of component i is
+//   within ~8 eps (|x right_i| + |y up_i| + |forward_scaled_i|); the part of that error vector
+//   across the ray, over the vector's length, bounds the angle. In general position that is ~8 eps;
+//   for a camera along an axis the small components round relative to themselves and it is far
+//   smaller (a narrow view of a far sphere straight ahead). We take eta = twice that bound, plus
+//   eps^2 (directions never exact to more than that).
 // - Positions. Geometry and camera are stored relative to the scene anchor, split into hi and lo
 //   floats (~48 bits: within 2^-48 R of exact, R bounding the distance of anything from the
 //   anchor), and the shader subtracts the camera's parts from a point's before adding them, so a
@@ -13,21 +18,24 @@
 //   (|c - o| + r), a triangle's farthest vertex, a plane's foot point (its height, computed with
 //   Dot2). We take 16 eps E + 2^-44 R.
 //
-// The reference therefore traces five rays per pixel: the exact one and four turned by eta towards
-// +-right and +-up. Where all five hit the same primitive (or all miss), the pixel is "stable" and
+// The reference therefore traces five rays per pixel: the exact one and four turned towards +-right
+// and +-up by eta plus the angle the position error subtends, 2 eps (t + E) / t. Where all five hit the same primitive (or all miss), the pixel is "stable" and
 // the GPU must agree closely:
 // - hit/miss identical;
 // - depth within [min, max] of the five depths, widened by the position error seen along the ray:
 //   (16 eps (t + E) + 2^-44 R) / cos(theta), theta the angle of incidence (a surface shifted by d
 //   moves the hit by d / cos(theta) along the ray);
-// - normal within the spread of the five normals plus 16 eps (1 + E / rho) + 2^-44 R / rho, rho
-//   the radius of curvature (a sphere's radius; planes and triangles have constant normals,
-//   computed in double and rounded once).
+// - normal within the spread of the five normals plus 16 eps (1 + E / (rho cos(theta))) +
+//   2^-44 R / (rho cos(theta)), rho the radius of curvature (a sphere's radius; planes and triangles
+//   have constant normals, computed in double and rounded once): the hit moves along the surface
+//   by the position error over cos(theta), and the normal turns by that over rho.
 // Elsewhere the pixel lies on a silhouette or an edge between primitives, where which primitive is
 // hit legitimately depends on rounding. There the GPU must reproduce one of the five outcomes: miss
 // only if a sample missed; a depth inside the samples' range widened by sqrt(2 eta) relative (the
 // depth along a ray grazing a convex surface changes like the square root of the angle) plus the
-// position term; a normal within the samples' spread of one of the sample normals.
+// position term; a normal within the samples' spread of one of the sample normals, and where the
+// samples hit a sphere's silhouette, of any normal between theirs and the silhouette's (a ray in
+// between grazes it: its normal is across the ray, asin |n.d| from a sample's).
 #include "tests/reference_envelope.hpp"
 
 #include "engine/gpu_scene.hpp"
@@ -44,7 +52,16 @@ namespace vkray::test {
 namespace {
 
 constexpr double eps = 0x1p-24;
-constexpr double eta = 16 * eps;
+// eta for the ray through `uv` (the direction bound above).
+double direction_uncertainty(const CameraBasis& camera, const glm::dvec2& uv) {
+  const glm::dvec3 forward_scaled = -camera.plane_distance * camera.forward;
+  const glm::dvec3 ray = uv.x * camera.right + uv.y * camera.up + forward_scaled;
+  const glm::dvec3 bound = 8 * eps * (glm::abs(uv.x * camera.right) + glm::abs(uv.y * camera.up) + glm::abs(forward_scaled));
+  const glm::dvec3 unit = glm::normalize(ray);
+  // The worst error vector within the component bounds, across the ray: bound minus its part along it.
+  const glm::dvec3 across = bound - glm::dot(bound, glm::abs(unit)) * glm::abs(unit);
+  return 2 * glm::length(across) / glm::length(ray) + eps * eps;
+}
 
 bool same_primitive(const ReferenceHit& a, const ReferenceHit& b) { return a.kind == b.kind && a.index == b.index; }
 
@@ -90,6 +107,7 @@ double scene_radius(const Scene& scene, const glm::dvec3& anchor) {
 struct PixelSamples {
   ReferenceHit hits[5];
   glm::dvec3 dir;
+  double eta = 0.0;  // the angle the samples are turned by
 };
 
 }  // namespace
@@ -101,7 +119,7 @@ std::string EnvelopeReport::describe() const {
   return text;
 }
 
-EnvelopeReport check_against_reference(const Scene& scene, const Frame& frame) {
+EnvelopeReport check_against_reference(const Scene& scene, const Frame& frame, uint32_t row_step) {
   const uint32_t width = frame.width, height = frame.height;
   const ReferenceScene reference(scene);
   const CameraBasis camera = make_camera_basis(scene.camera, width, height);
@@ -111,30 +129,63 @@ EnvelopeReport check_against_reference(const Scene& scene, const Frame& frame) {
 
   std::vector<PixelSamples> samples(frame.pixel_count());
   const unsigned workers = std::max(1u, std::thread::hardware_concurrency());
-  {
+  auto in_parallel = [&](const auto& per_pixel) {
     std::vector<std::jthread> threads;
     for (unsigned worker = 0; worker < workers; ++worker) {
       threads.emplace_back([&, worker] {
         for (size_t p = worker; p < samples.size(); p += workers) {
-          const glm::dvec3 dir = camera.direction(pixel_uv(static_cast<uint32_t>(p % width), static_cast<uint32_t>(p / width), width, height));
-          const glm::dvec3 turns[5] = {dir, dir + eta * camera.right, dir - eta * camera.right, dir + eta * camera.up,
-                                       dir - eta * camera.up};
-          samples[p].dir = dir;
-          for (int k = 0; k < 5; ++k) samples[p].hits[k] = reference.trace(camera.origin, glm::normalize(turns[k]));
+          if ((p / width) % row_step == 0) per_pixel(p);
         }
       });
     }
+  };
+  // The centre rays first: each pixel's position error subtends 2 eps (t + E) / t of its hit.
+  std::vector<double> position_angle(samples.size(), 0.0);
+  in_parallel([&](size_t p) {
+    const glm::dvec2 uv = pixel_uv(static_cast<uint32_t>(p % width), static_cast<uint32_t>(p / width), width, height);
+    samples[p].dir = camera.direction(uv);
+    samples[p].hits[0] = reference.trace(camera.origin, samples[p].dir);
+    const ReferenceHit& hit = samples[p].hits[0];
+    if (hit.kind != PrimitiveKind::none) {
+      position_angle[p] = 2 * eps * (hit.t + primitive_reach(scene, triangle_reach, hit)) / hit.t;
+    }
+    samples[p].eta = direction_uncertainty(camera, uv);
+  });
+  // A miss takes the largest angle of any hit: next to a silhouette it may legitimately hit.
+  const double miss_angle = *std::max_element(position_angle.begin(), position_angle.end());
+  in_parallel([&](size_t p) {
+    const double angle = samples[p].hits[0].kind == PrimitiveKind::none ? miss_angle : position_angle[p];
+    const double eta = samples[p].eta + angle;
+    samples[p].eta = eta;
+    const glm::dvec3& dir = samples[p].dir;
+    const glm::dvec3 turns[4] = {dir + eta * camera.right, dir - eta * camera.right, dir + eta * camera.up,
+                                 dir - eta * camera.up};
+    for (int k = 0; k < 4; ++k) samples[p].hits[k + 1] = reference.trace(camera.origin, glm::normalize(turns[k]));
+  });
+
+  // The checked rows alone, for the summary figures.
+  const uint32_t checked_rows = (height + row_step - 1) / row_step;
+  Frame checked(width, checked_rows, frame.aovs);
+  checked.allocate();
+  std::vector<ReferenceHit> centre;
+  for (uint32_t row = 0; row < checked_rows; ++row) {
+    for (uint32_t i = 0; i < width; ++i) {
+      const size_t from = size_t{row} * row_step * width + i, to = size_t{row} * width + i;
+      centre.push_back(samples[from].hits[0]);
+      if (frame.aovs.has(Aov::depth)) checked.depth[to] = frame.depth[from];
+      for (size_t c = 0; c < 3 && frame.aovs.has(Aov::normal); ++c) {
+        checked.normal[c * checked.pixel_count() + to] = frame.normal[c * frame.pixel_count() + from];
+      }
+    }
   }
 
-  std::vector<ReferenceHit> centre(samples.size());
-  for (size_t p = 0; p < samples.size(); ++p) centre[p] = samples[p].hits[0];
-
   EnvelopeReport report;
-  report.pixels = frame.pixel_count();
-  report.stats = measure_error(frame, centre);
+  report.pixels = checked.pixel_count();
+  report.stats = measure_error(checked, centre);
   const bool has_depth = frame.aovs.has(Aov::depth), has_normal = frame.aovs.has(Aov::normal);
 
   for (size_t p = 0; p < samples.size(); ++p) {
+    if ((p / width) % row_step != 0) continue;
     const PixelSamples& s = samples[p];
     const bool stable = std::all_of(std::begin(s.hits), std::end(s.hits),
                                     [&](const ReferenceHit& h) { return same_primitive(h, s.hits[0]); });
@@ -160,13 +211,14 @@ EnvelopeReport check_against_reference(const Scene& scene, const Frame& frame) {
         for (const auto& other : s.hits) {
           if (other.kind != PrimitiveKind::none) spread = std::max(spread, angle_between(h.normal, other.normal));
         }
+        if (!stable && h.kind == PrimitiveKind::sphere) spread = std::max(spread, std::asin(std::min(1.0, std::abs(glm::dot(h.normal, s.dir)))));
       }
       const ReferenceHit& main = s.hits[0].kind != PrimitiveKind::none ? s.hits[0] : *std::find_if(std::begin(s.hits), std::end(s.hits), [](const ReferenceHit& h) { return h.kind != PrimitiveKind::none; });
       if (main.kind == PrimitiveKind::sphere) curvature_radius = scene.spheres[main.index].radius;
       const double cos_theta = std::max(std::abs(glm::dot(main.normal, s.dir)), 1e-12);
       const double reach = primitive_reach(scene, triangle_reach, main);
       const double position_slack = (16 * eps * (main.t + reach) + split_error) / cos_theta;
-      const double grazing = stable ? 0.0 : std::sqrt(2 * eta);
+      const double grazing = stable ? 0.0 : std::sqrt(2 * s.eta);
       const double depth_lo = lo * (1 - grazing) - position_slack, depth_hi = hi * (1 + grazing) + position_slack;
       if (has_depth && !(gpu_depth >= depth_lo && gpu_depth <= depth_hi)) {
         char text[200];
@@ -174,7 +226,9 @@ EnvelopeReport check_against_reference(const Scene& scene, const Frame& frame) {
                       depth_hi, main.t);
         failure = text;
       }
-      const double normal_slack = 16 * eps * (1 + reach / curvature_radius) + split_error / curvature_radius;
+      // A surface shifted by d moves the hit along it by d / cos(theta): the normal turns by that over rho.
+      const double normal_slack = 16 * eps * (1 + reach / (curvature_radius * cos_theta)) +
+                                  split_error / (curvature_radius * cos_theta);
       double best = INFINITY;
       for (const auto& h : s.hits) {
         if (h.kind != PrimitiveKind::none) best = std::min(best, angle_between(gpu_normal, h.normal));
