@@ -37,7 +37,7 @@ Display::Display(VulkanContext& context, vk::raii::SurfaceKHR surface, bool vsyn
     format_ = choose_swapchain_format(context_, *surface_, vsync);
     overlay_pass_ = make_overlay_pass(context_.device, format_.surface_format.format);
     command_pool_ = vk::raii::CommandPool(
-        context_.device, vk::CommandPoolCreateInfo(vk::CommandPoolCreateFlagBits::eResetCommandBuffer, context_.queue_family));
+        context_.device, vk::CommandPoolCreateInfo(vk::CommandPoolCreateFlagBits::eTransient, context_.queue_family));
     commands_ = std::move(vk::raii::CommandBuffers(
         context_.device, vk::CommandBufferAllocateInfo(*command_pool_, vk::CommandBufferLevel::ePrimary, 1))[0]);
     done_ = vk::raii::Fence(context_.device, vk::FenceCreateInfo());
@@ -96,7 +96,7 @@ bool Display::present(const OverlayDraw* overlay, std::vector<uint8_t>* capture)
     const vk::Image image = swapchain_.images[index];
     const vk::Extent2D extent = swapchain_.extent;
 
-    commands_.reset();
+    command_pool_.reset();  // its one command buffer, recorded anew every frame
     commands_.begin(vk::CommandBufferBeginInfo(vk::CommandBufferUsageFlagBits::eOneTimeSubmit));
     // The submission waits for the acquire at the transfer stage: the first barrier chains to it.
     transition(commands_, image, vk::PipelineStageFlagBits::eTransfer, {}, vk::ImageLayout::eUndefined,

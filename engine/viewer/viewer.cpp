@@ -62,6 +62,7 @@ class Viewer {
   void run();
 
  private:
+  void resize();
   void handle(const WindowInput& input, double dt);
   void reload();
   void save();
@@ -85,6 +86,9 @@ class Viewer {
   bool dirty_ = true;     // what is shown changed: render again
   bool damaged_ = false;  // the rendered picture must be presented (again)
   bool stale_ = true;     // the swapchain must be made again
+  // The window size the swapchain was last made for (its extent may differ where the surface
+  // decides it).
+  vk::Extent2D sized_for_;
   uint64_t renders_ = 0, presents_ = 0;
   std::vector<double> frame_ms_;  // of every render and present, for --stats
   double gpu_ms_ = 0.0;
@@ -105,8 +109,7 @@ Viewer::Viewer(const ViewerOptions& options)
       device_(options.device, presentation_),
       display_(device_.vulkan(), window_.create_surface(device_.vulkan().instance), options.vsync),
       renderer_(std::make_unique<Renderer>(device_, scene_)) {
-  display_.resize(window_.framebuffer_size());
-  stale_ = false;
+  resize();
   if (options.overlay) {
     // The backend needs at least 2 images, even for a window that starts minimized.
     overlay_.emplace(device_.vulkan(), window_.handle(), display_.overlay_pass(), std::max(2u, display_.min_image_count()),
@@ -139,12 +142,7 @@ void Viewer::run() {
       if (options_.spin_degrees != 0.0) controller_.orbit(options_.spin_degrees * std::numbers::pi / 180.0, 0.0);
     }
 
-    if (stale_ || window_.framebuffer_size() != display_.extent()) {
-      display_.resize(window_.framebuffer_size());
-      if (overlay_ && display_.min_image_count() > 0) overlay_->set_min_image_count(std::max(2u, display_.min_image_count()));
-      stale_ = false;
-      dirty_ = true;
-    }
+    if (stale_ || window_.framebuffer_size() != sized_for_) resize();
     if (display_.extent().width == 0) continue;  // minimized: nothing to show
     const auto frame_start = Clock::now();
     if (dirty_) render();
@@ -164,7 +162,7 @@ void Viewer::run() {
   if (options_.screenshot) {
     std::vector<uint8_t> rgb;
     for (int attempt = 0; attempt < capture_attempts && rgb.empty(); ++attempt) {
-      if (stale_ || window_.framebuffer_size() != display_.extent()) display_.resize(window_.framebuffer_size()), dirty_ = true;
+      if (stale_ || window_.framebuffer_size() != sized_for_) resize();
       if (display_.extent().width == 0) break;
       if (dirty_) render();
       if (!present(&rgb)) rgb.clear(), stale_ = true;
@@ -186,6 +184,14 @@ void Viewer::run() {
                 static_cast<unsigned long long>(presents_), static_cast<unsigned long long>(renders_),
                 span_s > 0.0 ? double(presents_ - 1) / span_s : 0.0, median, gpu_ms_);
   }
+}
+
+void Viewer::resize() {
+  sized_for_ = window_.framebuffer_size();
+  display_.resize(sized_for_);
+  if (overlay_ && display_.min_image_count() > 0) overlay_->set_min_image_count(std::max(2u, display_.min_image_count()));
+  stale_ = false;
+  dirty_ = true;
 }
 
 void Viewer::handle(const WindowInput& input, double dt) {
