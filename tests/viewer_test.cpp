@@ -7,6 +7,7 @@
 #include <OpenImageIO/imageio.h>
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
+#include <fcntl.h>
 #include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -119,25 +120,46 @@ class ViewerTest : public TempDirTest {
     for (const char* tool : {"/usr/bin/Xvfb", "/usr/bin/xdotool"}) {
       if (!fs::exists(tool)) GTEST_SKIP() << tool << " is missing (apt-get install xvfb xdotool): viewer tests skipped";
     }
-    // -displayfd: Xvfb picks a free display number and writes it to the pipe once it accepts clients.
+    // Two servers starting at once may pick the same display number, and the loser then ends:
+    // a server counts as started once it has kept running while a client connected to it.
+    constexpr int server_attempts = 5;
+    for (int attempt = 0; attempt < server_attempts && display_.empty(); ++attempt) start_server();
+    ASSERT_FALSE(display_.empty()) << "Xvfb did not start";
+  }
+
+  // Starts Xvfb on a display number it picks itself (-displayfd: written to the pipe once it
+  // accepts clients); sets display_ when it runs.
+  void start_server() {
     int fds[2];
     ASSERT_EQ(pipe(fds), 0);
     xvfb_ = fork();
     ASSERT_GE(xvfb_, 0);
     if (xvfb_ == 0) {
       close(fds[0]);
-      const std::string fd = std::to_string(fds[1]);
+      // Above the standard descriptors, which ctest may have left closed for the pipe to take.
+      const std::string fd = std::to_string(fcntl(fds[1], F_DUPFD, 10));
       std::freopen("/dev/null", "w", stderr);
       execl("/usr/bin/Xvfb", "Xvfb", "-displayfd", fd.c_str(), "-screen", "0", "1280x1024x24", "-nolisten", "tcp",
             static_cast<char*>(nullptr));
       _exit(127);
     }
     close(fds[1]);
-    char number[16] = {};
-    const ssize_t got = read(fds[0], number, sizeof number - 1);
+    std::string number;
+    char c = 0;
+    while (read(fds[0], &c, 1) == 1 && c != '\n') number += c;
     close(fds[0]);
-    ASSERT_GT(got, 0) << "Xvfb did not start";
-    display_ = ":" + std::string(number, strcspn(number, "\n"));
+    const std::string display = ":" + number;
+    const std::string probe = "DISPLAY=" + display + " xdotool getdisplaygeometry > /dev/null 2>&1";
+    if (!number.empty() && std::system(probe.c_str()) == 0) {
+      std::this_thread::sleep_for(100ms);
+      if (waitpid(xvfb_, nullptr, WNOHANG) == 0) {
+        display_ = display;
+        return;
+      }
+    }
+    kill(xvfb_, SIGTERM);
+    waitpid(xvfb_, nullptr, 0);
+    xvfb_ = -1;
   }
 
   void TearDown() override {
