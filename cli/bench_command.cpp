@@ -30,23 +30,6 @@ struct BenchOptions {
   std::vector<std::string> compare;
 };
 
-std::pair<uint32_t, uint32_t> parse_size(const std::string& text) {
-  const size_t x = text.find('x');
-  try {
-    size_t used_w = 0, used_h = 0;
-    if (x == std::string::npos) throw std::invalid_argument("no x");
-    const unsigned long width = std::stoul(text.substr(0, x), &used_w);
-    const unsigned long height = std::stoul(text.substr(x + 1), &used_h);
-    if (used_w != x || used_h != text.size() - x - 1 || width > UINT32_MAX || height > UINT32_MAX) {
-      throw std::invalid_argument("trailing text");
-    }
-    check_image_size(static_cast<uint32_t>(width), static_cast<uint32_t>(height));
-    return {static_cast<uint32_t>(width), static_cast<uint32_t>(height)};
-  } catch (const std::logic_error&) {
-    throw InputError("--size: '" + text + "' is not WIDTHxHEIGHT, e.g. 1920x1080");
-  }
-}
-
 std::vector<std::string> split_list(const std::string& list) {
   std::vector<std::string> items;
   size_t start = 0;

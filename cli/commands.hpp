@@ -14,5 +14,6 @@ using Action = std::function<int()>;
 Action add_render_command(CLI::App& app);
 Action add_info_command(CLI::App& app);
 Action add_bench_command(CLI::App& app);
+Action add_view_command(CLI::App& app);
 
 }  // namespace vkray::cli

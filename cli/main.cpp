@@ -42,6 +42,7 @@ int main(int argc, char** argv) {
   const vkray::cli::Action render = vkray::cli::add_render_command(app);
   const vkray::cli::Action info = vkray::cli::add_info_command(app);
   const vkray::cli::Action bench = vkray::cli::add_bench_command(app);
+  const vkray::cli::Action view = vkray::cli::add_view_command(app);
 
   try {
     app.parse(argc, argv);
@@ -56,6 +57,7 @@ int main(int argc, char** argv) {
   try {
     if (app.got_subcommand("render")) return render();
     if (app.got_subcommand("bench")) return bench();
+    if (app.got_subcommand("view")) return view();
     return info();
   } catch (const vkray::InputError& error) {
     std::cerr << "vkray: " << error.what() << '\n';

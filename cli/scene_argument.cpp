@@ -10,6 +10,7 @@
 #include <charconv>
 #include <cmath>
 #include <filesystem>
+#include <stdexcept>
 #include <vector>
 
 namespace vkray::cli {
@@ -61,6 +62,23 @@ Scene load_scene_argument(const std::string& path, std::optional<uint32_t> width
   check_image_size(scene.width, scene.height);
   if (extension == ".obj") scene.camera = frame_scene(scene, scene.width, scene.height);
   return scene;
+}
+
+std::pair<uint32_t, uint32_t> parse_size(const std::string& text) {
+  const size_t x = text.find('x');
+  try {
+    size_t used_w = 0, used_h = 0;
+    if (x == std::string::npos) throw std::invalid_argument("no x");
+    const unsigned long width = std::stoul(text.substr(0, x), &used_w);
+    const unsigned long height = std::stoul(text.substr(x + 1), &used_h);
+    if (used_w != x || used_h != text.size() - x - 1 || width > UINT32_MAX || height > UINT32_MAX) {
+      throw std::invalid_argument("trailing text");
+    }
+    check_image_size(static_cast<uint32_t>(width), static_cast<uint32_t>(height));
+    return {static_cast<uint32_t>(width), static_cast<uint32_t>(height)};
+  } catch (const std::logic_error&) {
+    throw InputError("--size: '" + text + "' is not WIDTHxHEIGHT, e.g. 1920x1080");
+  }
 }
 
 void apply_camera_option(const std::string& text, Camera& camera) {

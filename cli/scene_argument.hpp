@@ -5,6 +5,7 @@
 
 #include <optional>
 #include <string>
+#include <utility>
 
 namespace vkray::cli {
 
@@ -12,6 +13,10 @@ namespace vkray::cli {
 // (engine/framing.hpp); the built-in scene for an empty path. `width`/`height` override the image
 // size, and the framing is done at the final size. Throws InputError naming the file.
 Scene load_scene_argument(const std::string& path, std::optional<uint32_t> width, std::optional<uint32_t> height);
+
+// A --size value "WIDTHxHEIGHT" (bench, view). Throws InputError for anything else or a size
+// check_image_size refuses.
+std::pair<uint32_t, uint32_t> parse_size(const std::string& text);
 
 // Applies a --camera override: space- or semicolon-separated keys, each optional,
 // "from=X,Y,Z to=X,Y,Z up=X,Y,Z fovy=DEGREES". Throws InputError for anything else.

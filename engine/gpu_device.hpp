@@ -18,6 +18,14 @@ class GpuError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+// No window can be shown: no display, or no device presents to it (the viewer). The message
+// names the headless alternative.
+class NoWindowError : public GpuError {
+ public:
+  explicit NoWindowError(const std::string& reason)
+      : GpuError("cannot open a window: " + reason + "; 'vkray render' renders without one") {}
+};
+
 struct GpuDeviceInfo {
   std::string name;
   std::string type;  // "discrete", "integrated", "virtual", "cpu" or "other"
@@ -47,12 +55,16 @@ std::vector<GpuDeviceInfo> list_gpu_devices();
 // `name_filter`, ignoring case. Throws GpuError when none fits.
 size_t choose_gpu_device(const std::vector<GpuDeviceInfo>& devices, std::string_view name_filter);
 
-struct VulkanContext;  // engine/vulkan/context.hpp
+struct VulkanContext;        // engine/vulkan/context.hpp
+struct PresentationSupport;  // engine/vulkan/context.hpp
 
 // An opened Vulkan device with a compute queue.
 class GpuDevice {
  public:
   explicit GpuDevice(std::string_view name_filter = {});
+  // A device whose compute queue can also present to a window (the viewer's): only devices with
+  // such a queue are candidates. Throws NoWindowError when none is.
+  GpuDevice(std::string_view name_filter, const PresentationSupport& presentation);
   ~GpuDevice();
   GpuDevice(const GpuDevice&) = delete;
   GpuDevice& operator=(const GpuDevice&) = delete;

@@ -1,5 +1,7 @@
 #include "engine/image_io.hpp"
 
+#include "engine/preview.hpp"
+
 #include <OpenImageIO/imageio.h>
 
 #include <unistd.h>
@@ -7,7 +9,6 @@
 #include <algorithm>
 #include <array>
 #include <atomic>
-#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <exception>
@@ -128,6 +129,13 @@ void write_preview_png(const std::filesystem::path& path, const Frame& frame) {
   file.commit();
 }
 
+void write_rgb_png(const std::filesystem::path& path, uint32_t width, uint32_t height, const std::vector<uint8_t>& rgb) {
+  PartialFile file(path);
+  const OIIO::ImageSpec spec(static_cast<int>(width), static_cast<int>(height), 3, OIIO::TypeDesc::UINT8);
+  write_image(file.path(), spec, OIIO::TypeDesc::UINT8, rgb.data(), path);
+  file.commit();
+}
+
 namespace {
 
 void write_exr_to(const PartialFile& file, const std::filesystem::path& path, const Frame& frame,
@@ -168,47 +176,17 @@ void write_exr_to(const PartialFile& file, const std::filesystem::path& path, co
 }
 
 void write_preview_png_to(const PartialFile& file, const std::filesystem::path& path, const Frame& frame) {
-  const size_t panels = (frame.aovs.has(Aov::depth) ? 1 : 0) + (frame.aovs.has(Aov::normal) ? 1 : 0) +
-                        (frame.aovs.has(Aov::uv) ? 1 : 0);
-  if (panels == 0) throw std::runtime_error(path.string() + ": no outputs to preview");
-  const size_t width = frame.width, height = frame.height, row_width = width * panels;
-  std::vector<uint8_t> rgb(row_width * height * 3, 0);
-  auto to_byte = [](double v) { return static_cast<uint8_t>(std::lround(255.0 * std::clamp(v, 0.0, 1.0))); };
-  size_t panel = 0;
-  auto put = [&](size_t p, double r, double g, double b) {
-    uint8_t* out = &rgb[((p / width) * row_width + panel * width + p % width) * 3];
-    out[0] = to_byte(r), out[1] = to_byte(g), out[2] = to_byte(b);
-  };
-
-  if (frame.aovs.has(Aov::depth)) {
-    // Grey from inverse depth, which keeps near detail visible when a ground plane runs to the
-    // horizon; every hit stays at 10% or brighter so it never reads as a miss.
-    double near = INFINITY, far = 0.0;
-    for (float z : frame.depth) {
-      if (std::isfinite(z)) near = std::min<double>(near, z), far = std::max<double>(far, z);
-    }
-    for (size_t p = 0; p < frame.pixel_count(); ++p) {
-      const double z = frame.depth[p];
-      if (!std::isfinite(z)) continue;
-      const double span = 1.0 / near - 1.0 / far;
-      const double grey = span > 0.0 ? 0.1 + 0.9 * (1.0 / z - 1.0 / far) / span : 1.0;
-      put(p, grey, grey, grey);
-    }
-    ++panel;
+  std::vector<Aov> shown;
+  for (Aov aov : {Aov::depth, Aov::normal, Aov::uv}) {
+    if (frame.aovs.has(aov)) shown.push_back(aov);
   }
-  if (frame.aovs.has(Aov::normal)) {
-    for (size_t p = 0; p < frame.pixel_count(); ++p) {
-      if (!frame.hit(p)) continue;
-      const glm::vec3 n = frame.normal_at(p);
-      put(p, 0.5 * (n.x + 1.0), 0.5 * (n.y + 1.0), 0.5 * (n.z + 1.0));
-    }
-    ++panel;
-  }
-  if (frame.aovs.has(Aov::uv)) {
-    for (size_t p = 0; p < frame.pixel_count(); ++p) {
-      const double u = frame.uv_at(p).x, v = frame.uv_at(p).y;
-      const double brightness = u * u + v * v <= 1.0 ? 1.0 : 0.3;
-      put(p, brightness * 0.5 * (u + 1.0), brightness * 0.5 * (v + 1.0), brightness * 0.5);
+  if (shown.empty()) throw std::runtime_error(path.string() + ": no outputs to preview");
+  const size_t width = frame.width, height = frame.height, row_width = width * shown.size();
+  std::vector<uint8_t> rgb(row_width * height * 3);
+  for (size_t panel = 0; panel < shown.size(); ++panel) {
+    const std::vector<uint8_t> panel_rgb = preview_rgb(frame, shown[panel]);
+    for (size_t row = 0; row < height; ++row) {
+      std::copy_n(&panel_rgb[row * width * 3], width * 3, &rgb[(row * row_width + panel * width) * 3]);
     }
   }
 

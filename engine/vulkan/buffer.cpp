@@ -47,6 +47,10 @@ GpuBuffer create_readback_buffer(VulkanContext& context, vk::DeviceSize size) {
                        vk::MemoryPropertyFlagBits::eHostCached);
 }
 
+GpuBuffer create_upload_buffer(VulkanContext& context, vk::DeviceSize size) {
+  return create_buffer(context, size, vk::BufferUsageFlagBits::eTransferSrc, host_access, {});
+}
+
 GpuBuffer upload_buffer(VulkanContext& context, const void* data, size_t bytes, vk::BufferUsageFlags usage) {
   GpuBuffer target = create_buffer(context, bytes, usage | vk::BufferUsageFlagBits::eTransferDst, {},
                                    vk::MemoryPropertyFlagBits::eDeviceLocal);

@@ -56,13 +56,15 @@ vk::DebugUtilsMessengerCreateInfoEXT messenger_info(Validation mode) {
       report_validation);
 }
 
-vk::raii::Instance create_instance(const vk::raii::Context& context) {
+vk::raii::Instance create_instance(const vk::raii::Context& context, std::vector<const char*> extension_names = {}) {
   // 1.2 lets us query VkPhysicalDeviceDriverProperties on devices that have it; a 1.1 device still
   // works (describe() checks each device's own version).
   const vk::ApplicationInfo application("vkray", 1, "vkray", 1, VK_API_VERSION_1_2);
   try {
     const Validation mode = validation_mode();
-    if (mode == Validation::off) return vk::raii::Instance(context, vk::InstanceCreateInfo({}, &application));
+    if (mode == Validation::off) {
+      return vk::raii::Instance(context, vk::InstanceCreateInfo({}, &application, {}, extension_names));
+    }
     const auto layers = context.enumerateInstanceLayerProperties();
     const bool has_layer = std::any_of(layers.begin(), layers.end(), [](const vk::LayerProperties& layer) {
       return std::string_view(layer.layerName.data()) == validation_layer;
@@ -74,7 +76,7 @@ vk::raii::Instance create_instance(const vk::raii::Context& context) {
     const std::array enabled_features = {vk::ValidationFeatureEnableEXT::eSynchronizationValidation,
                                          vk::ValidationFeatureEnableEXT::eBestPractices};
     const char* layer_names[] = {validation_layer};
-    const char* extension_names[] = {VK_EXT_DEBUG_UTILS_EXTENSION_NAME};
+    extension_names.push_back(VK_EXT_DEBUG_UTILS_EXTENSION_NAME);
     // The messenger in the chain also reports what happens while the instance is created.
     vk::StructureChain<vk::InstanceCreateInfo, vk::ValidationFeaturesEXT, vk::DebugUtilsMessengerCreateInfoEXT> chain(
         vk::InstanceCreateInfo({}, &application, layer_names, extension_names),
@@ -113,11 +115,15 @@ std::string lower(std::string_view text) {
   return result;
 }
 
-// First queue family with compute; UINT32_MAX if none.
-uint32_t compute_queue_family(const vk::raii::PhysicalDevice& physical_device) {
+// First queue family with compute (that can also present, when `presentation` is given);
+// UINT32_MAX if none.
+uint32_t compute_queue_family(const vk::raii::PhysicalDevice& physical_device,
+                              const PresentationSupport* presentation = nullptr, vk::Instance instance = {}) {
   const auto families = physical_device.getQueueFamilyProperties();
   for (uint32_t i = 0; i < families.size(); ++i) {
-    if (families[i].queueFlags & vk::QueueFlagBits::eCompute) return i;
+    if (!(families[i].queueFlags & vk::QueueFlagBits::eCompute)) continue;
+    if (presentation && !presentation->can_present(instance, *physical_device, i)) continue;
+    return i;
   }
   return UINT32_MAX;
 }
@@ -231,28 +237,44 @@ void VulkanContext::submit_and_wait(const std::function<void(const vk::raii::Com
   }
 }
 
-GpuDevice::GpuDevice(std::string_view name_filter) : context_(std::make_unique<VulkanContext>()) {
+namespace {
+
+void open_device(VulkanContext& vk_context, std::string_view name_filter, const PresentationSupport* presentation) {
   with_vulkan_errors("opening the Vulkan device", [&] {
-    VulkanContext& vk_context = *context_;
-    vk_context.instance = create_instance(vk_context.context);
+    vk_context.instance =
+        create_instance(vk_context.context, presentation ? presentation->instance_extensions : std::vector<const char*>{});
     vk_context.validation_messenger = create_validation_messenger(vk_context.instance);
     vk::raii::PhysicalDevices physical_devices(vk_context.instance);
     std::vector<GpuDeviceInfo> infos;
-    for (const auto& physical_device : physical_devices) infos.push_back(describe(physical_device));
-    const size_t chosen = choose_gpu_device(infos, name_filter);
+    for (const auto& physical_device : physical_devices) {
+      infos.push_back(describe(physical_device));
+      // A device that cannot present is no candidate for a window.
+      if (presentation && compute_queue_family(physical_device, presentation, *vk_context.instance) == UINT32_MAX) {
+        infos.back().can_compute = false;
+      }
+    }
+    size_t chosen = 0;
+    try {
+      chosen = choose_gpu_device(infos, name_filter);
+    } catch (const GpuError& error) {
+      if (!presentation) throw;
+      throw NoWindowError(std::string("no Vulkan device presents to this display (") + error.what() + ")");
+    }
     vk_context.physical_device = std::move(physical_devices[chosen]);
     vk_context.info = infos[chosen];
     vk_context.limits = vk_context.physical_device.getProperties().limits;
     vk_context.memory_properties = vk_context.physical_device.getMemoryProperties();
-    vk_context.queue_family = compute_queue_family(vk_context.physical_device);
+    vk_context.queue_family = compute_queue_family(vk_context.physical_device, presentation, *vk_context.instance);
 
     const float priority = 1.0f;
     const vk::DeviceQueueCreateInfo queue_info({}, vk_context.queue_family, 1, &priority);
+    std::vector<const char*> device_extensions;
+    if (presentation) device_extensions.push_back(VK_KHR_SWAPCHAIN_EXTENSION_NAME);
     // float64 arithmetic, where the device has it, for the `--precision double` shader.
     vk::PhysicalDeviceFeatures features;
     features.shaderFloat64 = vk_context.physical_device.getFeatures().shaderFloat64;
-    vk_context.device =
-        vk::raii::Device(vk_context.physical_device, vk::DeviceCreateInfo({}, queue_info, {}, {}, &features));
+    vk_context.device = vk::raii::Device(vk_context.physical_device,
+                                         vk::DeviceCreateInfo({}, queue_info, {}, device_extensions, &features));
     vk_context.queue = vk::raii::Queue(vk_context.device, vk_context.queue_family, 0);
     vk_context.command_pool = vk::raii::CommandPool(
         vk_context.device, vk::CommandPoolCreateInfo(vk::CommandPoolCreateFlagBits::eTransient, vk_context.queue_family));
@@ -261,6 +283,17 @@ GpuDevice::GpuDevice(std::string_view name_filter) : context_(std::make_unique<V
         vk::CommandBufferAllocateInfo(*vk_context.command_pool, vk::CommandBufferLevel::ePrimary, 1))[0]);
     vk_context.fence = vk::raii::Fence(vk_context.device, vk::FenceCreateInfo());
   });
+}
+
+}  // namespace
+
+GpuDevice::GpuDevice(std::string_view name_filter) : context_(std::make_unique<VulkanContext>()) {
+  open_device(*context_, name_filter, nullptr);
+}
+
+GpuDevice::GpuDevice(std::string_view name_filter, const PresentationSupport& presentation)
+    : context_(std::make_unique<VulkanContext>()) {
+  open_device(*context_, name_filter, &presentation);
 }
 
 GpuDevice::~GpuDevice() = default;

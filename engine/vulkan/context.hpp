@@ -7,8 +7,16 @@
 #include <vulkan/vulkan_raii.hpp>
 
 #include <functional>
+#include <vector>
 
 namespace vkray {
+
+// What showing images in a window asks of Vulkan (see engine/viewer/window.hpp): the instance
+// extensions of its kind of surface, and whether a queue family of a device can present there.
+struct PresentationSupport {
+  std::vector<const char*> instance_extensions;
+  std::function<bool(vk::Instance, vk::PhysicalDevice, uint32_t queue_family)> can_present;
+};
 
 struct VulkanContext {
   vk::raii::Context context;
