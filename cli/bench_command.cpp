@@ -1,6 +1,7 @@
 #include "cli/commands.hpp"
 #include "cli/progress.hpp"
 #include "cli/scene_argument.hpp"
+#include "engine/accuracy_report.hpp"
 #include "engine/bench.hpp"
 #include "engine/bench_plot.hpp"
 #include "engine/bench_report.hpp"
@@ -26,7 +27,7 @@ struct BenchOptions {
   std::string device;
   std::string models = "../shared/models";
   bool no_embree = false;
-  std::string json, csv, plot;
+  std::string json, csv, plot, markdown;
   std::vector<std::string> compare;
 };
 
@@ -39,6 +40,18 @@ std::vector<std::string> split_list(const std::string& list) {
     start = comma + 1;
   }
   return items;
+}
+
+// The options that decide what was measured, as a command: the accuracy document names it.
+std::string command_line(const BenchOptions& options) {
+  std::string line = "vkray bench";
+  for (const auto& scene : options.scenes) line += " " + scene;
+  if (!options.suite.empty()) line += " --suite " + options.suite;
+  line += " --size " + options.size + " --frames " + std::to_string(options.frames);
+  if (!options.variants.empty()) line += " --variants " + options.variants;
+  if (options.no_embree) line += " --no-embree";
+  if (!options.markdown.empty()) line += " --markdown " + options.markdown;
+  return line;
 }
 
 int run_compare(const BenchOptions& options) {
@@ -57,7 +70,7 @@ int run_bench(const BenchOptions& options) {
   for (const auto& name : settings.variants) find_bench_variant(name);  // unknown names fail before any work
   settings.embree = !options.no_embree;
   // Before any work: a bench must not run for minutes only to find it cannot be saved.
-  for (const std::string& path : {options.json, options.csv, options.plot}) {
+  for (const std::string& path : {options.json, options.csv, options.plot, options.markdown}) {
     if (!path.empty()) check_output_path(path);
   }
 
@@ -90,6 +103,7 @@ int run_bench(const BenchOptions& options) {
 
   if (!options.json.empty()) write_text_file(options.json, bench_json(report));
   if (!options.csv.empty()) write_text_file(options.csv, bench_csv(report));
+  if (!options.markdown.empty()) write_text_file(options.markdown, accuracy_markdown(report, command_line(options)));
   if (!options.plot.empty() && !options.json.empty()) plot_bench(options.json, options.plot);
   if (!options.plot.empty() && options.json.empty()) {  // the script reads the report from a file
     const auto json_path = std::filesystem::temp_directory_path() / ("vkray-bench-" + std::to_string(getpid()) + ".json");
@@ -126,6 +140,8 @@ Action add_bench_command(CLI::App& app) {
   command->add_flag("--no-embree", options->no_embree, "Leave out the Embree CPU baseline");
   command->add_option("--json", options->json, "Write every figure as JSON (schema: README, 'vkray bench')");
   command->add_option("--csv", options->csv, "Write every figure as CSV, a line per row");
+  command->add_option("--markdown", options->markdown,
+                      "Write the accuracy document (docs/accuracy.md) of this run: use with --suite accuracy");
   command->add_option("--plot", options->plot, "Plot error against time as PNG (needs python3-matplotlib)");
   command->add_option("--compare", options->compare, "Compare two JSON files of earlier runs (A B): ratios B/A")
       ->expected(2);

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <thread>
 #include <tuple>
 
 namespace vkray {
@@ -122,6 +123,25 @@ BenchSceneResult bench_scene(GpuDevice& device, const BenchScene& bench, const B
       render_reference_hits(reference_scene, make_camera_basis(scene.camera, scene.width, scene.height), scene.width,
                             scene.height, settings.reference_progress);
   result.reference_ms = elapsed_ms(reference_start);
+  {
+    const CameraBasis camera = make_camera_basis(scene.camera, scene.width, scene.height);
+    std::vector<ReferenceHit> rounded_rays(reference.size());
+    const unsigned workers = std::max(1u, std::min(std::thread::hardware_concurrency(), scene.height));
+    std::vector<std::jthread> threads;
+    for (unsigned worker = 0; worker < workers; ++worker) {
+      threads.emplace_back([&, worker] {
+        for (uint32_t j = worker; j < scene.height; j += workers) {
+          for (uint32_t i = 0; i < scene.width; ++i) {
+            rounded_rays[size_t{j} * scene.width + i] =
+                reference_scene.trace(camera.origin, float32_ray_direction(camera, i, j, scene.width, scene.height));
+          }
+        }
+      });
+    }
+    threads.clear();  // joins
+    result.float32_ray = measure_error(reference_frame(rounded_rays, scene.width, scene.height, {Aov::depth, Aov::normal}),
+                                       reference);
+  }
 
   std::vector<const BenchVariant*> chosen;
   for (const auto& name : settings.variants) chosen.push_back(&find_bench_variant(name));

@@ -53,6 +53,10 @@ struct BenchSceneResult {
   uint32_t width = 0, height = 0;
   size_t triangles = 0, spheres = 0, planes = 0;
   double reference_ms = 0.0;  // the double-precision reference, once per scene and size
+  // The reference traced along the float32 shader's rays (float32_ray_direction) against the exact
+  // one: the error that rounding the ray alone brings, whatever the arithmetic after it. Not in the
+  // JSON; docs/accuracy.md shows it.
+  FrameError float32_ray;
   std::vector<BenchRow> rows;
   std::vector<std::string> skipped;  // variants asked for that do not apply to this scene
 };

@@ -43,6 +43,7 @@ const RowField row_fields[] = {
     {"pixels", [](BenchRow& r) -> FieldRef { return &r.error.pixels; }},
     {"hit_mismatches", [](BenchRow& r) -> FieldRef { return &r.error.hit_mismatches; }},
     {"both_hit", [](BenchRow& r) -> FieldRef { return &r.error.both_hit; }},
+    {"nan_pixels", [](BenchRow& r) -> FieldRef { return &r.error.nan_pixels; }},
     {"depth_rel_p50", [](BenchRow& r) -> FieldRef { return &r.error.depth_p50; }},
     {"depth_rel_p99", [](BenchRow& r) -> FieldRef { return &r.error.depth_p99; }},
     {"depth_rel_max", [](BenchRow& r) -> FieldRef { return &r.error.depth_max; }},

@@ -19,6 +19,15 @@ glm::dvec3 CameraBasis::direction(glm::dvec2 uv) const {
   return glm::normalize(uv.x * right + uv.y * up - plane_distance * forward);
 }
 
+glm::dvec3 float32_ray_direction(const CameraBasis& camera, uint32_t i, uint32_t j, uint32_t width, uint32_t height) {
+  const float shorter = static_cast<float>(std::min(width, height));
+  const glm::vec2 uv = glm::vec2(static_cast<float>(2 * i + 1) - static_cast<float>(width),
+                                 static_cast<float>(height) - static_cast<float>(2 * j + 1)) /
+                       shorter;
+  const glm::vec3 right(camera.right), up(camera.up), forward_scaled(-camera.plane_distance * camera.forward);
+  return glm::dvec3(glm::normalize(uv.x * right + uv.y * up + forward_scaled));
+}
+
 namespace {
 
 // Below this sine of the angle between `up` and the view direction the two are taken as parallel.

@@ -32,6 +32,11 @@ struct CameraBasis {
   glm::dvec3 direction(glm::dvec2 uv) const;
 };
 
+// The direction of pixel (i, j)'s ray as the float32 shader computes it (shaders/raycast.comp):
+// uv, the basis and the sum rounded to float32, then normalized. Tracing it in double separates the
+// error a float32 ray brings in from the error of the intersection arithmetic.
+glm::dvec3 float32_ray_direction(const CameraBasis& camera, uint32_t i, uint32_t j, uint32_t width, uint32_t height);
+
 // Builds the course's frame: right = normalize(up x forward), up' = forward x right. When `up` is
 // parallel to the view direction (looking straight up or down) that cross product vanishes; the
 // frame then uses the coordinate axis least aligned with the view direction as `up` (ties: +z,

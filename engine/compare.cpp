@@ -21,6 +21,9 @@ FrameError measure_error(const Frame& frame, const std::vector<ReferenceHit>& re
   std::vector<double> depth_errors, depth_ulps, normal_errors;
   const bool doubles = !frame.depth64.empty() || !frame.normal64.empty();
   for (size_t p = 0; p < error.pixels; ++p) {
+    const bool nan_depth = frame.aovs.has(Aov::depth) && std::isnan(frame.depth[p]);
+    const bool nan_normal = frame.aovs.has(Aov::normal) && glm::any(glm::isnan(frame.normal_at(p)));
+    error.nan_pixels += nan_depth || nan_normal;
     const bool reference_hit = reference[p].kind != PrimitiveKind::none;
     if (frame.hit(p) != reference_hit) {
       ++error.hit_mismatches;

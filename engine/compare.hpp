@@ -13,6 +13,7 @@ namespace vkray {
 struct FrameError {
   size_t pixels = 0;
   size_t hit_mismatches = 0;  // pixels where one says hit and the other miss
+  size_t nan_pixels = 0;      // pixels with a NaN in depth or normal (counted among the misses too)
   size_t both_hit = 0;
   // Relative depth error |z - z_ref| / z_ref and normal angle error in degrees, over pixels where
   // both hit; percentiles by nearest rank.

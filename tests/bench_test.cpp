@@ -1,5 +1,6 @@
 // The bench's figures: error metrics on synthetic image pairs with known answers, the Pareto front,
 // the report's JSON (round trip, errors), CSV and comparison, scene hashes and suites. Host only.
+#include "engine/accuracy_report.hpp"
 #include "engine/bench_report.hpp"
 #include "engine/reference.hpp"
 #include "tests/temp_dir_test.hpp"
@@ -267,6 +268,33 @@ TEST(BenchScenes, HashesAreDeterministicAndSeeEveryBit) {
   scene = bench_suite("basic", 64, 48, "")[0].scene;
   scene.width = 65;
   EXPECT_NE(scene_hash(scene), hash);
+}
+
+// The accuracy document judges each stiff case on the default row, on top of what the float32 ray
+// alone costs, and names the command that made it.
+TEST(AccuracyMarkdown, JudgesTheGoalsOnTopOfTheFloat32RayAndNamesTheCommand) {
+  BenchReport report;
+  auto stiff_scene = [](const char* name, double ulps, double ray_ulps) {
+    BenchSceneResult scene;
+    scene.name = name;
+    scene.float32_ray.depth_ulp_p99 = ray_ulps;
+    BenchRow ours = row("default", 2.0, 0, 1e-7, 1e-3);
+    ours.error.depth_ulp_p99 = ulps;
+    scene.rows.push_back(ours);
+    return scene;
+  };
+  report.scenes.push_back(stiff_scene("far-sphere-1e-04", 3.9, 0.5));       // within 4 ulps
+  report.scenes.push_back(stiff_scene("huge-sphere-ground", 19.0, 16.0));   // 3 ulps over the ray's 16
+  report.scenes.push_back(stiff_scene("grazing-plane", 4.6, 0.5));          // 4.1 over: missed
+  BenchSceneResult ordinary;
+  ordinary.name = "default";
+  ordinary.rows = {row("default", 11.0, 0, 1e-7, 1e-4), row("naive", 10.0, 0, 1e-6, 1e-3)};
+  report.scenes.push_back(ordinary);
+  const std::string text = accuracy_markdown(report, "vkray bench --suite accuracy");
+  EXPECT_NE(text.find("`vkray bench --suite accuracy`"), std::string::npos);
+  EXPECT_NE(text.find("2 of 3 stiff cases meet the goals"), std::string::npos) << text;
+  EXPECT_NE(text.find("missed: grazing-plane"), std::string::npos) << text;
+  EXPECT_NE(text.find("default 11.00 ms against 10.00 ms (+10%)"), std::string::npos) << text;
 }
 
 TEST(BenchScenes, UnknownSuiteOrAbsentModelsFolder) {

@@ -858,7 +858,7 @@ TEST_F(CliTest, BenchBasicSuiteJsonHasEveryFieldAndSaneFigures) {
   const std::vector<std::string> row_fields = {
       "variant", "on_gpu", "device_triangles", "device_geometry_bytes", "bvh_nodes", "bvh_depth", "loop_budget",
       "upload_ms", "bvh_build_ms", "pipeline_ms", "gpu_median_ms", "gpu_min_ms", "frame_median_ms", "mrays_per_s",
-      "unfinished_rays", "pixels", "hit_mismatches", "both_hit", "depth_rel_p50", "depth_rel_p99", "depth_rel_max",
+      "unfinished_rays", "pixels", "hit_mismatches", "both_hit", "nan_pixels", "depth_rel_p50", "depth_rel_p99", "depth_rel_max",
       "depth_ulp_p50", "depth_ulp_p99", "depth_ulp_max",
       "normal_deg_p50", "normal_deg_p99", "normal_deg_max", "pareto"};
   size_t rows = 0;
