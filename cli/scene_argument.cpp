@@ -9,6 +9,7 @@
 #include <cctype>
 #include <charconv>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <stdexcept>
 #include <vector>
@@ -61,6 +62,10 @@ Scene load_scene_argument(const std::string& path, std::optional<uint32_t> width
   if (height) scene.height = *height;
   check_image_size(scene.width, scene.height);
   if (extension == ".obj") scene.camera = frame_scene(scene, scene.width, scene.height);
+  if (const size_t dropped = scene.zero_area_triangle_count(); dropped > 0) {
+    std::fprintf(stderr, "vkray: note: %s: %zu zero-area triangle%s dropped (no ray can hit them)\n",
+                 path.empty() ? "built-in scene" : path.c_str(), dropped, dropped == 1 ? "" : "s");
+  }
   return scene;
 }
 

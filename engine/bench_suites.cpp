@@ -101,8 +101,12 @@ std::vector<BenchScene> bench_suite(const std::string& suite, uint32_t width, ui
     // The stiff cases, then ordinary scenes to show what the robust default costs there.
     std::vector<BenchScene> scenes = stiff_suite(width, height);
     for (auto& scene : basic_suite(width, height)) scenes.push_back(std::move(scene));
-    for (auto& scene : models_suite(width, height, models_dir, skipped)) {
-      if (scene.name == accuracy_model) scenes.push_back(std::move(scene));
+    const std::filesystem::path model = models_dir / accuracy_model;
+    if (std::filesystem::exists(model)) {
+      Scene scene = load_model_file(model);
+      scene.width = width;
+      scene.height = height;
+      scenes.push_back(framed(accuracy_model, std::move(scene)));
     }
     return scenes;
   }

@@ -32,7 +32,9 @@ struct GpuScene {
   glm::dvec3 anchor{0.0};
   Precision precision = Precision::float32;
   std::vector<gpu::GpuPlane> planes;
-  std::vector<gpu::GpuSphere> spheres;  // spheres tested one by one (brute force only)
+  // Spheres tested one by one: all of them without the tree; with it, a handful beside triangles
+  // (the tree then holds the triangles alone).
+  std::vector<gpu::GpuSphere> spheres;
   // With the tree: every triangle and sphere in leaf order. Without: the triangles, padded to whole
   // VKRAY_TRIANGLE_BATCHes with all-zero ones. Zero-area triangles are left out (no ray can hit
   // them). See GpuPrimitive in gpu_layout.h.
@@ -65,6 +67,11 @@ PrimitiveSearch choose_search(size_t triangle_count, size_t sphere_count);
 
 // Positions encoded for `shader`'s precision and coordinates.
 GpuScene make_gpu_scene(const Scene& scene, const GpuSceneOptions& options = {}, const ShaderVariant& shader = {});
+
+// Every plane's normal_height for a camera at `origin` (see GpuPlane): `scene_planes` are the
+// scene's, in the same order as `planes`.
+void set_plane_heights(std::vector<gpu::GpuPlane>& planes, const std::vector<Plane>& scene_planes,
+                       const glm::dvec3& origin, Precision precision);
 
 // RayGenParams.counts: what the generic shader variant reads instead of specialization constants.
 glm::uvec4 run_time_counts(const GpuScene& scene);

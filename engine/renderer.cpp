@@ -88,6 +88,8 @@ struct Renderer::Impl {
   GpuBuffer placeholder;
   TexelBuffer placeholder_texels;
   std::optional<TexelBuffer> spheres, planes, primitives, bvh_nodes;
+  std::vector<gpu::GpuPlane> gpu_planes;  // what `planes` holds, its heights set per render
+  std::vector<Plane> scene_planes;
   SceneStats stats;
   // Where a loop budget applies: the scene, to finish on the CPU the rays that run out of it.
   std::optional<Scene> scene_for_unfinished;
@@ -199,7 +201,14 @@ Renderer::Renderer(GpuDevice& device, const Scene& scene, RendererOptions option
       return make_texel_buffer(r.context, items.data(), bytes);
     };
     r.spheres = upload(gpu_scene.spheres, "spheres");
-    r.planes = upload(gpu_scene.planes, "planes");
+    if (!gpu_scene.planes.empty()) {  // host-visible: their heights above the camera change every render
+      const vk::DeviceSize bytes = gpu_scene.planes.size() * sizeof(gpu::GpuPlane);
+      r.planes.emplace(TexelBuffer{create_upload_buffer(r.context, bytes, vk::BufferUsageFlagBits::eUniformTexelBuffer)});
+      r.planes->floats = create_texel_view(r.context, r.planes->buffer, vk::Format::eR32G32B32A32Sfloat);
+      r.planes->uints = create_texel_view(r.context, r.planes->buffer, vk::Format::eR32G32B32A32Uint);
+      r.gpu_planes = gpu_scene.planes;
+      r.scene_planes = scene.planes;
+    }
     r.primitives = upload(gpu_scene.primitives, "triangles and spheres");
     r.bvh_nodes = upload(gpu_scene.bvh_nodes, "BVH nodes");
     r.stats = SceneStats{gpu_scene.triangle_count, static_cast<uint32_t>(scene.spheres.size()),
@@ -277,6 +286,10 @@ Frame Renderer::render(const Camera& camera, uint32_t width, uint32_t height, Ao
   with_vulkan_errors("rendering", [&] {
     const vk::raii::Pipeline& pipeline = r.pipeline->pipeline(aovs, r.timings.pipeline_ms);
     const CameraBasis basis = make_camera_basis(camera, width, height);
+    if (r.planes) {  // no submission is in flight: render() waits for each
+      set_plane_heights(r.gpu_planes, r.scene_planes, camera.from, r.precision());
+      std::memcpy(r.planes->buffer.mapped, r.gpu_planes.data(), r.gpu_planes.size() * sizeof(gpu::GpuPlane));
+    }
     const uint32_t tile_rows = r.rows_per_tile(width, height, aovs);
     r.prepare_tile(width, tile_rows, aovs);
 

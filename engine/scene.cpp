@@ -1,5 +1,7 @@
 #include "engine/scene.hpp"
 
+#include <glm/geometric.hpp>
+
 #include <string>
 
 namespace vkray {
@@ -7,6 +9,17 @@ namespace vkray {
 size_t Scene::triangle_count() const {
   size_t count = 0;
   for (const auto& mesh : meshes) count += mesh.triangles.size();
+  return count;
+}
+
+size_t Scene::zero_area_triangle_count() const {
+  size_t count = 0;
+  for (const auto& mesh : meshes) {
+    for (const auto& corners : mesh.triangles) {
+      const glm::dvec3& v0 = mesh.positions[corners[0]];
+      count += glm::cross(mesh.positions[corners[1]] - v0, mesh.positions[corners[2]] - v0) == glm::dvec3(0.0);
+    }
+  }
   return count;
 }
 

@@ -57,6 +57,10 @@ struct Scene {
   std::vector<Mesh> meshes;
 
   size_t triangle_count() const;
+  // Triangles of zero area (coincident or collinear vertices: their edge vectors' cross product is
+  // exactly 0 in double). No ray can hit them; the renderer and the reference leave them out, and
+  // the command line says how many.
+  size_t zero_area_triangle_count() const;
 };
 
 // Throws InputError unless 1 <= side <= max_image_side and the pixel count is within the limit.

@@ -104,12 +104,14 @@ struct GpuSphere {
 };
 VKRAY_CHECK_SIZE(GpuSphere, 32);
 
-// A plane: unit normal and w = dot(normal, point - anchor), both in double on the host; then the
-// point itself, which only float64 shaders read (they evaluate dot(normal, point - origin) in
-// double, exactly as the reference does).
+// A plane: its unit normal with its height above the camera, dot(normal, point - camera), written
+// by the host in double before every render (a handful of planes: rewriting them costs nothing, and
+// the height is then exact to its own rounding at any distance from the scene's centre); then the
+// normal with w = dot(normal, point - anchor), which only the plain float coordinate variants read
+// (they subtract dot(normal, camera) in float, as a textbook shader does).
 struct GpuPlane {
+  GpuPoint normal_height;
   GpuPoint normal_offset;
-  GpuPoint point;
 };
 VKRAY_CHECK_SIZE(GpuPlane, 64);
 

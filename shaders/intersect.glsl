@@ -141,15 +141,13 @@ vec3 perpendicular_part(vec3 f_hi, vec3 f_lo, float b_over_a, vec3 dir) {
 // Ray/sphere after Haines, Guenther and Akenine-Moeller, "Precision Improvements for Ray/Sphere
 // Intersection", Ray Tracing Gems (2019), ch. 7:
 // - the discriminant is r^2 - |f_perp|^2, with f_perp the part of f = origin - center orthogonal
-//   to the ray (perpendicular_part), instead of b^2 - c, which cancels catastrophically for small
-//   spheres far away;
+//   to the ray, instead of b^2 - c, which cancels catastrophically for small spheres far away (and
+//   b^2 / a - c where that is the form that does not cancel: see intersect_sphere);
 // - the two roots come from q = -(b + sign(b) sqrt(disc)) as c/q and q/a, so neither root is a
-//   difference of nearly equal numbers; c itself comes from sphere_c.
-// `normal` receives the hit point minus the centre over the radius, from the same quantities (see
-// the end): for a small sphere far away the hit is f_perp -+ sqrt(disc / a) dir from the centre
-// (minus for the near root), not the rounded difference f + t dir of two long vectors. It faces the
-// ray by which root was taken (outward for the near root, inward from inside), not by the sign of
-// its dot product with the ray, which rounding decides at the silhouette, where it is 0.
+//   difference of nearly equal numbers.
+// `normal` receives the hit point minus the centre over the radius, facing the ray by which root was
+// taken (outward for the near root, inward from inside), not by the sign of its dot product with
+// the ray, which rounding decides at the silhouette, where it is 0.
 // The textbook form, kept as a benchmark variant (VKRAY_SPHERE_NAIVE) to show what this buys:
 // b^2 - c cancels when the sphere is small against its distance, -b + sqrt(disc) when the camera is
 // inside, c = |f|^2 - r^2 near a large sphere's surface, and f + t dir for any small sphere far away.
@@ -169,26 +167,40 @@ float intersect_sphere(vec3 f_hi, vec3 f_lo, float r_hi, float r_lo, vec3 dir, f
   if (SPHERE_FORMULA == VKRAY_SPHERE_NAIVE) return intersect_sphere_naive(f_hi + f_lo, r_hi, dir, t_max, normal);
   normal = vec3(0.0);
   float a = dot(dir, dir);
-  float b = dot(f_hi + f_lo, dir);
-  vec3 f_perp = perpendicular_part(f_hi, f_lo, b / a, dir);
-  // disc = r^2 - |f_perp|^2 = b^2 / a - c: two forms of one number, each exact where the other
-  // cancels. r^2 - |f_perp|^2 rounds at the scale of r^2, b^2 / a - c at the scale of b^2: the
-  // first keeps small spheres far away (|b| >> r), the second large spheres seen from near their
-  // surface (|b| < r: a planet's horizon, where |f_perp| is within a few units of r = 1e6), with b
-  // and c error-free sums there.
-  float disc, c;
-  bool near_surface = b * b < a * r_hi * r_hi;
-  if (near_surface) {
-    float sum, error;
-    dot2(f_hi, dir, sum, error);
-    b = sum + (error + dot(f_lo, dir));
-    c = sphere_c(f_hi, f_lo, r_hi, r_lo);
-    disc = (b * b) / a - c;
+  vec3 f = f_hi + f_lo;
+  float ff = dot(f, f);
+  float rr = r_hi * r_hi;
+  float b = dot(f, dir);
+  vec3 f_perp = f - (b / a) * dir;
+  float disc = rr - dot(f_perp, f_perp);
+  // Misses first, cheaply: this f_perp is within ~11 eps |f| of the exact one, so its square within
+  // ~21 eps |f|^2, and the roundings of disc add ~3 eps (|f|^2 + r^2). Below -32 eps (|f|^2 + r^2)
+  // (eps = 2^-24) no ray can hit.
+  if (disc < -1.9073486e-6 * (ff + rr)) return t_max;
+  // Two kinds of sphere, told apart by f alone, the camera's offset (the same for every ray: the
+  // branch never diverges):
+  // - far away (|f| > 4 r): c = |f|^2 - r^2 cannot cancel (it is above 15/16 |f|^2), but f_perp
+  //   can: the error-free form keeps small spheres far away round;
+  // - near (the camera within 4 r of the centre: inside, on, or near a large sphere): f_perp is
+  //   good to 4 eps r, but c needs the error-free sum, and where |b| < r (a planet's horizon: rays
+  //   along the surface, |f_perp| within a few units of r = 1e6) so does the discriminant, then
+  //   taken as b^2 / a - c with b error-free too.
+  bool far = ff > 16.0 * rr;
+  float c;
+  if (far) {
+    f_perp = perpendicular_part(f_hi, f_lo, b / a, dir);
+    disc = rr - dot(f_perp, f_perp);
+    c = ff - rr;
   } else {
-    disc = r_hi * r_hi - dot(f_perp, f_perp);
+    c = sphere_c(f_hi, f_lo, r_hi, r_lo);
+    if (b * b < a * rr) {
+      float sum, error;
+      dot2(f_hi, dir, sum, error);
+      b = sum + (error + dot(f_lo, dir));
+      disc = (b * b) / a - c;
+    }
   }
   if (disc < 0.0) return t_max;
-  if (!near_surface) c = sphere_c(f_hi, f_lo, r_hi, r_lo);
   float root = sqrt(a * disc);
   float q = -(b + (b >= 0.0 ? root : -root));
   if (q == 0.0) return t_max;  // origin on the surface and tangent ray: no hit in front
@@ -197,47 +209,11 @@ float intersect_sphere(vec3 f_hi, vec3 f_lo, float r_hi, float r_lo, vec3 dir, f
   float t_near = min(t0, t1);
   bool near = t_near > 0.0;
   float t = near ? t_near : max(t0, t1);  // camera inside the sphere: the far root
-  // The hit relative to the centre, in whichever of two exact forms rounds less here:
-  // f_perp -+ sqrt(disc / a) dir carries the error of sqrt(disc), ~eps r^2 / root (large where the
-  // ray grazes: the discriminant cancels); f + t dir, evaluated error-free, carries the error of t,
-  // ~eps t (large for a small sphere far away: Ray Tracing Gems ch. 7).
-  vec3 offset;
-  if (r_hi * r_hi < t * root) {
-    offset = f_perp + ((near ? -root : root) / a) * dir;
-  } else {
-    vec3 products, product_errors, sums, sum_errors;
-    two_product(vec3(t), dir, products, product_errors);
-    two_sum(f_hi, products, sums, sum_errors);
-    precise vec3 exact_offset = sums + ((sum_errors + product_errors) + f_lo);
-    offset = exact_offset;
-  }
-  normal = (near ? offset : -offset) / r_hi;  // facing the ray (see the header comment)
-  return (t > 0.0 && t < t_max) ? t : t_max;
-}
-
-// Ray/plane: t = height / (n.d), with height = w - n.o the plane's signed offset from the camera
-// along n (see GpuPlane). With camera-relative coordinates w and n come split into hi and lo parts
-// and n.o_hi is evaluated with Dot2, so height is accurate to float32 relative to itself plus
-// ~2^-48 of the camera's distance from the anchor: a ground plane one unit below a camera 1e6 from
-// the scene's centre keeps 7 digits, where plain float keeps none. A ray parallel to the plane
-// (n.d == 0) never hits it, which the explicit test states instead of relying on inf/NaN.
-float plane_height(vec4 normal_offset_hi, vec4 normal_offset_lo, vec3 origin_hi, vec3 origin_lo) {
-  vec3 normal = normal_offset_hi.xyz;
-  if (COORDINATES != VKRAY_COORDINATES_CAMERA_RELATIVE) return normal_offset_hi.w - dot(normal, origin_hi);
-  float product, product_error;
-  dot2(normal, origin_hi, product, product_error);
-  float height, height_error;
-  two_sum(normal_offset_hi.w, -product, height, height_error);
-  precise float small_terms = (normal_offset_lo.w - product_error) -
-                              (dot(normal, origin_lo) + dot(normal_offset_lo.xyz, origin_hi));
-  precise float total = height + (height_error + small_terms);
-  return total;
-}
-
-float intersect_plane(vec3 normal, float height, vec3 dir, float t_max) {
-  float denom = dot(normal, dir);
-  if (denom == 0.0) return t_max;
-  float t = height / denom;
+  // The hit relative to the centre: for a sphere far away f_perp -+ sqrt(disc / a) dir (minus for
+  // the near root), not f + t dir, a difference of two vectors as long as the distance; near, f + t
+  // dir is within ~10 eps r.
+  vec3 offset = far ? f_perp + ((near ? -root : root) / a) * dir : f + t * dir;
+  normal = (near ? offset : -offset) / r_hi;  // facing the ray (see above)
   return (t > 0.0 && t < t_max) ? t : t_max;
 }
 
@@ -262,14 +238,18 @@ double intersect_sphere(dvec3 f, double radius, dvec3 dir, double t_max, out dve
   return (t > 0.0 && t < t_max) ? t : t_max;
 }
 
-double intersect_plane(dvec3 normal, dvec3 point, dvec3 origin, dvec3 dir, double t_max) {
-  double denom = dot(normal, dir);
-  if (denom == 0.0) return t_max;
-  double t = dot(normal, point - origin) / denom;
-  return (t > 0.0 && t < t_max) ? t : t_max;
-}
 
 #endif  // VKRAY_FLOAT64
+
+// Ray/plane: t = height / (n.d), height = dot(n, point - origin) the plane's signed offset from the
+// ray origin along n (the host computes it per render in double: GpuPlane). A ray parallel to the
+// plane (n.d == 0) never hits it, which the explicit test states instead of relying on inf/NaN.
+real intersect_plane(real3 normal, real height, real3 dir, real t_max) {
+  real denom = dot(normal, dir);
+  if (denom == 0.0) return t_max;
+  real t = height / denom;
+  return (t > 0.0 && t < t_max) ? t : t_max;
+}
 
 // Watertight ray/triangle test of Woop, Benthin and Wald, "Watertight Ray/Triangle Intersection",
 // JCGT 2(1), 2013. The vertices, already relative to the ray's origin, are moved into a ray-aligned
@@ -349,9 +329,9 @@ real intersect_triangle(RayFrame frame, real3 dir, real3 v0, real3 v1, real3 v2,
   // functions below their rounding error, 2 eps (|left| + |right|) with eps = 2^-24: their signs are
   // noise, and all three may agree, a hit far from the triangle. Where any is that small, all three
   // are evaluated again error-free (TwoProduct; the difference of the products is then exact by
-  // Sterbenz's lemma). The same inputs give the same decision for the two triangles of an edge, and
-  // the exact values are exact negatives, so the test stays watertight. Rare: ~never on meshes seen
-  // at their own scale.
+  // Sterbenz's lemma). Whether an edge is that small depends on its two vertices alone: where it is,
+  // both triangles of the edge take its exact value (exact negatives of each other); where it is
+  // not, its sign is right either way. So the test stays watertight.
   if (any(lessThan(abs(uvw), 2.5e-7 * (abs(left) + abs(right))))) {
     vec3 left_error, right_error;
     two_product(left_x, left_y, left, left_error);
@@ -359,8 +339,8 @@ real intersect_triangle(RayFrame frame, real3 dir, real3 v0, real3 v1, real3 v2,
     uvw = (left - right) + (left_error - right_error);
   }
 #endif
+  if (any(lessThan(uvw, real3(0.0))) && any(greaterThan(uvw, real3(0.0)))) return t_max;
   real u = uvw.x, v = uvw.y, w = uvw.z;
-  if ((u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0)) return t_max;
   real det = u + v + w;
   if (det == 0.0) return t_max;  // ray in the triangle's plane, or a degenerate projection
   real t = frame.shear.z * (u * a.z + v * b.z + w * c.z) / det;

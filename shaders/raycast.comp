@@ -92,15 +92,18 @@ void main() {
   real primitive_t_max = t_best;
   uint plane_count = GENERIC ? params.counts.y : PLANE_COUNT;
   for (uint i = 0; i < plane_count; ++i) {
-    Point normal_offset = fetch_point(planes, 2 * int(i));
+    // The height above the camera, set by the host per render (see GpuPlane); plain float
+    // coordinates subtract the camera from the anchored offset instead.
+    Point plane = fetch_point(planes, 2 * int(i));
 #ifdef VKRAY_FLOAT64
-    real3 plane_normal = normal_offset.value.xyz;
-    real t = intersect_plane(plane_normal, fetch_point(planes, 2 * int(i) + 1).value.xyz, origin.position, dir, t_best);
+    real3 plane_normal = plane.value.xyz;
+    real height = plane.value.w;
 #else
-    real3 plane_normal = normal_offset.hi.xyz;
-    real t = intersect_plane(plane_normal, plane_height(normal_offset.hi, normal_offset.lo, origin.hi, origin.lo), dir,
-                             t_best);
+    if (COORDINATES != VKRAY_COORDINATES_CAMERA_RELATIVE) plane = fetch_point(planes, 2 * int(i) + 1);
+    vec3 plane_normal = plane.hi.xyz;
+    float height = COORDINATES == VKRAY_COORDINATES_CAMERA_RELATIVE ? plane.hi.w : plane.hi.w - dot(plane_normal, origin.hi);
 #endif
+    real t = intersect_plane(plane_normal, height, dir, t_best);
     if (t < t_best) {
       t_best = t;
       normal = dot(plane_normal, dir) > 0.0 ? -plane_normal : plane_normal;

@@ -357,6 +357,20 @@ TEST_F(CliTest, SphereSceneMatchesClosedForm) {
   expect_sphere_closed_form(exr);
 }
 
+// Zero-area triangles (a repeated vertex, collinear vertices) are dropped and counted; the
+// proper triangle beside them still renders.
+TEST_F(CliTest, ZeroAreaTrianglesAreCountedAndDropped) {
+  write("degenerate.json", R"({"camera": {"from": [0, 0, 5], "to": [0, 0, 0], "fovy": 40},
+    "image": {"width": 16, "height": 16},
+    "meshes": [{"positions": [[-1, -1, 0], [1, -1, 0], [0, 1, 0], [2, 2, 0], [3, 3, 0]],
+                "triangles": [[0, 1, 2], [0, 0, 1], [0, 3, 4], [2, 3, 3]]}]})");
+  const RunResult run = vkray({"render", "degenerate.json", "-o", "degenerate.exr", "--check"});
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_NE(run.err.find("vkray: note: degenerate.json: 3 zero-area triangles dropped (no ray can hit them)"),
+            std::string::npos) << run.err;
+  EXPECT_NE(run.out.find("hit/miss mismatches 0 of 256"), std::string::npos) << run.out;
+}
+
 // The double-precision CPU reference (--reference) writes the same contract.
 TEST_F(CliTest, ReferenceRendererMatchesClosedForm) {
   write("sphere.json", sphere_scene);

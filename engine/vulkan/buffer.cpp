@@ -47,8 +47,8 @@ GpuBuffer create_readback_buffer(VulkanContext& context, vk::DeviceSize size) {
                        vk::MemoryPropertyFlagBits::eHostCached);
 }
 
-GpuBuffer create_upload_buffer(VulkanContext& context, vk::DeviceSize size) {
-  return create_buffer(context, size, vk::BufferUsageFlagBits::eTransferSrc, host_access, {});
+GpuBuffer create_upload_buffer(VulkanContext& context, vk::DeviceSize size, vk::BufferUsageFlags usage) {
+  return create_buffer(context, size, usage, host_access, {});
 }
 
 GpuBuffer upload_buffer(VulkanContext& context, const void* data, size_t bytes, vk::BufferUsageFlags usage) {

@@ -22,8 +22,9 @@ GpuBuffer create_storage_buffer(VulkanContext& context, vk::DeviceSize size, vk:
 GpuBuffer create_readback_buffer(VulkanContext& context, vk::DeviceSize size);
 
 // A host-visible, coherent buffer the host writes and the device copies from (the viewer's
-// picture, every frame: no staging copy).
-GpuBuffer create_upload_buffer(VulkanContext& context, vk::DeviceSize size);
+// picture, every frame: no staging copy), or reads with `usage` (the planes, every render).
+GpuBuffer create_upload_buffer(VulkanContext& context, vk::DeviceSize size,
+                               vk::BufferUsageFlags usage = vk::BufferUsageFlagBits::eTransferSrc);
 
 // A device-local buffer for `usage` holding `bytes` of `data` (through a staging buffer if needed).
 GpuBuffer upload_buffer(VulkanContext& context, const void* data, size_t bytes, vk::BufferUsageFlags usage);
