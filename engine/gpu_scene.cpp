@@ -109,6 +109,10 @@ GpuScene make_gpu_scene(const Scene& scene, const GpuSceneOptions& options, cons
   const bool world_origin = shader.precision == Precision::float64 || shader.coordinates == VKRAY_COORDINATES_ABSOLUTE;
   gpu.anchor = world_origin ? glm::dvec3(0.0) : scene_anchor(scene);
   auto encode = [&](const glm::dvec3& position, double w) { return encode_point(glm::dvec4(position, w), gpu.precision); };
+  for (const auto& sphere : scene.spheres) gpu.radius = std::max(gpu.radius, glm::length(sphere.center - gpu.anchor) + sphere.radius);
+  for (const auto& mesh : scene.meshes) {
+    for (const auto& position : mesh.positions) gpu.radius = std::max(gpu.radius, glm::length(position - gpu.anchor));
+  }
   for (const auto& plane : scene.planes) {
     gpu.planes.push_back({{}, encode(plane.normal, glm::dot(plane.normal, plane.point - gpu.anchor))});
   }
@@ -215,7 +219,16 @@ glm::uvec4 run_time_counts(const GpuScene& scene) {
           scene.brute_force_triangle_slots(), scene.search_mode()};
 }
 
-gpu::RayGenParams make_ray_gen_params(const CameraBasis& camera, const glm::dvec3& anchor, Precision precision, uint32_t width,
+bool needs_lo_parts(const glm::dvec3& anchor, double radius, const glm::dvec3& origin) {
+  return glm::length(origin - anchor) < 2.0 * radius;
+}
+
+bool needs_lo_parts(const GpuScene& scene, const glm::dvec3& origin) {
+  return needs_lo_parts(scene.anchor, scene.radius, origin);
+}
+
+gpu::RayGenParams make_ray_gen_params(const CameraBasis& camera, const glm::dvec3& anchor, Precision precision,
+                                      uint32_t width,
                                       uint32_t height, uint32_t first_row, uint32_t row_count,
                                       const glm::uvec4& counts) {
   gpu::RayGenParams params{};

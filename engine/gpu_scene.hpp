@@ -31,6 +31,8 @@ struct GpuScene {
   // the fewest bits; the world origin for float64 shaders and the absolute-coordinates variant.
   glm::dvec3 anchor{0.0};
   Precision precision = Precision::float32;
+  // The largest distance from the anchor of a sphere's surface or a mesh vertex (0 without either).
+  double radius = 0.0;
   std::vector<gpu::GpuPlane> planes;
   // Spheres tested one by one: all of them without the tree; with it, a handful beside triangles
   // (the tree then holds the triangles alone).
@@ -76,8 +78,17 @@ void set_plane_heights(std::vector<gpu::GpuPlane>& planes, const std::vector<Pla
 // RayGenParams.counts: what the generic shader variant reads instead of specialization constants.
 glm::uvec4 run_time_counts(const GpuScene& scene);
 
+// Whether a float32 camera-relative shader must add the lo parts of positions for a camera at
+// `origin`: only while the camera is within 2 radii of the anchor. Farther, everything is at least
+// half the camera's distance from the anchor away from it, and hi parts alone are within 1.5 eps of
+// that distance: below what the ray's own rounding moves a hit, for half the texel fetches
+// (VKRAY_SPEC_LO_PARTS).
+bool needs_lo_parts(const GpuScene& scene, const glm::dvec3& origin);
+bool needs_lo_parts(const glm::dvec3& anchor, double radius, const glm::dvec3& origin);
+
 // Push constants for one tile of rows of a width x height image.
-gpu::RayGenParams make_ray_gen_params(const CameraBasis& camera, const glm::dvec3& anchor, Precision precision, uint32_t width,
+gpu::RayGenParams make_ray_gen_params(const CameraBasis& camera, const glm::dvec3& anchor, Precision precision,
+                                      uint32_t width,
                                       uint32_t height, uint32_t first_row, uint32_t row_count,
                                       const glm::uvec4& counts);
 

@@ -83,6 +83,7 @@ struct Renderer::Impl {
   VulkanContext& context;
   RendererOptions options;
   glm::dvec3 anchor{0.0};
+  double scene_radius = 0.0;  // GpuScene::radius
   glm::uvec4 counts{0};  // RayGenParams.counts
   // Bound wherever the scene lacks a primitive type or an output is off.
   GpuBuffer placeholder;
@@ -245,6 +246,7 @@ Renderer::Renderer(GpuDevice& device, const Scene& scene, RendererOptions option
     }
 
     r.anchor = gpu_scene.anchor;
+    r.scene_radius = gpu_scene.radius;
     r.placeholder = create_storage_buffer(r.context, texel_bytes);
     const std::array<uint32_t, 4> zero_texel{};
     r.placeholder_texels = make_texel_buffer(r.context, zero_texel.data(), texel_bytes);
@@ -284,7 +286,8 @@ Frame Renderer::render(const Camera& camera, uint32_t width, uint32_t height, Ao
   if (aovs.empty()) return frame;
 
   with_vulkan_errors("rendering", [&] {
-    const vk::raii::Pipeline& pipeline = r.pipeline->pipeline(aovs, r.timings.pipeline_ms);
+    const bool lo_parts = needs_lo_parts(r.anchor, r.scene_radius, camera.from);
+    const vk::raii::Pipeline& pipeline = r.pipeline->pipeline(aovs, lo_parts, r.timings.pipeline_ms);
     const CameraBasis basis = make_camera_basis(camera, width, height);
     if (r.planes) {  // no submission is in flight: render() waits for each
       set_plane_heights(r.gpu_planes, r.scene_planes, camera.from, r.precision());

@@ -70,7 +70,11 @@ using uvec4 = glm::uvec4;
 // constants (RayGenParams.counts) instead of specialized: what a shader not built for its scene costs.
 #define VKRAY_SPEC_GENERIC 15
 #define VKRAY_SPEC_COORDINATES 16           // VKRAY_COORDINATES_* (float32 shaders)
-#define VKRAY_SPEC_COUNT 17
+// Camera-relative coordinates add the lo parts of positions only while the camera is near the
+// scene (engine/gpu_scene.cpp, needs_lo_parts): two pipelines, chosen per render, since on lavapipe
+// a run-time branch costs as much as the code it skips.
+#define VKRAY_SPEC_LO_PARTS 17
+#define VKRAY_SPEC_COUNT 18
 
 #define VKRAY_SPHERE_STABLE 0               // Ray Tracing Gems ch. 7 (intersect.glsl)
 #define VKRAY_SPHERE_NAIVE 1                // the textbook b^2 - c

@@ -24,6 +24,10 @@ layout(constant_id = VKRAY_SPEC_SPHERE_FORMULA) const uint SPHERE_FORMULA = VKRA
 layout(constant_id = VKRAY_SPEC_TRIANGLE_TEST) const uint TRIANGLE_TEST = VKRAY_TRIANGLE_WATERTIGHT;
 layout(constant_id = VKRAY_SPEC_COORDINATES) const uint COORDINATES = VKRAY_COORDINATES_CAMERA_RELATIVE;
 
+layout(constant_id = VKRAY_SPEC_LO_PARTS) const bool LO_PARTS = true;
+// Whether the lo parts of positions are added: camera-relative coordinates, the camera near the scene.
+const bool use_lo_parts = COORDINATES == VKRAY_COORDINATES_CAMERA_RELATIVE && LO_PARTS;
+
 // The ray's origin: the camera, split into hi and lo parts relative to the anchor in float32
 // shaders (see GpuPoint in gpu_layout.h), in world coordinates in float64 shaders.
 struct Origin {
@@ -85,10 +89,10 @@ void dot2(vec3 a, vec3 b, out float sum, out float error) {
 
 // A position relative to the camera, from its GpuPoint parts and the camera's (see gpu_layout.h):
 // hi - hi and lo - lo first, so the result is accurate to float32 relative to its own size. With
-// plain float coordinates the lo parts are left out.
+// plain float coordinates, or the camera far from the scene, the lo parts are left out.
 vec3 relative_to_camera(vec3 hi, vec3 lo, vec3 origin_hi, vec3 origin_lo) {
   precise vec3 difference = hi - origin_hi;
-  if (COORDINATES != VKRAY_COORDINATES_CAMERA_RELATIVE) return difference;
+  if (!use_lo_parts) return difference;
   precise vec3 sum = difference + (lo - origin_lo);
   return sum;
 }
@@ -96,7 +100,7 @@ vec3 relative_to_camera(vec3 hi, vec3 lo, vec3 origin_hi, vec3 origin_lo) {
 // f = origin - center as an unevaluated sum f_hi + f_lo, |f_lo| <= ulp(f_hi) / 2 (f_lo = 0 with
 // plain float coordinates).
 void sphere_offset(vec3 center_hi, vec3 center_lo, vec3 origin_hi, vec3 origin_lo, out vec3 f_hi, out vec3 f_lo) {
-  if (COORDINATES != VKRAY_COORDINATES_CAMERA_RELATIVE) {
+  if (!use_lo_parts) {
     f_hi = origin_hi - center_hi;
     f_lo = vec3(0.0);
     return;

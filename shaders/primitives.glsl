@@ -50,7 +50,7 @@ Point fetch_point(GeometryTexels texels, int point) {
   return Point(dvec4(packDouble2x32(first.xy), packDouble2x32(first.zw), packDouble2x32(second.xy),
                      packDouble2x32(second.zw)));
 #else
-  return Point(texelFetch(texels, texel), COORDINATES == VKRAY_COORDINATES_CAMERA_RELATIVE ? texelFetch(texels, texel + 1) : vec4(0.0));
+  return Point(texelFetch(texels, texel), use_lo_parts ? texelFetch(texels, texel + 1) : vec4(0.0));
 #endif
 }
 

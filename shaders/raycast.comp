@@ -78,7 +78,7 @@ void main() {
   dvec3 dir = normalize(double(uv_numerator.x) / shorter * camera[1] + double(uv_numerator.y) / shorter * camera[2] +
                         camera[3]);
 #else
-  Origin origin = Origin(uintBitsToFloat(params.camera[0].xyz), uintBitsToFloat(params.camera[1].xyz));
+  Origin origin = Origin(uintBitsToFloat(params.camera[0].xyz), use_lo_parts ? uintBitsToFloat(params.camera[1].xyz) : vec3(0.0));
   vec3 dir = normalize(uv.x * uintBitsToFloat(params.camera[2].xyz) + uv.y * uintBitsToFloat(params.camera[3].xyz) +
                        uintBitsToFloat(params.camera[4].xyz));
 #endif

@@ -16,7 +16,9 @@
 //   2^-47 R of the split. The primitive hit therefore moves by up to ~4 eps E + 2^-46 R, where E is
 //   the distance from the camera of the farthest point that defines it: a sphere's far side
 //   (|c - o| + r), a triangle's farthest vertex, a plane's foot point (its height, computed with
-//   Dot2). We take 16 eps E + 2^-44 R.
+//   Dot2). We take 16 eps E + 2^-44 R. (Beyond two radii of the anchor the shader leaves the lo
+//   parts out, engine/gpu_scene.cpp needs_lo_parts: positions are then within 1.5 eps of their
+//   distance from the camera, inside the same bound.)
 //
 // The reference therefore traces five rays per pixel: the exact one and four turned towards +-right
 // and +-up by eta plus the angle the position error subtends, 2 eps (t + E) / t. Where all five hit the same primitive (or all miss), the pixel is "stable" and

@@ -35,9 +35,10 @@ RaycastPipeline::RaycastPipeline(VulkanContext& context, PipelineSpecialization 
   set_ = std::move(vk::raii::DescriptorSets(context.device, vk::DescriptorSetAllocateInfo(*pool_, set_layout))[0]);
 }
 
-const vk::raii::Pipeline& RaycastPipeline::pipeline(AovSet aovs, double& created_ms) {
+const vk::raii::Pipeline& RaycastPipeline::pipeline(AovSet aovs, bool lo_parts, double& created_ms) {
   created_ms = 0.0;
-  if (auto found = pipelines_.find(aovs.bits()); found != pipelines_.end()) return found->second;
+  const uint32_t key = aovs.bits() | (lo_parts ? 256u : 0u);
+  if (auto found = pipelines_.find(key); found != pipelines_.end()) return found->second;
 
   const auto start = std::chrono::steady_clock::now();
   // One 32-bit value per VKRAY_SPEC_* id (SPIR-V booleans are 32-bit), stored at the id's index.
@@ -60,12 +61,13 @@ const vk::raii::Pipeline& RaycastPipeline::pipeline(AovSet aovs, double& created
   values[VKRAY_SPEC_MORTON_ORDER] = variant.morton_order ? 1u : 0u;
   values[VKRAY_SPEC_GENERIC] = variant.generic ? 1u : 0u;
   values[VKRAY_SPEC_COORDINATES] = variant.coordinates;
+  values[VKRAY_SPEC_LO_PARTS] = lo_parts ? 1u : 0u;
   std::array<vk::SpecializationMapEntry, values.size()> entries;
   for (uint32_t id = 0; id < entries.size(); ++id) entries[id] = vk::SpecializationMapEntry(id, id * 4u, 4u);
   const vk::SpecializationInfo specialization(entries, vk::ArrayProxyNoTemporaries<const uint32_t>(values));
   const vk::PipelineShaderStageCreateInfo stage({}, vk::ShaderStageFlagBits::eCompute, *shader_, "main", &specialization);
   auto [entry, inserted] = pipelines_.emplace(
-      aovs.bits(), vk::raii::Pipeline(context_.device, nullptr, vk::ComputePipelineCreateInfo({}, stage, *layout_)));
+      key, vk::raii::Pipeline(context_.device, nullptr, vk::ComputePipelineCreateInfo({}, stage, *layout_)));
   created_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   return entry->second;
 }

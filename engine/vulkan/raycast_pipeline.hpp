@@ -28,9 +28,10 @@ class RaycastPipeline {
  public:
   RaycastPipeline(VulkanContext& context, PipelineSpecialization specialization);
 
-  // The pipeline for this set of outputs, created on first request. `created_ms` receives the
-  // creation time, 0 when it was already there.
-  const vk::raii::Pipeline& pipeline(AovSet aovs, double& created_ms);
+  // The pipeline for this set of outputs, with or without the lo parts of positions
+  // (VKRAY_SPEC_LO_PARTS), created on first request. `created_ms` receives the creation time, 0 when
+  // it was already there.
+  const vk::raii::Pipeline& pipeline(AovSet aovs, bool lo_parts, double& created_ms);
 
   // What each binding (VKRAY_BINDING_*) reads or writes: a storage buffer or a texel view.
   struct Resources {
@@ -53,7 +54,7 @@ class RaycastPipeline {
   vk::raii::ShaderModule shader_{nullptr};
   vk::raii::DescriptorPool pool_{nullptr};
   vk::raii::DescriptorSet set_{nullptr};
-  std::map<uint32_t, vk::raii::Pipeline> pipelines_;  // by AovSet bits
+  std::map<uint32_t, vk::raii::Pipeline> pipelines_;  // by AovSet bits, and 256 with the lo parts
 };
 
 }  // namespace vkray
