@@ -69,6 +69,7 @@ int run_bench(const BenchOptions& options) {
   settings.variants = split_list(options.variants);
   for (const auto& name : settings.variants) find_bench_variant(name);  // unknown names fail before any work
   settings.embree = !options.no_embree;
+  settings.float32_ray_error = !options.markdown.empty();
   // Before any work: a bench must not run for minutes only to find it cannot be saved.
   for (const std::string& path : {options.json, options.csv, options.plot, options.markdown}) {
     if (!path.empty()) check_output_path(path);

@@ -123,7 +123,7 @@ BenchSceneResult bench_scene(GpuDevice& device, const BenchScene& bench, const B
       render_reference_hits(reference_scene, make_camera_basis(scene.camera, scene.width, scene.height), scene.width,
                             scene.height, settings.reference_progress);
   result.reference_ms = elapsed_ms(reference_start);
-  {
+  if (settings.float32_ray_error) {
     const CameraBasis camera = make_camera_basis(scene.camera, scene.width, scene.height);
     std::vector<ReferenceHit> rounded_rays(reference.size());
     const unsigned workers = std::max(1u, std::min(std::thread::hardware_concurrency(), scene.height));

@@ -54,8 +54,8 @@ struct BenchSceneResult {
   size_t triangles = 0, spheres = 0, planes = 0;
   double reference_ms = 0.0;  // the double-precision reference, once per scene and size
   // The reference traced along the float32 shader's rays (float32_ray_direction) against the exact
-  // one: the error that rounding the ray alone brings, whatever the arithmetic after it. Not in the
-  // JSON; docs/accuracy.md shows it.
+  // one: the error that rounding the ray alone brings, whatever the arithmetic after it. Measured
+  // when BenchSettings::float32_ray_error asks; not in the JSON; docs/accuracy.md shows it.
   FrameError float32_ray;
   std::vector<BenchRow> rows;
   std::vector<std::string> skipped;  // variants asked for that do not apply to this scene
@@ -65,6 +65,7 @@ struct BenchSettings {
   uint32_t frames = 5;                       // timed frames per variant, after one warm-up
   std::vector<std::string> variants;         // names; empty: every variant that applies
   bool embree = true;                        // the Embree rows
+  bool float32_ray_error = false;            // also BenchSceneResult::float32_ray (docs/accuracy.md)
   std::function<void(double)> reference_progress;  // fraction done of the reference, from any thread
 };
 
