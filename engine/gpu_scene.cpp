@@ -223,10 +223,6 @@ bool needs_lo_parts(const glm::dvec3& anchor, double radius, const glm::dvec3& o
   return glm::length(origin - anchor) < 2.0 * radius;
 }
 
-bool needs_lo_parts(const GpuScene& scene, const glm::dvec3& origin) {
-  return needs_lo_parts(scene.anchor, scene.radius, origin);
-}
-
 gpu::RayGenParams make_ray_gen_params(const CameraBasis& camera, const glm::dvec3& anchor, Precision precision,
                                       uint32_t width,
                                       uint32_t height, uint32_t first_row, uint32_t row_count,

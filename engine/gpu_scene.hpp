@@ -83,7 +83,6 @@ glm::uvec4 run_time_counts(const GpuScene& scene);
 // half the camera's distance from the anchor away from it, and hi parts alone are within 1.5 eps of
 // that distance: below what the ray's own rounding moves a hit, for half the texel fetches
 // (VKRAY_SPEC_LO_PARTS).
-bool needs_lo_parts(const GpuScene& scene, const glm::dvec3& origin);
 bool needs_lo_parts(const glm::dvec3& anchor, double radius, const glm::dvec3& origin);
 
 // Push constants for one tile of rows of a width x height image.

@@ -135,7 +135,6 @@ struct GpuPrimitive {
 };
 VKRAY_CHECK_SIZE(GpuPrimitive, 96);
 #define VKRAY_TEXELS_PER_POINT 2
-#define VKRAY_TEXELS_PER_PRIMITIVE 6
 #define VKRAY_SPHERE_MARK 4.0
 
 // The brute-force path tests triangles in batches of this many, padded with all-zero triangles

@@ -54,6 +54,13 @@ Point fetch_point(GeometryTexels texels, int point) {
 #endif
 }
 
+#ifndef VKRAY_FLOAT64
+// The hi part alone, for what needs no more (a plane's normal and height above the camera).
+Point fetch_point_hi(GeometryTexels texels, int point) {
+  return Point(texelFetch(texels, VKRAY_TEXELS_PER_POINT * point), vec4(0.0));
+}
+#endif
+
 // The point's position relative to the ray origin, and its w.
 real3 point_from_origin(Point point, Origin origin) {
 #ifdef VKRAY_FLOAT64

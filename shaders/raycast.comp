@@ -94,12 +94,12 @@ void main() {
   for (uint i = 0; i < plane_count; ++i) {
     // The height above the camera, set by the host per render (see GpuPlane); plain float
     // coordinates subtract the camera from the anchored offset instead.
-    Point plane = fetch_point(planes, 2 * int(i));
 #ifdef VKRAY_FLOAT64
+    Point plane = fetch_point(planes, 2 * int(i));
     real3 plane_normal = plane.value.xyz;
     real height = plane.value.w;
 #else
-    if (COORDINATES != VKRAY_COORDINATES_CAMERA_RELATIVE) plane = fetch_point(planes, 2 * int(i) + 1);
+    Point plane = fetch_point_hi(planes, COORDINATES == VKRAY_COORDINATES_CAMERA_RELATIVE ? 2 * int(i) : 2 * int(i) + 1);
     vec3 plane_normal = plane.hi.xyz;
     float height = COORDINATES == VKRAY_COORDINATES_CAMERA_RELATIVE ? plane.hi.w : plane.hi.w - dot(plane_normal, origin.hi);
 #endif
