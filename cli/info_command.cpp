@@ -17,7 +17,7 @@ Action add_info_command(CLI::App& app) {
     for (size_t i = 0; i < devices.size(); ++i) {
       const GpuDeviceInfo& d = devices[i];
       std::cout << (i == chosen ? "* " : "  ") << "[" << i << "] " << d.name << " (" << d.type << ", Vulkan "
-                << d.api_version << ", " << d.driver << ")" << (d.can_compute ? "" : " - unusable: no compute queue or no subgroup vote and ballot") << '\n';
+                << d.api_version << ", " << d.driver << ")" << (d.can_compute ? "" : " - unusable: no compute queue or no subgroup vote, ballot and arithmetic") << '\n';
     }
     const GpuDeviceInfo& d = devices[chosen];
     std::cout << "\nvkray uses [" << chosen << "] " << d.name << '\n'

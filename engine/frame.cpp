@@ -49,4 +49,12 @@ bool Frame::hit(size_t pixel) const {
   return false;
 }
 
+DepthRange finite_depth_range(const Frame& frame) {
+  DepthRange range;
+  for (float z : frame.depth) {
+    if (std::isfinite(z)) range.add(z);
+  }
+  return range;
+}
+
 }  // namespace vkray

@@ -4,6 +4,7 @@
 #include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
 
+#include <cmath>
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -67,5 +68,16 @@ struct Frame {
   // A hit is known from depth (finite) or, when only normals were asked for, from a non-zero normal.
   bool hit(size_t pixel) const;
 };
+
+// The nearest and farthest finite depth of an image; far is 0 when nothing was hit.
+struct DepthRange {
+  float near = INFINITY;
+  float far = 0.0f;
+  void add(float depth) {
+    if (depth < near) near = depth;
+    if (depth > far) far = depth;
+  }
+};
+DepthRange finite_depth_range(const Frame& frame);
 
 }  // namespace vkray

@@ -31,9 +31,9 @@ struct GpuDeviceInfo {
   std::string type;  // "discrete", "integrated", "virtual", "cpu" or "other"
   std::string driver;
   std::string api_version;
-  // A compute queue, and subgroup vote and ballot operations in compute shaders: vkray's one shader
-  // module declares them (the packet walk uses them), so a device without them cannot create its
-  // pipeline. Every Vulkan 1.1 desktop driver and lavapipe have them.
+  // A compute queue, and subgroup vote, ballot and arithmetic operations in compute shaders: vkray's
+  // one ray-casting module declares them (the packet walk, the viewer's depth range), so a device
+  // without them cannot create its pipeline. Every Vulkan 1.1 desktop driver and lavapipe have them.
   bool can_compute = false;
   uint32_t max_workgroup_count[3] = {0, 0, 0};
   uint32_t max_workgroup_invocations = 0;

@@ -4,44 +4,96 @@
 #include <cmath>
 
 namespace vkray {
+namespace {
+
+constexpr double byte_max = VKRAY_RAMP_LEVELS - 1;
+
+// The ramp of round(255 * clamp(f(v), 0, 1)) for a rising f, from its inverse: byte k starts where
+// f reaches (k - 1/2) / 255. The inverse is evaluated in double and rounded to float once.
+template <typename Inverse>
+PreviewRamp ramp_from_inverse(Inverse inverse) {
+  PreviewRamp ramp;
+  ramp.thresholds[0] = -INFINITY;
+  for (int k = 1; k < VKRAY_RAMP_LEVELS; ++k) ramp.thresholds[k] = static_cast<float>(inverse((k - 0.5) / byte_max));
+  return ramp;
+}
+
+}  // namespace
+
+uint8_t PreviewRamp::byte(float v) const {
+  // The same 8 steps as preview.comp's ramp_byte.
+  int level = 0;
+  for (int step = VKRAY_RAMP_LEVELS / 2; step >= 1; step /= 2) {
+    if (thresholds[level + step] <= v) level += step;
+  }
+  return static_cast<uint8_t>(level);
+}
+
+std::array<PreviewRamp, 2> preview_ramps(Aov aov, DepthRange depths) {
+  switch (aov) {
+    case Aov::depth: {
+      // grey = 0.1 + 0.9 (1/z - 1/far) / (1/near - 1/far), on -z so that it rises toward the camera.
+      // Inverse depth keeps near detail visible when a ground plane runs to the horizon.
+      constexpr double darkest = 0.1;
+      const double span = 1.0 / depths.near - 1.0 / depths.far;
+      const bool one_depth = !(span > 0.0);  // all hits at one depth (or none): full brightness
+      return {ramp_from_inverse([&](double grey) {
+                if (one_depth || grey <= darkest) return -double(INFINITY);
+                return -1.0 / (1.0 / depths.far + (grey - darkest) / (1.0 - darkest) * span);
+              }),
+              PreviewRamp{}};
+    }
+    case Aov::normal:
+      return {ramp_from_inverse([](double channel) { return 2.0 * channel - 1.0; }), PreviewRamp{}};
+    case Aov::uv: {
+      constexpr double outside_brightness = 0.3;
+      auto brightened = [](double brightness) {
+        return ramp_from_inverse([=](double channel) { return 2.0 * channel / brightness - 1.0; });
+      };
+      return {brightened(1.0), brightened(outside_brightness)};
+    }
+  }
+  return {};
+}
+
+bool inside_unit_disk(uint32_t i, uint32_t j, uint32_t width, uint32_t height) {
+  // uv = (2i + 1 - width, height - 2j - 1) / min(width, height); see pixel_uv.
+  const int64_t x = int64_t{2} * i + 1 - width, y = int64_t{height} - 2 * int64_t{j} - 1;
+  const int64_t shorter = std::min(width, height);
+  return x * x + y * y <= shorter * shorter;
+}
 
 std::vector<uint8_t> preview_rgb(const Frame& frame, Aov aov) {
   std::vector<uint8_t> rgb(frame.pixel_count() * 3, 0);
-  auto to_byte = [](double v) { return static_cast<uint8_t>(std::lround(255.0 * std::clamp(v, 0.0, 1.0))); };
-  auto put = [&](size_t p, double r, double g, double b) {
+  auto put = [&](size_t p, uint8_t r, uint8_t g, uint8_t b) {
     uint8_t* out = &rgb[p * 3];
-    out[0] = to_byte(r), out[1] = to_byte(g), out[2] = to_byte(b);
+    out[0] = r, out[1] = g, out[2] = b;
   };
-
+  const auto ramps = preview_ramps(aov, aov == Aov::depth ? finite_depth_range(frame) : DepthRange{});
   switch (aov) {
-    case Aov::depth: {
-      // Grey from inverse depth, which keeps near detail visible when a ground plane runs to the
-      // horizon; every hit stays at 10% or brighter so it never reads as a miss.
-      double near = INFINITY, far = 0.0;
-      for (float z : frame.depth) {
-        if (std::isfinite(z)) near = std::min<double>(near, z), far = std::max<double>(far, z);
-      }
+    case Aov::depth:
       for (size_t p = 0; p < frame.pixel_count(); ++p) {
-        const double z = frame.depth[p];
+        const float z = frame.depth[p];
         if (!std::isfinite(z)) continue;
-        const double span = 1.0 / near - 1.0 / far;
-        const double grey = span > 0.0 ? 0.1 + 0.9 * (1.0 / z - 1.0 / far) / span : 1.0;
+        const uint8_t grey = ramps[0].byte(-z);
         put(p, grey, grey, grey);
       }
       break;
-    }
     case Aov::normal:
       for (size_t p = 0; p < frame.pixel_count(); ++p) {
         if (!frame.hit(p)) continue;
         const glm::vec3 n = frame.normal_at(p);
-        put(p, 0.5 * (n.x + 1.0), 0.5 * (n.y + 1.0), 0.5 * (n.z + 1.0));
+        put(p, ramps[0].byte(n.x), ramps[0].byte(n.y), ramps[0].byte(n.z));
       }
       break;
     case Aov::uv:
-      for (size_t p = 0; p < frame.pixel_count(); ++p) {
-        const double u = frame.uv_at(p).x, v = frame.uv_at(p).y;
-        const double brightness = u * u + v * v <= 1.0 ? 1.0 : 0.3;
-        put(p, brightness * 0.5 * (u + 1.0), brightness * 0.5 * (v + 1.0), brightness * 0.5);
+      for (uint32_t j = 0; j < frame.height; ++j) {
+        for (uint32_t i = 0; i < frame.width; ++i) {
+          const size_t p = size_t{j} * frame.width + i;
+          const PreviewRamp& ramp = ramps[inside_unit_disk(i, j, frame.width, frame.height) ? 0 : 1];
+          const glm::vec2 uv = frame.uv_at(p);
+          put(p, ramp.byte(uv.x), ramp.byte(uv.y), ramp.byte(0.0f));
+        }
       }
       break;
   }

@@ -1,17 +1,36 @@
-// The 8-bit picture of one output, shared by the PNG preview (image_io.cpp) and the viewer, so
-// that what the viewer shows is byte for byte the panel `vkray render` writes.
+// The 8-bit picture of one output, shared by the PNG preview (image_io.cpp) and the viewer's GPU
+// pass (shaders/preview.comp), so that what the viewer shows is byte for byte the panel
+// `vkray render` writes. Both map floats to bytes through the same ramps of float thresholds:
+// comparisons are exact on any device, where the arithmetic of a formula would round differently.
 #pragma once
 
 #include "engine/frame.hpp"
+#include "shaders/gpu_layout.h"
 
+#include <array>
 #include <cstdint>
 #include <vector>
 
 namespace vkray {
 
-// `aov` of `frame` (which must hold it) as 8-bit RGB, 3 bytes a pixel, row-major from the top row:
-// depth as grey from inverse depth (near bright, far dark, misses black), normals as (N+1)/2
-// (misses black), uv as (u+1)/2, (v+1)/2 with the unit disk drawn brighter.
+// A rising map from floats to bytes: the byte of v is the largest k with thresholds[k] <= v
+// (thresholds[0] is -infinity; NaN maps to 0).
+struct PreviewRamp {
+  std::array<float, VKRAY_RAMP_LEVELS> thresholds;
+  uint8_t byte(float v) const;
+};
+
+// The ramps `aov` is mapped with: depth as grey from inverse depth (near bright, far dark, every
+// hit at 10% or brighter) through [0] applied to -depth, given the image's depth range; normals as
+// (N+1)/2 through [0]; uv as (u+1)/2, (v+1)/2 and 1/2 through [0] inside the unit disk and [1],
+// 0.3 as bright, outside it. Misses are black.
+std::array<PreviewRamp, 2> preview_ramps(Aov aov, DepthRange depths);
+
+// Whether the centre of pixel (i, j) lies in the unit disk of uv: decided on the integer numerators
+// of uv (see pixel_uv), exactly, so every device draws the same disk.
+bool inside_unit_disk(uint32_t i, uint32_t j, uint32_t width, uint32_t height);
+
+// `aov` of `frame` (which must hold it) as 8-bit RGB, 3 bytes a pixel, row-major from the top row.
 std::vector<uint8_t> preview_rgb(const Frame& frame, Aov aov);
 
 }  // namespace vkray

@@ -4,9 +4,11 @@
 #include "engine/gpu_scene.hpp"
 #include "engine/reference.hpp"
 #include "engine/vulkan/buffer.hpp"
+#include "engine/vulkan/image.hpp"
 #include "engine/vulkan/raycast_pipeline.hpp"
 
 #include <algorithm>
+#include <bit>
 #include <chrono>
 #include <cstring>
 #include <optional>
@@ -56,13 +58,21 @@ struct OutputBuffer {
   const void* host() const { return readback ? readback->mapped : written.mapped; }
 };
 
-// Output buffers for tiles of `width` x `rows`, kept between renders of the same shape.
+// Output buffers for tiles of `width` x `rows`, kept between renders of the same shape; with the
+// storage-image target (image_id != 0) the outputs go to that image instead.
 struct TileOutputs {
   uint32_t width = 0;
   uint32_t rows = 0;
   uint32_t aov_bits = 0;
+  uint64_t image_id = 0;  // ImageTarget::id
   std::optional<OutputBuffer> depth, normal, uv;
   std::optional<OutputBuffer> overflow;  // only where a loop budget applies
+};
+
+// A pixel of a storage-image target written by the host: a ray the CPU finished.
+struct PixelPatch {
+  uint32_t i, j;
+  glm::vec4 value;  // as the shader stores it
 };
 
 // Loop iterations of raycast.comp outside the tree walk, and a margin for the few iterations the
@@ -96,6 +106,8 @@ struct Renderer::Impl {
   std::optional<Scene> scene_for_unfinished;
   std::optional<ReferenceScene> reference;
   std::optional<RaycastPipeline> pipeline;
+  std::unique_ptr<ImageTarget> placeholder_image;  // 1x1, bound while rendering to buffers
+  std::optional<OutputBuffer> depth_range;  // DepthRangeBits, made on the first render to an image
   vk::raii::QueryPool timestamps{nullptr};
   TileOutputs tile;
   RenderTimings timings;
@@ -110,13 +122,18 @@ struct Renderer::Impl {
     return output;
   }
 
-  void prepare_tile(uint32_t width, uint32_t rows, AovSet aovs) {
-    if (tile.width == width && tile.rows == rows && tile.aov_bits == aovs.bits()) return;
-    tile = TileOutputs{width, rows, aovs.bits(), {}, {}, {}, {}};
+  // Output buffers and bindings for tiles of `width` x `rows` writing `aovs` to buffers, or to
+  // `target` when given.
+  void prepare_tile(uint32_t width, uint32_t rows, AovSet aovs, const ImageTarget* target) {
+    const uint64_t image_id = target ? target->id() : 0;
+    if (tile.width == width && tile.rows == rows && tile.aov_bits == aovs.bits() && tile.image_id == image_id) return;
+    tile = TileOutputs{width, rows, aovs.bits(), image_id, {}, {}, {}, {}};
     const vk::DeviceSize pixels = vk::DeviceSize{width} * rows;
-    if (aovs.has(Aov::depth)) tile.depth = make_output(pixels * depth_bytes(precision()));
-    if (aovs.has(Aov::normal)) tile.normal = make_output(pixels * normal_bytes(precision()));
-    if (aovs.has(Aov::uv)) tile.uv = make_output(pixels * uv_bytes);
+    if (!target) {
+      if (aovs.has(Aov::depth)) tile.depth = make_output(pixels * depth_bytes(precision()));
+      if (aovs.has(Aov::normal)) tile.normal = make_output(pixels * normal_bytes(precision()));
+      if (aovs.has(Aov::uv)) tile.uv = make_output(pixels * uv_bytes);
+    }
     if (stats.loop_budget > 0 && aovs.needs_rays()) tile.overflow = make_output((pixels + 1) * sizeof(uint32_t));
     auto floats = [&](const std::optional<TexelBuffer>& texels) {
       return *(texels ? texels->floats : placeholder_texels.floats);
@@ -141,23 +158,27 @@ struct Renderer::Impl {
     resources.buffers[VKRAY_BINDING_NORMAL] = output(tile.normal);
     resources.buffers[VKRAY_BINDING_UV] = output(tile.uv);
     resources.buffers[VKRAY_BINDING_OVERFLOW] = output(tile.overflow);
+    resources.buffers[VKRAY_BINDING_DEPTH_RANGE] = output(depth_range);
+    resources.images[VKRAY_BINDING_IMAGE] = *(target ? *target : *placeholder_image).image().view;
     pipeline->bind_resources(resources);
   }
 
   // Rays listed in the overflow buffer ran out of the loop budget with part of the tree not yet
   // visited: they are traced again, exactly, by the double-precision reference. Rare: a primary ray
   // visits tens to hundreds of nodes, the budget is ~65000 on lavapipe.
-  void finish_unfinished_rays(Frame& frame, const CameraBasis& basis, uint32_t first_row) {
+  // `finish` receives each pixel (i, j) and its hit.
+  template <typename Finish>
+  void finish_unfinished_rays(const CameraBasis& basis, uint32_t width, uint32_t height, uint32_t first_row,
+                              Finish&& finish) {
     const auto* overflow = static_cast<const uint32_t*>(tile.overflow->host());
     const uint32_t count = overflow[0];
     if (count == 0) return;
     const auto start = Clock::now();
     if (!reference) reference.emplace(*scene_for_unfinished);
     for (uint32_t k = 0; k < count; ++k) {
-      const uint32_t i = overflow[1 + k] % frame.width;
-      const uint32_t j = first_row + overflow[1 + k] / frame.width;
-      store_reference_hit(frame, size_t{j} * frame.width + i,
-                          reference->trace(basis.origin, basis.direction(pixel_uv(i, j, frame.width, frame.height))));
+      const uint32_t i = overflow[1 + k] % width;
+      const uint32_t j = first_row + overflow[1 + k] / width;
+      finish(i, j, reference->trace(basis.origin, basis.direction(pixel_uv(i, j, width, height))));
     }
     timings.unfinished_rays += count;
     timings.cpu_finish_ms += elapsed_ms(start);
@@ -165,20 +186,120 @@ struct Renderer::Impl {
 
   // Rows per dispatch: every output buffer within the device's storage-buffer range (and the
   // caller's cap), and the workgroup count within the device's limit.
-  uint32_t rows_per_tile(uint32_t width, uint32_t height, AovSet aovs) const {
+  // `buffer_aovs`: the outputs written to buffers (none with the storage-image target).
+  uint32_t rows_per_tile(uint32_t width, uint32_t height, AovSet buffer_aovs) const {
     vk::DeviceSize largest = 0;
-    if (aovs.has(Aov::depth)) largest = std::max(largest, depth_bytes(precision()));
-    if (aovs.has(Aov::normal)) largest = std::max(largest, normal_bytes(precision()));
-    if (aovs.has(Aov::uv)) largest = std::max(largest, uv_bytes);
+    if (buffer_aovs.has(Aov::depth)) largest = std::max(largest, depth_bytes(precision()));
+    if (buffer_aovs.has(Aov::normal)) largest = std::max(largest, normal_bytes(precision()));
+    if (buffer_aovs.has(Aov::uv)) largest = std::max(largest, uv_bytes);
     vk::DeviceSize limit = context.limits.maxStorageBufferRange;
     if (options.max_tile_bytes > 0) limit = std::min<vk::DeviceSize>(limit, options.max_tile_bytes);
-    vk::DeviceSize by_bytes = std::max<vk::DeviceSize>(1, limit / (vk::DeviceSize{width} * largest));
+    vk::DeviceSize by_bytes = largest > 0 ? std::max<vk::DeviceSize>(1, limit / (vk::DeviceSize{width} * largest)) : height;
     if (stats.loop_budget > 0) {  // the overflow list: a count, then 4 bytes a pixel
       by_bytes = std::min(by_bytes, std::max<vk::DeviceSize>(1, (limit - sizeof(uint32_t)) / (vk::DeviceSize{width} * 4)));
     }
     const vk::DeviceSize by_groups =
         vk::DeviceSize{context.limits.maxComputeWorkGroupCount[1]} * options.shader.workgroup_height;
     return static_cast<uint32_t>(std::min<vk::DeviceSize>({height, by_bytes, by_groups}));
+  }
+
+  void reset_timings() {
+    timings = RenderTimings{timings.upload_ms, timings.bvh_build_ms, 0.0, *timestamps != vk::QueryPool(), 0.0, 0.0, 0, 0, 0.0};
+  }
+
+  // What a render needs before its tiles: the pipeline (returned), the planes' heights above this
+  // camera, the tile's outputs and bindings; `tile_rows` receives the rows per tile.
+  const vk::raii::Pipeline& begin_render(const Camera& camera, uint32_t width, uint32_t height, AovSet aovs,
+                                         const ImageTarget* target, uint32_t& tile_rows) {
+    const bool lo_parts = needs_lo_parts(anchor, scene_radius, camera.from);
+    const vk::raii::Pipeline& chosen = pipeline->pipeline(aovs, lo_parts, target != nullptr, timings.pipeline_ms);
+    if (planes) {  // no submission is in flight: every render waits for its own
+      set_plane_heights(gpu_planes, scene_planes, camera.from, precision());
+      std::memcpy(planes->buffer.mapped, gpu_planes.data(), gpu_planes.size() * sizeof(gpu::GpuPlane));
+    }
+    tile_rows = rows_per_tile(width, height, target ? AovSet{} : aovs);
+    prepare_tile(width, tile_rows, aovs, target);
+    return chosen;
+  }
+
+  // Casts the rays of one tile: resets the overflow list (and the depth range, for an image),
+  // dispatches, and copies what the host reads into host-visible memory; waits for it.
+  void dispatch_tile(const vk::raii::Pipeline& chosen, const gpu::RayGenParams& params) {
+    const bool to_image = tile.image_id != 0;
+    context.submit_and_wait([&](const vk::raii::CommandBuffer& commands) {
+      if (*timestamps) {
+        commands.resetQueryPool(*timestamps, 0, 3);
+        commands.writeTimestamp(vk::PipelineStageFlagBits::eTopOfPipe, *timestamps, 0);
+      }
+      if (tile.overflow || to_image) {
+        if (tile.overflow) commands.fillBuffer(*tile.overflow->written.buffer, 0, sizeof(uint32_t), 0u);
+        if (to_image) {  // (+infinity, 0): see DepthRangeBits
+          commands.fillBuffer(*depth_range->written.buffer, 0, sizeof(uint32_t), std::bit_cast<uint32_t>(INFINITY));
+          commands.fillBuffer(*depth_range->written.buffer, sizeof(uint32_t), VK_WHOLE_SIZE, 0u);
+        }
+        const vk::MemoryBarrier cleared(vk::AccessFlagBits::eTransferWrite,
+                                        vk::AccessFlagBits::eShaderRead | vk::AccessFlagBits::eShaderWrite);
+        commands.pipelineBarrier(vk::PipelineStageFlagBits::eTransfer, vk::PipelineStageFlagBits::eComputeShader, {},
+                                 cleared, {}, {});
+      }
+      pipeline->bind(commands, chosen, params);
+      const uint32_t group_width = options.shader.workgroup_width;
+      const uint32_t group_height = options.shader.workgroup_height;
+      commands.dispatch((tile.width + group_width - 1) / group_width, (params.image.w + group_height - 1) / group_height, 1);
+      if (*timestamps) commands.writeTimestamp(vk::PipelineStageFlagBits::eComputeShader, *timestamps, 1);
+      // Make the shader's writes visible to the copy into host-visible memory, and to the host.
+      const vk::MemoryBarrier barrier(vk::AccessFlagBits::eShaderWrite,
+                                      vk::AccessFlagBits::eTransferRead | vk::AccessFlagBits::eHostRead);
+      commands.pipelineBarrier(vk::PipelineStageFlagBits::eComputeShader,
+                               vk::PipelineStageFlagBits::eTransfer | vk::PipelineStageFlagBits::eHost, {}, barrier, {},
+                               {});
+      bool copied = false;
+      for (const auto* output : {&tile.depth, &tile.normal, &tile.uv, &tile.overflow, to_image ? &depth_range : nullptr}) {
+        if (output && *output && (*output)->readback) {
+          commands.copyBuffer(*(*output)->written.buffer, *(*output)->readback->buffer,
+                              vk::BufferCopy(0, 0, (*output)->written.size));
+          copied = true;
+        }
+      }
+      if (copied) {  // a fence wait alone does not make device writes visible to the host
+        const vk::MemoryBarrier to_host(vk::AccessFlagBits::eTransferWrite, vk::AccessFlagBits::eHostRead);
+        commands.pipelineBarrier(vk::PipelineStageFlagBits::eTransfer, vk::PipelineStageFlagBits::eHost, {}, to_host,
+                                 {}, {});
+      }
+      if (*timestamps) commands.writeTimestamp(vk::PipelineStageFlagBits::eBottomOfPipe, *timestamps, 2);
+    });
+
+    if (*timestamps) {
+      const auto [result, ticks] = timestamps.getResults<uint64_t>(
+          0, 3, 3 * sizeof(uint64_t), sizeof(uint64_t), vk::QueryResultFlagBits::e64 | vk::QueryResultFlagBits::eWait);
+      const double period_ms = context.info.timestamp_period_ns * 1e-6;
+      timings.dispatch_gpu_ms += static_cast<double>(ticks[1] - ticks[0]) * period_ms;
+      timings.readback_ms += static_cast<double>(ticks[2] - ticks[1]) * period_ms;
+    }
+    ++timings.tiles;
+  }
+
+  // Writes the pixels the CPU finished into `target`, after the shader's writes.
+  void write_patches(const std::vector<PixelPatch>& patches, ImageTarget& target) {
+    GpuBuffer staging = create_upload_buffer(context, patches.size() * sizeof(glm::vec4));
+    std::vector<vk::BufferImageCopy> regions;
+    regions.reserve(patches.size());
+    auto* values = static_cast<glm::vec4*>(staging.mapped);
+    for (size_t k = 0; k < patches.size(); ++k) {
+      values[k] = patches[k].value;
+      regions.emplace_back(k * sizeof(glm::vec4), 0, 0, color_layer,
+                           vk::Offset3D(int32_t(patches[k].i), int32_t(patches[k].j), 0), vk::Extent3D(1, 1, 1));
+    }
+    const vk::Image image = *target.image().image;
+    context.submit_and_wait([&](const vk::raii::CommandBuffer& commands) {
+      transition_image(commands, image, vk::PipelineStageFlagBits::eComputeShader, vk::AccessFlagBits::eShaderWrite,
+                 vk::ImageLayout::eGeneral, vk::PipelineStageFlagBits::eTransfer, vk::AccessFlagBits::eTransferWrite,
+                 vk::ImageLayout::eTransferDstOptimal);
+      commands.copyBufferToImage(*staging.buffer, image, vk::ImageLayout::eTransferDstOptimal, regions);
+      transition_image(commands, image, vk::PipelineStageFlagBits::eTransfer, vk::AccessFlagBits::eTransferWrite,
+                 vk::ImageLayout::eTransferDstOptimal, vk::PipelineStageFlagBits::eComputeShader,
+                 vk::AccessFlagBits::eShaderRead | vk::AccessFlagBits::eShaderWrite, vk::ImageLayout::eGeneral);
+    });
   }
 };
 
@@ -248,6 +369,7 @@ Renderer::Renderer(GpuDevice& device, const Scene& scene, RendererOptions option
     r.anchor = gpu_scene.anchor;
     r.scene_radius = gpu_scene.radius;
     r.placeholder = create_storage_buffer(r.context, texel_bytes);
+    r.placeholder_image = std::make_unique<ImageTarget>(device, 1, 1);
     const std::array<uint32_t, 4> zero_texel{};
     r.placeholder_texels = make_texel_buffer(r.context, zero_texel.data(), texel_bytes);
     PipelineSpecialization specialization;
@@ -281,70 +403,16 @@ Frame Renderer::render(const Camera& camera, uint32_t width, uint32_t height, Ao
   if (r.options.shader.generic) aovs = AovSet{Aov::depth, Aov::normal, Aov::uv};  // it writes them all
   Frame frame(width, height, aovs);
   frame.allocate(r.precision() == Precision::float64);
-  r.timings = RenderTimings{r.timings.upload_ms, r.timings.bvh_build_ms, 0.0, *r.timestamps != vk::QueryPool(),
-                            0.0, 0.0, 0, 0, 0.0};
+  r.reset_timings();
   if (aovs.empty()) return frame;
 
   with_vulkan_errors("rendering", [&] {
-    const bool lo_parts = needs_lo_parts(r.anchor, r.scene_radius, camera.from);
-    const vk::raii::Pipeline& pipeline = r.pipeline->pipeline(aovs, lo_parts, r.timings.pipeline_ms);
     const CameraBasis basis = make_camera_basis(camera, width, height);
-    if (r.planes) {  // no submission is in flight: render() waits for each
-      set_plane_heights(r.gpu_planes, r.scene_planes, camera.from, r.precision());
-      std::memcpy(r.planes->buffer.mapped, r.gpu_planes.data(), r.gpu_planes.size() * sizeof(gpu::GpuPlane));
-    }
-    const uint32_t tile_rows = r.rows_per_tile(width, height, aovs);
-    r.prepare_tile(width, tile_rows, aovs);
-
+    uint32_t tile_rows = 0;
+    const vk::raii::Pipeline& pipeline = r.begin_render(camera, width, height, aovs, nullptr, tile_rows);
     for (uint32_t first_row = 0; first_row < height; first_row += tile_rows) {
       const uint32_t rows = std::min(tile_rows, height - first_row);
-      const gpu::RayGenParams params = make_ray_gen_params(basis, r.anchor, r.precision(), width, height, first_row, rows, r.counts);
-      r.context.submit_and_wait([&](const vk::raii::CommandBuffer& commands) {
-        if (*r.timestamps) {
-          commands.resetQueryPool(*r.timestamps, 0, 3);
-          commands.writeTimestamp(vk::PipelineStageFlagBits::eTopOfPipe, *r.timestamps, 0);
-        }
-        if (r.tile.overflow) {
-          commands.fillBuffer(*r.tile.overflow->written.buffer, 0, sizeof(uint32_t), 0u);
-          const vk::MemoryBarrier cleared(vk::AccessFlagBits::eTransferWrite,
-                                          vk::AccessFlagBits::eShaderRead | vk::AccessFlagBits::eShaderWrite);
-          commands.pipelineBarrier(vk::PipelineStageFlagBits::eTransfer, vk::PipelineStageFlagBits::eComputeShader, {},
-                                   cleared, {}, {});
-        }
-        r.pipeline->bind(commands, pipeline, params);
-        const uint32_t group_width = r.options.shader.workgroup_width;
-        const uint32_t group_height = r.options.shader.workgroup_height;
-        commands.dispatch((width + group_width - 1) / group_width, (rows + group_height - 1) / group_height, 1);
-        if (*r.timestamps) commands.writeTimestamp(vk::PipelineStageFlagBits::eComputeShader, *r.timestamps, 1);
-        // Make the shader's writes visible to the copy into host-visible memory, and to the host.
-        const vk::MemoryBarrier barrier(vk::AccessFlagBits::eShaderWrite,
-                                        vk::AccessFlagBits::eTransferRead | vk::AccessFlagBits::eHostRead);
-        commands.pipelineBarrier(vk::PipelineStageFlagBits::eComputeShader,
-                                 vk::PipelineStageFlagBits::eTransfer | vk::PipelineStageFlagBits::eHost, {}, barrier,
-                                 {}, {});
-        bool copied = false;
-        for (const auto* output : {&r.tile.depth, &r.tile.normal, &r.tile.uv, &r.tile.overflow}) {
-          if (*output && (*output)->readback) {
-            commands.copyBuffer(*(*output)->written.buffer, *(*output)->readback->buffer,
-                                vk::BufferCopy(0, 0, (*output)->written.size));
-            copied = true;
-          }
-        }
-        if (copied) {  // a fence wait alone does not make device writes visible to the host
-          const vk::MemoryBarrier to_host(vk::AccessFlagBits::eTransferWrite, vk::AccessFlagBits::eHostRead);
-          commands.pipelineBarrier(vk::PipelineStageFlagBits::eTransfer, vk::PipelineStageFlagBits::eHost, {},
-                                   to_host, {}, {});
-        }
-        if (*r.timestamps) commands.writeTimestamp(vk::PipelineStageFlagBits::eBottomOfPipe, *r.timestamps, 2);
-      });
-
-      if (*r.timestamps) {
-        const auto [result, ticks] = r.timestamps.getResults<uint64_t>(
-            0, 3, 3 * sizeof(uint64_t), sizeof(uint64_t), vk::QueryResultFlagBits::e64 | vk::QueryResultFlagBits::eWait);
-        const double period_ms = r.context.info.timestamp_period_ns * 1e-6;
-        r.timings.dispatch_gpu_ms += static_cast<double>(ticks[1] - ticks[0]) * period_ms;
-        r.timings.readback_ms += static_cast<double>(ticks[2] - ticks[1]) * period_ms;
-      }
+      r.dispatch_tile(pipeline, make_ray_gen_params(basis, r.anchor, r.precision(), width, height, first_row, rows, r.counts));
       const auto copy_start = Clock::now();
       // The shader packs each plane of this tile to width * rows floats (see raycast.comp); each
       // lands in the same plane of the frame.
@@ -367,12 +435,51 @@ Frame Renderer::render(const Camera& camera, uint32_t width, uint32_t height, Ao
       }
       copy_planes(r.tile.uv, frame.uv, 2);
       r.timings.readback_ms += elapsed_ms(copy_start);
-      if (r.tile.overflow) r.finish_unfinished_rays(frame, basis, first_row);
-      ++r.timings.tiles;
+      if (r.tile.overflow) {
+        r.finish_unfinished_rays(basis, width, height, first_row, [&](uint32_t i, uint32_t j, const ReferenceHit& hit) {
+          store_reference_hit(frame, size_t{j} * width + i, hit);
+        });
+      }
     }
   });
   frame.round_doubles();
   return frame;
+}
+
+DepthRange Renderer::render(const Camera& camera, Aov aov, ImageTarget& target) {
+  const uint32_t width = target.width(), height = target.height();
+  check_image_size(width, height);
+  Impl& r = *impl_;
+  if (r.options.shader.generic || r.precision() != Precision::float32) {
+    throw std::logic_error("the storage-image target takes a float32 shader specialized on its output");
+  }
+  r.reset_timings();
+  DepthRange depths;
+  with_vulkan_errors("rendering", [&] {
+    const CameraBasis basis = make_camera_basis(camera, width, height);
+    if (!r.depth_range) r.depth_range = r.make_output(sizeof(gpu::DepthRangeBits));
+    uint32_t tile_rows = 0;
+    const vk::raii::Pipeline& pipeline = r.begin_render(camera, width, height, AovSet{aov}, &target, tile_rows);
+    std::vector<PixelPatch> patches;
+    for (uint32_t first_row = 0; first_row < height; first_row += tile_rows) {
+      const uint32_t rows = std::min(tile_rows, height - first_row);
+      r.dispatch_tile(pipeline, make_ray_gen_params(basis, r.anchor, r.precision(), width, height, first_row, rows, r.counts));
+      if (aov == Aov::depth) {
+        const auto& bits = static_cast<const gpu::DepthRangeBits*>(r.depth_range->host())->near_far;
+        if (bits.y != 0) depths.add(std::bit_cast<float>(bits.x)), depths.add(std::bit_cast<float>(bits.y));
+      }
+      if (r.tile.overflow) {
+        // The values store_reference_hit puts in a Frame, as the shader stores them.
+        r.finish_unfinished_rays(basis, width, height, first_row, [&](uint32_t i, uint32_t j, const ReferenceHit& hit) {
+          const float depth = static_cast<float>(hit.t);
+          patches.push_back({i, j, aov == Aov::depth ? glm::vec4(depth, 0.0f, 0.0f, 0.0f) : glm::vec4(glm::vec3(hit.normal), 0.0f)});
+          if (aov == Aov::depth && std::isfinite(depth)) depths.add(depth);
+        });
+      }
+    }
+    if (!patches.empty()) r.write_patches(patches, target);
+  });
+  return depths;
 }
 
 }  // namespace vkray

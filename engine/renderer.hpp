@@ -5,6 +5,7 @@
 #include "engine/frame.hpp"
 #include "engine/gpu_device.hpp"
 #include "engine/gpu_scene.hpp"
+#include "engine/image_target.hpp"
 #include "engine/scene.hpp"
 #include "engine/shader_variant.hpp"
 
@@ -18,7 +19,7 @@ struct RenderTimings {
   double pipeline_ms = 0.0;        // pipeline creation (first render with a given set of outputs)
   bool has_gpu_times = false;      // the device has timestamps; else dispatch_gpu_ms is not measured
   double dispatch_gpu_ms = 0.0;    // GPU time of the ray-casting dispatches (timestamp queries)
-  double readback_ms = 0.0;        // copying results back into the Frame
+  double readback_ms = 0.0;        // copying results back into the Frame (or the few the host reads)
   uint32_t tiles = 0;              // dispatches the image was split into
   uint64_t unfinished_rays = 0;    // rays that ran out of the device's loop budget, finished on the CPU
   double cpu_finish_ms = 0.0;      // time spent finishing them
@@ -57,6 +58,12 @@ class Renderer {
   // Renders `camera` at width x height; only the outputs in `aovs` are computed and read back
   // (every output with the generic shader variant).
   Frame render(const Camera& camera, uint32_t width, uint32_t height, AovSet aovs);
+
+  // Renders `aov` of `camera` into the storage-image target, at its size: the same values render()
+  // returns, left on the device (rays past the loop budget are finished on the CPU and written in).
+  // Returns the range of finite depths when `aov` is depth. Takes a float32 shader specialized on
+  // its outputs (not the generic or float64 variants).
+  DepthRange render(const Camera& camera, Aov aov, ImageTarget& target);
 
   // Timings of the last render (upload_ms and bvh_build_ms are the constructor's).
   const RenderTimings& timings() const;

@@ -35,7 +35,11 @@ using uvec4 = glm::uvec4;
 #define VKRAY_BINDING_BVH_BOUNDS 6   // texels, RGBA32F: four per node (GpuBvhNode), boxes in the first three
 #define VKRAY_BINDING_BVH_LINKS 7    // texels, RGBA32UI view of the same buffer: children in the fourth
 #define VKRAY_BINDING_OVERFLOW 8     // storage buffer
-#define VKRAY_BINDING_COUNT 9
+// The storage-image target (`vkray view`): one output's values in an RGBA32F storage image instead
+// of the buffers above, and the range of its finite depths (DepthRangeBits) for the preview's grey.
+#define VKRAY_BINDING_IMAGE 9        // storage image, RGBA32F
+#define VKRAY_BINDING_DEPTH_RANGE 10 // storage buffer
+#define VKRAY_BINDING_COUNT 11
 
 // How the shader finds the nearest triangle or sphere (VKRAY_SPEC_SEARCH_MODE). Planes are
 // infinite: they stay outside the tree, in their own loop.
@@ -74,7 +78,9 @@ using uvec4 = glm::uvec4;
 // scene (engine/gpu_scene.cpp, needs_lo_parts): two pipelines, chosen per render, since on lavapipe
 // a run-time branch costs as much as the code it skips.
 #define VKRAY_SPEC_LO_PARTS 17
-#define VKRAY_SPEC_COUNT 18
+// Write the one requested output into the storage image (VKRAY_BINDING_IMAGE) rather than buffers.
+#define VKRAY_SPEC_IMAGE_TARGET 18
+#define VKRAY_SPEC_COUNT 19
 
 #define VKRAY_SPHERE_STABLE 0               // Ray Tracing Gems ch. 7 (intersect.glsl)
 #define VKRAY_SPHERE_NAIVE 1                // the textbook b^2 - c
@@ -194,6 +200,36 @@ struct RayGenParams {
   uvec4 counts;  // read by the generic variant only: spheres, planes, triangle slots, search mode
 };
 VKRAY_CHECK_SIZE(RayGenParams, 128);
+
+// The nearest and farthest finite depth of an image as the bits of positive floats, which order
+// as unsigned integers do: the shader folds its hits in with atomicMin/atomicMax. Reset to
+// (+infinity, 0) before a dispatch; far_bits stays 0 when nothing was hit.
+struct DepthRangeBits {
+  uvec4 near_far;  // x: nearest, y: farthest; z, w: 0
+};
+VKRAY_CHECK_SIZE(DepthRangeBits, 16);
+
+// The 8-bit preview of an output (engine/preview.hpp), as shaders/preview.comp applies it. A ramp
+// maps a float to a byte: the byte of v is the largest k with thresholds[k] <= v (thresholds[0] is
+// -infinity, thresholds ascend), found by a binary search of 8 comparisons. Comparisons are exact,
+// so the GPU picks the same byte as the host for the same float, whatever its arithmetic.
+#define VKRAY_RAMP_LEVELS 256
+#define VKRAY_PREVIEW_BINDING_VALUES 0   // storage image, RGBA32F: what the render wrote
+#define VKRAY_PREVIEW_BINDING_PICTURE 1  // storage image, RGBA8UI: the 8-bit picture
+#define VKRAY_PREVIEW_BINDING_RAMPS 2    // uniform buffer: GpuPreviewRamps
+#define VKRAY_PREVIEW_DEPTH 0            // grey from ramp 0 on -depth; misses black
+#define VKRAY_PREVIEW_NORMAL 1           // each component through ramp 0; misses (zero normal) black
+#define VKRAY_PREVIEW_UV 2               // u, v and 0 through ramp 0 inside the unit disk, ramp 1 outside
+// Two ramps of VKRAY_RAMP_LEVELS thresholds, four to a vec4 (std140 arrays have a 16-byte stride).
+struct GpuPreviewRamps {
+  vec4 thresholds[2 * VKRAY_RAMP_LEVELS / 4];
+};
+VKRAY_CHECK_SIZE(GpuPreviewRamps, 2048);
+// Push constants of preview.comp.
+struct PreviewParams {
+  uvec4 image;  // width, height, VKRAY_PREVIEW_*, 1 to store blue first (BGRA swapchains)
+};
+VKRAY_CHECK_SIZE(PreviewParams, 16);
 
 #ifdef __cplusplus
 }  // namespace vkray::gpu

@@ -1,9 +1,11 @@
 #version 460
 // One primary ray per pixel through the pixel centre; the nearest hit over every primitive wins.
-// Writes the requested outputs (depth, normal, uv) for one tile of rows of the image. Compiled
+// Writes the requested outputs (depth, normal, uv) for one tile of rows of the image into buffers,
+// or one output into a storage image (IMAGE_TARGET, the viewer's frame). Compiled
 // twice: float32, and float64 with VKRAY_FLOAT64 defined (`--precision double`), which writes depth
 // and normals as doubles.
 #extension GL_GOOGLE_include_directive : require
+#extension GL_KHR_shader_subgroup_arithmetic : require
 
 #include "gpu_layout.h"
 #include "intersect.glsl"
@@ -17,6 +19,7 @@ layout(constant_id = VKRAY_SPEC_WRITE_DEPTH) const bool WRITE_DEPTH = true;
 layout(constant_id = VKRAY_SPEC_WRITE_NORMAL) const bool WRITE_NORMAL = true;
 layout(constant_id = VKRAY_SPEC_WRITE_UV) const bool WRITE_UV = false;
 layout(constant_id = VKRAY_SPEC_MORTON_ORDER) const bool MORTON_ORDER = true;
+layout(constant_id = VKRAY_SPEC_IMAGE_TARGET) const bool IMAGE_TARGET = false;
 
 layout(push_constant) uniform PushConstants { RayGenParams params; };
 
@@ -26,6 +29,22 @@ layout(std430, binding = VKRAY_BINDING_NORMAL) writeonly buffer NormalOut { real
 layout(std430, binding = VKRAY_BINDING_UV) writeonly buffer UvOut { float uv_out[]; };
 // Rays that ran out of LOOP_BUDGET: their count, then their pixels' indices within the tile.
 layout(std430, binding = VKRAY_BINDING_OVERFLOW) buffer Overflow { uint overflow_count; uint overflow_pixels[]; };
+// The storage-image target: the output at its pixel (depth in x, normal in xyz, uv in xy), and the
+// range of finite depths.
+layout(binding = VKRAY_BINDING_IMAGE, rgba32f) uniform writeonly image2D image_out;
+layout(std430, binding = VKRAY_BINDING_DEPTH_RANGE) buffer DepthRange { DepthRangeBits depth_range; };
+
+// Folds the depths of the counted pixels into depth_range: reduced across the subgroup first, then
+// one atomic pair per subgroup (per-invocation atomics cost llvmpipe ~20 ms a 1280x720 frame; a
+// workgroup barrier costs it more than that). Positive floats order as their bits do.
+void record_depth_range(bool counted, float depth) {
+  uint near_bits = subgroupMin(counted ? floatBitsToUint(depth) : 0x7f800000u);  // +infinity when none
+  uint far_bits = subgroupMax(counted ? floatBitsToUint(depth) : 0u);
+  if (subgroupElect() && far_bits != 0u) {
+    atomicMin(depth_range.near_far.x, near_bits);
+    atomicMax(depth_range.near_far.y, far_bits);
+  }
+}
 
 // Every other bit of `bits` (bits 0, 2, 4, 6), packed: one coordinate of a Morton index below 256.
 uint compact_even_bits(uint bits) {
@@ -59,8 +78,12 @@ void main() {
   vec2 uv_numerator = vec2(float(2 * tile_pixel.x + 1) - float(width), float(height) - float(2 * row + 1));
   vec2 uv = uv_numerator / shorter;
   if (WRITE_UV && inside) {
-    uv_out[out_index] = uv.x;
-    uv_out[plane_size + out_index] = uv.y;
+    if (IMAGE_TARGET) {
+      imageStore(image_out, ivec2(tile_pixel.x, row), vec4(uv, 0.0, 0.0));
+    } else {
+      uv_out[out_index] = uv.x;
+      uv_out[plane_size + out_index] = uv.y;
+    }
   }
   if (!WRITE_DEPTH && !WRITE_NORMAL) return;
 
@@ -116,12 +139,18 @@ void main() {
     normal = hit.normal;
   }
   if (hit.unfinished && inside) overflow_pixels[atomicAdd(overflow_count, 1u)] = out_index;
+  // Unfinished rays stay out: the host finishes them and folds their depth in.
+  if (IMAGE_TARGET && WRITE_DEPTH) record_depth_range(inside && !hit.unfinished && t_best < no_hit, float(t_best));
   if (!inside) return;
 
+  // Unit length again (the sphere normal carries rounding); every kind turned it to face the ray.
+  if (WRITE_NORMAL && t_best < no_hit) normal = normalize(normal);
+  if (IMAGE_TARGET) {
+    imageStore(image_out, ivec2(tile_pixel.x, row), WRITE_DEPTH ? vec4(t_best, 0.0, 0.0, 0.0) : vec4(normal, 0.0));
+    return;
+  }
   if (WRITE_DEPTH) depth_out[out_index] = t_best;
   if (WRITE_NORMAL) {
-    // Unit length again (the sphere normal carries rounding); every kind turned it to face the ray.
-    if (t_best < no_hit) normal = normalize(normal);
     normal_out[out_index] = normal.x;
     normal_out[plane_size + out_index] = normal.y;
     normal_out[2 * plane_size + out_index] = normal.z;

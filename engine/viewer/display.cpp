@@ -6,16 +6,7 @@
 namespace vkray {
 namespace {
 
-constexpr vk::ImageSubresourceRange whole_image(vk::ImageAspectFlagBits::eColor, 0, 1, 0, 1);
-constexpr size_t picture_bytes_per_pixel = 4;
-
-void transition(const vk::raii::CommandBuffer& commands, vk::Image image, vk::PipelineStageFlags source_stage,
-                vk::AccessFlags source_access, vk::ImageLayout old_layout, vk::PipelineStageFlags target_stage,
-                vk::AccessFlags target_access, vk::ImageLayout new_layout) {
-  const vk::ImageMemoryBarrier barrier(source_access, target_access, old_layout, new_layout, VK_QUEUE_FAMILY_IGNORED,
-                                       VK_QUEUE_FAMILY_IGNORED, image, whole_image);
-  commands.pipelineBarrier(source_stage, target_stage, {}, {}, {}, barrier);
-}
+constexpr size_t swapchain_bytes_per_pixel = 4;
 
 vk::raii::RenderPass make_overlay_pass(const vk::raii::Device& device, vk::Format format) {
   // The picture is already in the image (loaded, not cleared); the barriers around the pass
@@ -62,27 +53,14 @@ void Display::resize(vk::Extent2D window_size) {
                                                                             swapchain_.extent.width,
                                                                             swapchain_.extent.height, 1));
     }
-    const vk::DeviceSize bytes = vk::DeviceSize{swapchain_.extent.width} * swapchain_.extent.height * picture_bytes_per_pixel;
-    picture_ = create_upload_buffer(context_, bytes);
+    const vk::DeviceSize bytes = vk::DeviceSize{swapchain_.extent.width} * swapchain_.extent.height * swapchain_bytes_per_pixel;
     readback_ = create_readback_buffer(context_, bytes);
   });
 }
 
-void Display::set_picture(const std::vector<uint8_t>& rgb) {
-  const size_t pixels = size_t{swapchain_.extent.width} * swapchain_.extent.height;
-  if (!picture_ || rgb.size() != pixels * 3) throw std::logic_error("the picture does not match the swapchain's size");
-  auto* out = static_cast<uint8_t*>(picture_->mapped);
-  const size_t red = format_.bgra ? 2 : 0, blue = format_.bgra ? 0 : 2;
-  for (size_t p = 0; p < pixels; ++p) {
-    out[4 * p + red] = rgb[3 * p];
-    out[4 * p + 1] = rgb[3 * p + 1];
-    out[4 * p + blue] = rgb[3 * p + 2];
-    out[4 * p + 3] = 255;
-  }
-}
-
-bool Display::present(const OverlayDraw* overlay, std::vector<uint8_t>* capture) {
+bool Display::present(const GpuImage& picture, const OverlayDraw* overlay, std::vector<uint8_t>* capture) {
   if (swapchain_.images.empty()) return false;
+  if (picture.extent != swapchain_.extent) throw std::logic_error("the picture does not match the swapchain's size");
   return with_vulkan_errors("showing a frame", [&] {
     uint32_t index = 0;
     bool current = true;
@@ -99,17 +77,18 @@ bool Display::present(const OverlayDraw* overlay, std::vector<uint8_t>* capture)
     command_pool_.reset();  // its one command buffer, recorded anew every frame
     commands_.begin(vk::CommandBufferBeginInfo(vk::CommandBufferUsageFlagBits::eOneTimeSubmit));
     // The submission waits for the acquire at the transfer stage: the first barrier chains to it.
-    transition(commands_, image, vk::PipelineStageFlagBits::eTransfer, {}, vk::ImageLayout::eUndefined,
+    transition_image(commands_, image, vk::PipelineStageFlagBits::eTransfer, {}, vk::ImageLayout::eUndefined,
                vk::PipelineStageFlagBits::eTransfer, vk::AccessFlagBits::eTransferWrite,
                vk::ImageLayout::eTransferDstOptimal);
-    const vk::BufferImageCopy region(0, 0, 0, vk::ImageSubresourceLayers(vk::ImageAspectFlagBits::eColor, 0, 0, 1),
-                                     {0, 0, 0}, {extent.width, extent.height, 1});
-    commands_.copyBufferToImage(*picture_->buffer, image, vk::ImageLayout::eTransferDstOptimal, region);
+    // RGBA8UI onto the swapchain's 8-bit UNORM (or sRGB) format: the same 32-bit size class, so the
+    // copy moves the bytes unchanged (PreviewPass wrote them in this image's channel order).
+    const vk::ImageCopy copy(color_layer, {0, 0, 0}, color_layer, {0, 0, 0}, vk::Extent3D(extent, 1));
+    commands_.copyImage(*picture.image, vk::ImageLayout::eTransferSrcOptimal, image, vk::ImageLayout::eTransferDstOptimal, copy);
     vk::PipelineStageFlags last_stage = vk::PipelineStageFlagBits::eTransfer;
     vk::AccessFlags last_access = vk::AccessFlagBits::eTransferWrite;
     vk::ImageLayout layout = vk::ImageLayout::eTransferDstOptimal;
     if (overlay) {
-      transition(commands_, image, last_stage, last_access, layout, vk::PipelineStageFlagBits::eColorAttachmentOutput,
+      transition_image(commands_, image, last_stage, last_access, layout, vk::PipelineStageFlagBits::eColorAttachmentOutput,
                  vk::AccessFlagBits::eColorAttachmentRead | vk::AccessFlagBits::eColorAttachmentWrite,
                  vk::ImageLayout::eColorAttachmentOptimal);
       commands_.beginRenderPass(vk::RenderPassBeginInfo(*overlay_pass_, *framebuffers_[index], vk::Rect2D({0, 0}, extent)),
@@ -121,8 +100,9 @@ bool Display::present(const OverlayDraw* overlay, std::vector<uint8_t>* capture)
       layout = vk::ImageLayout::eColorAttachmentOptimal;
     }
     if (capture) {
-      transition(commands_, image, last_stage, last_access, layout, vk::PipelineStageFlagBits::eTransfer,
+      transition_image(commands_, image, last_stage, last_access, layout, vk::PipelineStageFlagBits::eTransfer,
                  vk::AccessFlagBits::eTransferRead, vk::ImageLayout::eTransferSrcOptimal);
+      const vk::BufferImageCopy region(0, 0, 0, color_layer, {0, 0, 0}, vk::Extent3D(extent, 1));
       commands_.copyImageToBuffer(image, vk::ImageLayout::eTransferSrcOptimal, *readback_->buffer, region);
       // A fence wait alone does not make device writes visible to the host.
       const vk::MemoryBarrier to_host(vk::AccessFlagBits::eTransferWrite, vk::AccessFlagBits::eHostRead);
@@ -133,7 +113,7 @@ bool Display::present(const OverlayDraw* overlay, std::vector<uint8_t>* capture)
       layout = vk::ImageLayout::eTransferSrcOptimal;
     }
     // Presentation needs no access mask: the semaphore it waits on makes the writes visible.
-    transition(commands_, image, last_stage, last_access, layout, vk::PipelineStageFlagBits::eBottomOfPipe, {},
+    transition_image(commands_, image, last_stage, last_access, layout, vk::PipelineStageFlagBits::eBottomOfPipe, {},
                vk::ImageLayout::ePresentSrcKHR);
     commands_.end();
 

@@ -1,11 +1,13 @@
-// Showing pictures in the window: the swapchain, the commands that copy the picture onto the
-// acquired image and draw the overlay on top, presentation, and reading back what was presented.
+// Showing pictures in the window: the swapchain, the commands that copy the picture (made on the
+// device by PreviewPass) onto the acquired image and draw the overlay on top, presentation, and
+// reading back what was presented.
 // One frame in flight: the renderer waits for its own work anyway, and a viewer that redraws
 // only on change gains nothing from a deeper queue.
 #pragma once
 
 #include "engine/viewer/swapchain.hpp"
 #include "engine/vulkan/buffer.hpp"
+#include "engine/vulkan/image.hpp"
 
 #include <functional>
 #include <optional>
@@ -28,14 +30,15 @@ class Display {
   // The render pass the overlay draws in: one colour attachment, the swapchain image, kept.
   vk::RenderPass overlay_pass() const { return *overlay_pass_; }
 
-  // The picture to show, 8-bit RGB, extent() in size.
-  void set_picture(const std::vector<uint8_t>& rgb);
+  // Whether swapchain images store blue first: the picture must come in their order.
+  bool bgra() const { return format_.bgra; }
 
   using OverlayDraw = std::function<void(vk::CommandBuffer)>;
-  // Shows the picture, with `overlay` recorded on top inside overlay_pass() when given. With
+  // Shows `picture` (8-bit, in the swapchain's channel order, extent() in size, TRANSFER_SRC_OPTIMAL layout),
+  // copied bit for bit, with `overlay` recorded on top inside overlay_pass() when given. With
   // `capture`, also returns what was presented, 8-bit RGB. Returns false when the swapchain is out
   // of date or suboptimal: resize() and draw again.
-  bool present(const OverlayDraw* overlay, std::vector<uint8_t>* capture);
+  bool present(const GpuImage& picture, const OverlayDraw* overlay, std::vector<uint8_t>* capture);
 
  private:
   VulkanContext& context_;
@@ -48,7 +51,6 @@ class Display {
   vk::raii::CommandBuffer commands_{nullptr};
   vk::raii::Fence done_{nullptr};
   vk::raii::Semaphore acquired_{nullptr};
-  std::optional<GpuBuffer> picture_;   // BGRA or RGBA as the swapchain wants, extent() in size
   std::optional<GpuBuffer> readback_;  // the presented image, for captures
 };
 

@@ -1,8 +1,8 @@
 #include "engine/viewer/viewer.hpp"
 
 #include "engine/image_io.hpp"
-#include "engine/preview.hpp"
 #include "engine/renderer.hpp"
+#include "engine/vulkan/preview_pass.hpp"
 #include "engine/viewer/camera_controller.hpp"
 #include "engine/viewer/display.hpp"
 #include "engine/viewer/file_watch.hpp"
@@ -80,6 +80,10 @@ class Viewer {
   Display display_;
   std::optional<Overlay> overlay_;
   std::unique_ptr<Renderer> renderer_;
+  // The frame stays on the device: rendered into target_, mapped to 8 bits by preview_, copied
+  // onto the swapchain by display_.
+  std::unique_ptr<ImageTarget> target_;
+  PreviewPass preview_;
   std::optional<FileWatch> watch_;
   std::string error_;  // of the last reload or save, shown until the next one succeeds
 
@@ -108,7 +112,8 @@ Viewer::Viewer(const ViewerOptions& options)
       presentation_(window_.presentation()),
       device_(options.device, presentation_),
       display_(device_.vulkan(), window_.create_surface(device_.vulkan().instance), options.vsync),
-      renderer_(std::make_unique<Renderer>(device_, scene_)) {
+      renderer_(std::make_unique<Renderer>(device_, scene_)),
+      preview_(device_.vulkan()) {
   resize();
   if (options.overlay) {
     // The backend needs at least 2 images, even for a window that starts minimized.
@@ -276,8 +281,12 @@ void Viewer::save() {
 
 void Viewer::render() {
   const vk::Extent2D extent = display_.extent();
-  const Frame frame = renderer_->render(controller_.camera(), extent.width, extent.height, AovSet{output_});
-  display_.set_picture(preview_rgb(frame, output_));
+  if (!target_ || target_->width() != extent.width || target_->height() != extent.height) {
+    target_.reset();  // its memory first
+    target_ = std::make_unique<ImageTarget>(device_, extent.width, extent.height);
+  }
+  const DepthRange depths = renderer_->render(controller_.camera(), output_, *target_);
+  preview_.run(*target_, output_, depths, display_.bgra());
   gpu_ms_ = renderer_->timings().dispatch_gpu_ms;
   ++renders_;
   dirty_ = false;
@@ -294,9 +303,9 @@ bool Viewer::present(std::vector<uint8_t>* capture) {
   if (overlay_) {
     const std::vector<std::string> lines = overlay_lines();
     const Display::OverlayDraw draw = [&](vk::CommandBuffer commands) { overlay_->draw(lines, error_, commands); };
-    shown = display_.present(&draw, capture);
+    shown = display_.present(preview_.picture(), &draw, capture);
   } else {
-    shown = display_.present(nullptr, capture);
+    shown = display_.present(preview_.picture(), nullptr, capture);
   }
   damaged_ = !shown;
   if (shown) {

@@ -7,8 +7,8 @@ namespace {
 
 constexpr auto host_access = vk::MemoryPropertyFlagBits::eHostVisible | vk::MemoryPropertyFlagBits::eHostCoherent;
 
-// First memory type allowed by `type_bits` with all `required` flags, preferring one that also has
-// all `preferred` flags.
+}  // namespace
+
 uint32_t find_memory_type(const VulkanContext& context, uint32_t type_bits, vk::MemoryPropertyFlags required,
                           vk::MemoryPropertyFlags preferred) {
   const auto& memory = context.memory_properties;
@@ -17,8 +17,10 @@ uint32_t find_memory_type(const VulkanContext& context, uint32_t type_bits, vk::
       if ((type_bits & (1u << i)) && (memory.memoryTypes[i].propertyFlags & wanted) == wanted) return i;
     }
   }
-  throw GpuError("no suitable Vulkan memory type for a buffer");
+  throw GpuError("no suitable Vulkan memory type for a buffer or image");
 }
+
+namespace {
 
 GpuBuffer create_buffer(VulkanContext& context, vk::DeviceSize size, vk::BufferUsageFlags usage,
                         vk::MemoryPropertyFlags required, vk::MemoryPropertyFlags preferred) {

@@ -1,4 +1,4 @@
-// Storage buffers: allocation with a memory-type choice, upload and host access.
+// Buffers: allocation with a memory-type choice, upload and host access.
 #pragma once
 
 #include "engine/vulkan/context.hpp"
@@ -12,6 +12,11 @@ struct GpuBuffer {
   vk::DeviceSize size = 0;
   void* mapped = nullptr;  // set when the memory is host-visible and coherent
 };
+
+// First memory type allowed by `type_bits` with all `required` flags, preferring one that also has
+// all `preferred` flags.
+uint32_t find_memory_type(const VulkanContext& context, uint32_t type_bits, vk::MemoryPropertyFlags required,
+                          vk::MemoryPropertyFlags preferred);
 
 // A storage buffer in device-local memory where the device has it. On devices whose device-local
 // memory is also host-visible (integrated GPUs, lavapipe, resizable BAR) the buffer is mapped, so

@@ -163,7 +163,8 @@ GpuDeviceInfo describe(const vk::raii::PhysicalDevice& physical_device) {
   const bool subgroup_operations =
       (subgroups.supportedStages & vk::ShaderStageFlagBits::eCompute) &&
       (subgroups.supportedOperations & vk::SubgroupFeatureFlagBits::eVote) &&
-      (subgroups.supportedOperations & vk::SubgroupFeatureFlagBits::eBallot);
+      (subgroups.supportedOperations & vk::SubgroupFeatureFlagBits::eBallot) &&
+      (subgroups.supportedOperations & vk::SubgroupFeatureFlagBits::eArithmetic);
   info.can_compute = family != UINT32_MAX && subgroup_operations;
   if (info.can_compute && physical_device.getQueueFamilyProperties()[family].timestampValidBits > 0) {
     info.timestamp_period_ns = limits.timestampPeriod;
@@ -217,9 +218,9 @@ size_t choose_gpu_device(const std::vector<GpuDeviceInfo>& devices, std::string_
       names += "'" + device.name + "'";
     }
     throw GpuError(name_filter.empty()
-                       ? "no Vulkan device with a compute queue and subgroup vote and ballot among " + names
+                       ? "no Vulkan device with a compute queue and subgroup vote, ballot and arithmetic among " + names
                        : "no Vulkan device named like '" + std::string(name_filter) +
-                             "' with a compute queue and subgroup vote and ballot; found " + names);
+                             "' with a compute queue and subgroup vote, ballot and arithmetic; found " + names);
   }
   return best;
 }

@@ -10,10 +10,10 @@ namespace vkray {
 RaycastPipeline::RaycastPipeline(VulkanContext& context, PipelineSpecialization specialization)
     : context_(context), specialization_(specialization) {
   std::array<vk::DescriptorSetLayoutBinding, VKRAY_BINDING_COUNT> bindings;
-  uint32_t storage_buffers = 0;
+  std::map<vk::DescriptorType, uint32_t> descriptors;  // of each type
   for (uint32_t i = 0; i < bindings.size(); ++i) {
     bindings[i] = vk::DescriptorSetLayoutBinding(i, binding_type(i), 1, vk::ShaderStageFlagBits::eCompute);
-    storage_buffers += binding_type(i) == vk::DescriptorType::eStorageBuffer ? 1 : 0;
+    ++descriptors[binding_type(i)];
   }
   set_layout_ = vk::raii::DescriptorSetLayout(context.device, vk::DescriptorSetLayoutCreateInfo({}, bindings));
   const vk::PushConstantRange push_range(vk::ShaderStageFlagBits::eCompute, 0, sizeof(gpu::RayGenParams));
@@ -27,17 +27,16 @@ RaycastPipeline::RaycastPipeline(VulkanContext& context, PipelineSpecialization 
                                                                                         raycast_comp_VKRAY_FLOAT64))
                     : vk::raii::ShaderModule(context.device, vk::ShaderModuleCreateInfo({}, sizeof(raycast_comp), raycast_comp));
 
-  const std::array pool_sizes{
-      vk::DescriptorPoolSize(vk::DescriptorType::eStorageBuffer, storage_buffers),
-      vk::DescriptorPoolSize(vk::DescriptorType::eUniformTexelBuffer, VKRAY_BINDING_COUNT - storage_buffers)};
+  std::vector<vk::DescriptorPoolSize> pool_sizes;
+  for (const auto& [type, count] : descriptors) pool_sizes.emplace_back(type, count);
   pool_ = vk::raii::DescriptorPool(
       context.device, vk::DescriptorPoolCreateInfo(vk::DescriptorPoolCreateFlagBits::eFreeDescriptorSet, 1, pool_sizes));
   set_ = std::move(vk::raii::DescriptorSets(context.device, vk::DescriptorSetAllocateInfo(*pool_, set_layout))[0]);
 }
 
-const vk::raii::Pipeline& RaycastPipeline::pipeline(AovSet aovs, bool lo_parts, double& created_ms) {
+const vk::raii::Pipeline& RaycastPipeline::pipeline(AovSet aovs, bool lo_parts, bool image_target, double& created_ms) {
   created_ms = 0.0;
-  const uint32_t key = aovs.bits() | (lo_parts ? 256u : 0u);
+  const uint32_t key = aovs.bits() | (lo_parts ? 256u : 0u) | (image_target ? 512u : 0u);
   if (auto found = pipelines_.find(key); found != pipelines_.end()) return found->second;
 
   const auto start = std::chrono::steady_clock::now();
@@ -62,6 +61,7 @@ const vk::raii::Pipeline& RaycastPipeline::pipeline(AovSet aovs, bool lo_parts, 
   values[VKRAY_SPEC_GENERIC] = variant.generic ? 1u : 0u;
   values[VKRAY_SPEC_COORDINATES] = variant.coordinates;
   values[VKRAY_SPEC_LO_PARTS] = lo_parts ? 1u : 0u;
+  values[VKRAY_SPEC_IMAGE_TARGET] = image_target ? 1u : 0u;
   std::array<vk::SpecializationMapEntry, values.size()> entries;
   for (uint32_t id = 0; id < entries.size(); ++id) entries[id] = vk::SpecializationMapEntry(id, id * 4u, 4u);
   const vk::SpecializationInfo specialization(entries, vk::ArrayProxyNoTemporaries<const uint32_t>(values));
@@ -78,22 +78,33 @@ vk::DescriptorType RaycastPipeline::binding_type(uint32_t binding) {
     case VKRAY_BINDING_NORMAL:
     case VKRAY_BINDING_UV:
     case VKRAY_BINDING_OVERFLOW:
+    case VKRAY_BINDING_DEPTH_RANGE:
       return vk::DescriptorType::eStorageBuffer;
+    case VKRAY_BINDING_IMAGE:
+      return vk::DescriptorType::eStorageImage;
     default:
       return vk::DescriptorType::eUniformTexelBuffer;
   }
 }
 
 void RaycastPipeline::bind_resources(const Resources& resources) {
-  std::array<vk::DescriptorBufferInfo, VKRAY_BINDING_COUNT> infos;
+  std::array<vk::DescriptorBufferInfo, VKRAY_BINDING_COUNT> buffer_infos;
+  std::array<vk::DescriptorImageInfo, VKRAY_BINDING_COUNT> image_infos;
   std::array<vk::WriteDescriptorSet, VKRAY_BINDING_COUNT> writes;
   for (uint32_t i = 0; i < VKRAY_BINDING_COUNT; ++i) {
     writes[i] = vk::WriteDescriptorSet(*set_, i, 0, 1, binding_type(i));
-    if (binding_type(i) == vk::DescriptorType::eStorageBuffer) {
-      infos[i] = vk::DescriptorBufferInfo(resources.buffers[i], 0, VK_WHOLE_SIZE);
-      writes[i].setPBufferInfo(&infos[i]);
-    } else {
-      writes[i].setPTexelBufferView(&resources.texel_views[i]);
+    switch (binding_type(i)) {
+      case vk::DescriptorType::eStorageBuffer:
+        buffer_infos[i] = vk::DescriptorBufferInfo(resources.buffers[i], 0, VK_WHOLE_SIZE);
+        writes[i].setPBufferInfo(&buffer_infos[i]);
+        break;
+      case vk::DescriptorType::eStorageImage:
+        image_infos[i] = vk::DescriptorImageInfo({}, resources.images[i], vk::ImageLayout::eGeneral);
+        writes[i].setPImageInfo(&image_infos[i]);
+        break;
+      default:
+        writes[i].setPTexelBufferView(&resources.texel_views[i]);
+        break;
     }
   }
   context_.device.updateDescriptorSets(writes, {});

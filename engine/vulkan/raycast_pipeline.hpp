@@ -29,14 +29,16 @@ class RaycastPipeline {
   RaycastPipeline(VulkanContext& context, PipelineSpecialization specialization);
 
   // The pipeline for this set of outputs, with or without the lo parts of positions
-  // (VKRAY_SPEC_LO_PARTS), created on first request. `created_ms` receives the creation time, 0 when
-  // it was already there.
-  const vk::raii::Pipeline& pipeline(AovSet aovs, bool lo_parts, double& created_ms);
+  // (VKRAY_SPEC_LO_PARTS), writing buffers or the storage image (VKRAY_SPEC_IMAGE_TARGET), created on
+  // first request. `created_ms` receives the creation time, 0 when it was already there.
+  const vk::raii::Pipeline& pipeline(AovSet aovs, bool lo_parts, bool image_target, double& created_ms);
 
-  // What each binding (VKRAY_BINDING_*) reads or writes: a storage buffer or a texel view.
+  // What each binding (VKRAY_BINDING_*) reads or writes: a storage buffer, a texel view or a
+  // storage image (in the GENERAL layout).
   struct Resources {
     std::array<vk::Buffer, VKRAY_BINDING_COUNT> buffers;
     std::array<vk::BufferView, VKRAY_BINDING_COUNT> texel_views;
+    std::array<vk::ImageView, VKRAY_BINDING_COUNT> images;
   };
   // The descriptor type of each binding (see gpu_layout.h).
   static vk::DescriptorType binding_type(uint32_t binding);
@@ -54,7 +56,7 @@ class RaycastPipeline {
   vk::raii::ShaderModule shader_{nullptr};
   vk::raii::DescriptorPool pool_{nullptr};
   vk::raii::DescriptorSet set_{nullptr};
-  std::map<uint32_t, vk::raii::Pipeline> pipelines_;  // by AovSet bits, and 256 with the lo parts
+  std::map<uint32_t, vk::raii::Pipeline> pipelines_;  // by AovSet bits, 256 with the lo parts, 512 to the image
 };
 
 }  // namespace vkray
