@@ -293,12 +293,12 @@ struct Renderer::Impl {
     const vk::Image image = *target.image().image;
     context.submit_and_wait([&](const vk::raii::CommandBuffer& commands) {
       transition_image(commands, image, vk::PipelineStageFlagBits::eComputeShader, vk::AccessFlagBits::eShaderWrite,
-                 vk::ImageLayout::eGeneral, vk::PipelineStageFlagBits::eTransfer, vk::AccessFlagBits::eTransferWrite,
-                 vk::ImageLayout::eTransferDstOptimal);
+                       vk::ImageLayout::eGeneral, vk::PipelineStageFlagBits::eTransfer, vk::AccessFlagBits::eTransferWrite,
+                       vk::ImageLayout::eTransferDstOptimal);
       commands.copyBufferToImage(*staging.buffer, image, vk::ImageLayout::eTransferDstOptimal, regions);
       transition_image(commands, image, vk::PipelineStageFlagBits::eTransfer, vk::AccessFlagBits::eTransferWrite,
-                 vk::ImageLayout::eTransferDstOptimal, vk::PipelineStageFlagBits::eComputeShader,
-                 vk::AccessFlagBits::eShaderRead | vk::AccessFlagBits::eShaderWrite, vk::ImageLayout::eGeneral);
+                       vk::ImageLayout::eTransferDstOptimal, vk::PipelineStageFlagBits::eComputeShader,
+                       vk::AccessFlagBits::eShaderRead | vk::AccessFlagBits::eShaderWrite, vk::ImageLayout::eGeneral);
     });
   }
 };

@@ -78,8 +78,8 @@ bool Display::present(const GpuImage& picture, const OverlayDraw* overlay, std::
     commands_.begin(vk::CommandBufferBeginInfo(vk::CommandBufferUsageFlagBits::eOneTimeSubmit));
     // The submission waits for the acquire at the transfer stage: the first barrier chains to it.
     transition_image(commands_, image, vk::PipelineStageFlagBits::eTransfer, {}, vk::ImageLayout::eUndefined,
-               vk::PipelineStageFlagBits::eTransfer, vk::AccessFlagBits::eTransferWrite,
-               vk::ImageLayout::eTransferDstOptimal);
+                     vk::PipelineStageFlagBits::eTransfer, vk::AccessFlagBits::eTransferWrite,
+                     vk::ImageLayout::eTransferDstOptimal);
     // RGBA8UI onto the swapchain's 8-bit UNORM (or sRGB) format: the same 32-bit size class, so the
     // copy moves the bytes unchanged (PreviewPass wrote them in this image's channel order).
     const vk::ImageCopy copy(color_layer, {0, 0, 0}, color_layer, {0, 0, 0}, vk::Extent3D(extent, 1));
@@ -89,8 +89,8 @@ bool Display::present(const GpuImage& picture, const OverlayDraw* overlay, std::
     vk::ImageLayout layout = vk::ImageLayout::eTransferDstOptimal;
     if (overlay) {
       transition_image(commands_, image, last_stage, last_access, layout, vk::PipelineStageFlagBits::eColorAttachmentOutput,
-                 vk::AccessFlagBits::eColorAttachmentRead | vk::AccessFlagBits::eColorAttachmentWrite,
-                 vk::ImageLayout::eColorAttachmentOptimal);
+                       vk::AccessFlagBits::eColorAttachmentRead | vk::AccessFlagBits::eColorAttachmentWrite,
+                       vk::ImageLayout::eColorAttachmentOptimal);
       commands_.beginRenderPass(vk::RenderPassBeginInfo(*overlay_pass_, *framebuffers_[index], vk::Rect2D({0, 0}, extent)),
                                 vk::SubpassContents::eInline);
       (*overlay)(*commands_);
@@ -101,7 +101,7 @@ bool Display::present(const GpuImage& picture, const OverlayDraw* overlay, std::
     }
     if (capture) {
       transition_image(commands_, image, last_stage, last_access, layout, vk::PipelineStageFlagBits::eTransfer,
-                 vk::AccessFlagBits::eTransferRead, vk::ImageLayout::eTransferSrcOptimal);
+                       vk::AccessFlagBits::eTransferRead, vk::ImageLayout::eTransferSrcOptimal);
       const vk::BufferImageCopy region(0, 0, 0, color_layer, {0, 0, 0}, vk::Extent3D(extent, 1));
       commands_.copyImageToBuffer(image, vk::ImageLayout::eTransferSrcOptimal, *readback_->buffer, region);
       // A fence wait alone does not make device writes visible to the host.
@@ -114,7 +114,7 @@ bool Display::present(const GpuImage& picture, const OverlayDraw* overlay, std::
     }
     // Presentation needs no access mask: the semaphore it waits on makes the writes visible.
     transition_image(commands_, image, last_stage, last_access, layout, vk::PipelineStageFlagBits::eBottomOfPipe, {},
-               vk::ImageLayout::ePresentSrcKHR);
+                     vk::ImageLayout::ePresentSrcKHR);
     commands_.end();
 
     const vk::PipelineStageFlags wait_stage = vk::PipelineStageFlagBits::eTransfer;
