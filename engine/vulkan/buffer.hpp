@@ -26,8 +26,9 @@ GpuBuffer create_storage_buffer(VulkanContext& context, vk::DeviceSize size, vk:
 // A host-visible, coherent buffer (cached where possible) to copy results into for reading.
 GpuBuffer create_readback_buffer(VulkanContext& context, vk::DeviceSize size);
 
-// A host-visible, coherent buffer the host writes and the device copies from (the viewer's
-// picture, every frame: no staging copy), or reads with `usage` (the planes, every render).
+// A host-visible, coherent buffer the host writes and the device copies from (pixels the CPU
+// finished, into a storage image: no staging copy), or reads with `usage` (the planes and the
+// preview's ramps, every render).
 GpuBuffer create_upload_buffer(VulkanContext& context, vk::DeviceSize size,
                                vk::BufferUsageFlags usage = vk::BufferUsageFlagBits::eTransferSrc);
 
