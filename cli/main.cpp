@@ -3,10 +3,12 @@
 #include "cli/commands.hpp"
 #include "engine/gpu_device.hpp"
 #include "engine/image_io.hpp"
+#include "engine/nearest_name.hpp"
 #include "engine/scene.hpp"
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <csignal>
 #include <iostream>
 
@@ -43,6 +45,20 @@ int main(int argc, char** argv) {
   const vkray::cli::Action info = vkray::cli::add_info_command(app);
   const vkray::cli::Action bench = vkray::cli::add_bench_command(app);
   const vkray::cli::Action view = vkray::cli::add_view_command(app);
+
+  // A mistyped command would otherwise read as a stray argument ("A subcommand is required").
+  if (argc > 1 && argv[1][0] != '-') {
+    std::vector<std::string> commands;
+    for (const CLI::App* command : app.get_subcommands({})) commands.push_back(command->get_name());
+    if (std::find(commands.begin(), commands.end(), argv[1]) == commands.end()) {
+      const auto nearest = vkray::nearest_name(argv[1], commands);
+      std::string known;
+      for (const auto& name : commands) known += (known.empty() ? "" : ", ") + name;
+      std::cerr << "vkray: unknown command '" << argv[1] << "'; "
+                << (nearest ? "did you mean '" + *nearest + "'?" : "the commands are " + known) << " (see 'vkray --help')\n";
+      return 2;
+    }
+  }
 
   try {
     app.parse(argc, argv);

@@ -1,6 +1,7 @@
 #include "cli/scene_argument.hpp"
 
 #include "engine/framing.hpp"
+#include "engine/nearest_name.hpp"
 #include "engine/scene_loader.hpp"
 
 #include <glm/geometric.hpp>
@@ -17,13 +18,6 @@
 namespace vkray::cli {
 namespace {
 
-std::string lower_extension(const std::string& path) {
-  std::string extension = std::filesystem::path(path).extension().string();
-  std::transform(extension.begin(), extension.end(), extension.begin(),
-                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  return extension;
-}
-
 std::vector<std::string> split(const std::string& text, const std::string& separators) {
   std::vector<std::string> parts;
   size_t start = 0;
@@ -35,25 +29,89 @@ std::vector<std::string> split(const std::string& text, const std::string& separ
   return parts;
 }
 
-double parse_number(const std::string& text, const std::string& key) {
-  double value = 0.0;
-  const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), value);
-  if (error != std::errc() || end != text.data() + text.size() || !std::isfinite(value)) {
-    throw InputError("--camera: " + key + ": '" + text + "' is not a finite number");
+constexpr const char* camera_forms =
+    "write --camera 'from=0,1,5 to=0,0,0 up=0,1,0 fovy=35' (any of the keys, vectors also as [0,1,5]) or the scene "
+    "file's camera as JSON, '{\"from\": [0, 1, 5], \"fovy\": 35}'";
+
+// The items of the key=value form: separated by spaces or semicolons outside brackets, so that
+// "from=[0, 1, 5]" stays one item.
+std::vector<std::string> camera_items(const std::string& text) {
+  std::vector<std::string> items(1);
+  int depth = 0;
+  for (char c : text) {
+    depth += c == '[' ? 1 : c == ']' ? -1 : 0;
+    if (depth == 0 && (c == ' ' || c == ';')) {
+      if (!items.back().empty()) items.emplace_back();
+    } else {
+      items.back() += c;
+    }
   }
-  return value;
+  if (items.back().empty()) items.pop_back();
+  return items;
 }
 
-glm::dvec3 parse_vector(const std::string& text, const std::string& key) {
-  const std::vector<std::string> parts = split(text, ",");
-  if (parts.size() != 3) throw InputError("--camera: " + key + " takes three numbers X,Y,Z, got '" + text + "'");
-  return {parse_number(parts[0], key), parse_number(parts[1], key), parse_number(parts[2], key)};
+std::string trimmed(const std::string& text) {
+  const size_t first = text.find_first_not_of(' ');
+  return first == std::string::npos ? "" : text.substr(first, text.find_last_not_of(' ') - first + 1);
+}
+
+// A number of the key=value form as exact JSON (17 digits give the same double back).
+std::string number_json(const std::string& text, const std::string& key) {
+  const std::string number = trimmed(text);
+  double value = 0.0;
+  const auto [end, error] = std::from_chars(number.data(), number.data() + number.size(), value);
+  if (error != std::errc() || end != number.data() + number.size() || !std::isfinite(value)) {
+    throw InputError("--camera: " + key + ": '" + number + "' is not a finite number; " + camera_forms);
+  }
+  char json[32];
+  std::snprintf(json, sizeof json, "%.17g", value);
+  return json;
+}
+
+// "from=X,Y,Z to=[X,Y,Z] fovy=35" as the JSON object {"from": [X, Y, Z], ...}.
+std::string camera_json(const std::string& text) {
+  std::string json;
+  for (const std::string& item : camera_items(text)) {
+    const size_t equals = item.find('=');
+    const std::string key = item.substr(0, equals);
+    const std::vector<std::string> keys = {"from", "to", "up", "fovy"};
+    if (std::find(keys.begin(), keys.end(), key) == keys.end()) {
+      const auto nearest = nearest_name(key, keys);
+      throw InputError("--camera: unknown key '" + key + "'" + (nearest ? " (did you mean '" + *nearest + "'?)" : "") +
+                       "; " + camera_forms);
+    }
+    if (equals == std::string::npos) throw InputError("--camera: " + key + " has no value; " + camera_forms);
+    std::string value = trimmed(item.substr(equals + 1));
+    if (value.size() >= 2 && value.front() == '[' && value.back() == ']') value = value.substr(1, value.size() - 2);
+    json += (json.empty() ? "{" : ", ") + std::string("\"") + key + "\": ";
+    if (key == "fovy") {
+      json += number_json(value, key);
+      continue;
+    }
+    const std::vector<std::string> parts = split(value, ",");
+    if (parts.size() != 3) {
+      throw InputError("--camera: " + key + " takes three numbers X,Y,Z, got '" + item.substr(equals + 1) + "'; " +
+                       camera_forms);
+    }
+    json += "[" + number_json(parts[0], key) + ", " + number_json(parts[1], key) + ", " + number_json(parts[2], key) + "]";
+  }
+  return json.empty() ? "{}" : json + "}";
 }
 
 }  // namespace
 
+std::string lower_extension(const std::string& path) {
+  std::string extension = std::filesystem::path(path).extension().string();
+  std::transform(extension.begin(), extension.end(), extension.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return extension;
+}
+
 Scene load_scene_argument(const std::string& path, std::optional<uint32_t> width, std::optional<uint32_t> height) {
   const std::string extension = lower_extension(path);
+  if (!path.empty() && std::filesystem::is_directory(path)) {
+    throw InputError(path + ": is a folder, not a scene file (.json) or a model (.obj)");
+  }
   if (!path.empty() && extension != ".json" && extension != ".obj") {
     throw InputError(path + ": unknown kind of file '" + extension + "' (a scene is .json, a model .obj)");
   }
@@ -87,35 +145,8 @@ std::pair<uint32_t, uint32_t> parse_size(const std::string& text) {
 }
 
 void apply_camera_option(const std::string& text, Camera& camera) {
-  Camera changed = camera;
-  for (const std::string& item : split(text, " ;")) {
-    if (item.empty()) continue;
-    const size_t equals = item.find('=');
-    const std::string key = item.substr(0, equals);
-    const std::string value = equals == std::string::npos ? "" : item.substr(equals + 1);
-    if (key == "from") {
-      changed.from = parse_vector(value, key);
-    } else if (key == "to") {
-      changed.to = parse_vector(value, key);
-    } else if (key == "up") {
-      changed.up = parse_vector(value, key);
-      if (changed.up == glm::dvec3(0.0)) throw InputError("--camera: up must not be zero");
-    } else if (key == "fovy") {
-      changed.fovy_degrees = parse_number(value, key);
-      if (!(changed.fovy_degrees > 0.0 && changed.fovy_degrees < 180.0)) {
-        throw InputError("--camera: fovy must be in (0, 180) degrees, got " + value);
-      }
-    } else {
-      throw InputError("--camera: unknown key '" + key + "' (use from=X,Y,Z to=X,Y,Z up=X,Y,Z fovy=DEGREES)");
-    }
-  }
-  if (changed.from == changed.to) throw InputError("--camera: from and to must differ");
-  for (const auto& v : {changed.from, changed.to, changed.up}) {
-    for (int axis = 0; axis < 3; ++axis) {
-      if (std::abs(v[axis]) > max_coordinate) throw InputError("--camera: coordinates must stay within +-1e15");
-    }
-  }
-  camera = changed;
+  const std::string given = trimmed(text);
+  camera = parse_camera_override(given.starts_with("{") ? given : camera_json(given), "--camera", camera);
 }
 
 }  // namespace vkray::cli

@@ -14,12 +14,17 @@ namespace vkray::cli {
 // size, and the framing is done at the final size. Throws InputError naming the file.
 Scene load_scene_argument(const std::string& path, std::optional<uint32_t> width, std::optional<uint32_t> height);
 
+// A path's extension in lower case, with its dot (".exr"); empty when it has none.
+std::string lower_extension(const std::string& path);
+
 // A --size value "WIDTHxHEIGHT" (bench, view). Throws InputError for anything else or a size
 // check_image_size refuses.
 std::pair<uint32_t, uint32_t> parse_size(const std::string& text);
 
 // Applies a --camera override: space- or semicolon-separated keys, each optional,
-// "from=X,Y,Z to=X,Y,Z up=X,Y,Z fovy=DEGREES". Throws InputError for anything else.
+// "from=X,Y,Z to=[X,Y,Z] up=X,Y,Z fovy=DEGREES", or the scene file's camera object as JSON with
+// every key optional. Checked as the scene file's camera is; throws InputError, with the forms
+// that work when the text has none of them.
 void apply_camera_option(const std::string& text, Camera& camera);
 
 }  // namespace vkray::cli

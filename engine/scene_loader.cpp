@@ -1,5 +1,6 @@
 #include "engine/scene_loader.hpp"
 
+#include "engine/nearest_name.hpp"
 #include "engine/obj_loader.hpp"
 #include "engine/unit_vector.hpp"
 
@@ -13,27 +14,13 @@
 #include <initializer_list>
 #include <limits>
 #include <numbers>
+#include <set>
 #include <sstream>
 
 namespace vkray {
 namespace {
 
 using Json = nlohmann::json;
-
-size_t edit_distance(std::string_view a, std::string_view b) {
-  std::vector<size_t> row(b.size() + 1);
-  for (size_t j = 0; j <= b.size(); ++j) row[j] = j;
-  for (size_t i = 1; i <= a.size(); ++i) {
-    size_t diagonal = row[0];
-    row[0] = i;
-    for (size_t j = 1; j <= b.size(); ++j) {
-      const size_t substitution = diagonal + (a[i - 1] == b[j - 1] ? 0 : 1);
-      diagonal = row[j];
-      row[j] = std::min({row[j] + 1, row[j - 1] + 1, substitution});
-    }
-  }
-  return row[b.size()];
-}
 
 // A key as JSON writes it, without the quotes: a key holding a newline or another control character
 // must not break the one-line message.
@@ -89,14 +76,9 @@ class Node {
         continue;
       }
       std::string message = "unknown key '" + printable(item.key()) + "'";
-      const char* nearest = nullptr;
-      size_t nearest_distance = std::numeric_limits<size_t>::max();
-      for (const char* key : allowed) {
-        const size_t distance = edit_distance(item.key(), key);
-        if (distance < nearest_distance) nearest = key, nearest_distance = distance;
-      }
-      if (nearest && nearest_distance <= std::max<size_t>(2, item.key().size() / 3)) {
-        message += " (did you mean '" + std::string(nearest) + "'?)";
+      const std::vector<std::string> names(allowed.begin(), allowed.end());
+      if (const auto nearest = nearest_name(item.key(), names)) {
+        message += " (did you mean '" + *nearest + "'?)";
       } else {
         std::string list;
         for (const char* key : allowed) {
@@ -179,17 +161,23 @@ class Node {
   const std::string& file_;
 };
 
-Camera parse_camera(const Node& node) {
+// A camera object. With a `base`, every key is optional and overrides that camera's (--camera).
+Camera parse_camera(const Node& node, const Camera* base = nullptr) {
   node.expect_object({"from", "to", "up", "fovy"});
-  Camera camera;
-  camera.from = node.at("from").point();
-  camera.to = node.at("to").point();
-  if (camera.from == camera.to) node.at("to").fail("must differ from camera.from");
+  Camera camera = base ? *base : Camera{};
+  if (!base || node.has("from")) camera.from = node.at("from").point();
+  if (!base || node.has("to")) camera.to = node.at("to").point();
+  if (camera.from == camera.to) {
+    if (node.has("to")) node.at("to").fail("must differ from camera.from");
+    node.at("from").fail("must differ from camera.to");
+  }
   if (node.has("up")) camera.up = node.at("up").nonzero_vec3();
-  const Node fovy = node.at("fovy");
-  camera.fovy_degrees = fovy.number();
-  if (!(camera.fovy_degrees > 0.0 && camera.fovy_degrees < 180.0)) {
-    fovy.fail("field of view must be in (0, 180) degrees, got " + describe(fovy.json()));
+  if (!base || node.has("fovy")) {
+    const Node fovy = node.at("fovy");
+    camera.fovy_degrees = fovy.number();
+    if (!(camera.fovy_degrees > 0.0 && camera.fovy_degrees < 180.0)) {
+      fovy.fail("field of view must be in (0, 180) degrees, got " + describe(fovy.json()));
+    }
   }
   return camera;
 }
@@ -279,11 +267,13 @@ std::string line_and_column(std::string_view text, size_t byte) {
   return std::to_string(line) + ":" + std::to_string(column);
 }
 
-// nlohmann::json refuses a number that overflows a double (1e999) with out_of_range.406, which
-// carries no position. Parsing once more with this handler finds the JSON path of that number.
-class ErrorPathFinder : public Json::json_sax_t {
+// Walks a document to say where it failed, by JSON path: nlohmann::json refuses a number that
+// overflows a double (1e999) with out_of_range.406, which carries no position; and it accepts an
+// object with the same key twice, keeping the last, which a scene file must not do silently.
+class JsonPathTracker : public Json::json_sax_t {
  public:
-  std::string path;
+  std::string path;           // where parsing stopped
+  std::string duplicate_key;  // the key met twice in one object, if that is why
 
   bool null() override { return value(); }
   bool boolean(bool) override { return value(); }
@@ -292,35 +282,41 @@ class ErrorPathFinder : public Json::json_sax_t {
   bool number_float(number_float_t, const string_t&) override { return value(); }
   bool string(string_t&) override { return value(); }
   bool binary(binary_t&) override { return value(); }
-  bool start_object(std::size_t) override { return levels_.push_back({false, 0, {}}), true; }
-  bool key(string_t& member) override { return levels_.back().key = member, true; }
-  bool end_object() override { return levels_.pop_back(), value(); }
-  bool start_array(std::size_t) override { return levels_.push_back({true, 0, {}}), true; }
-  bool end_array() override { return levels_.pop_back(), value(); }
-  bool parse_error(std::size_t, const std::string&, const Json::exception&) override {
-    for (const Level& level : levels_) {
-      path += level.array ? "[" + std::to_string(level.index) + "]" : (path.empty() ? "" : ".") + printable(level.key);
-    }
-    return false;
+  bool start_object(std::size_t) override { return levels_.push_back({false, 0, {}, {}}), true; }
+  bool key(string_t& member) override {
+    Level& level = levels_.back();
+    level.key = member;
+    if (level.keys.insert(member).second) return true;
+    duplicate_key = member;
+    return stop();
   }
+  bool end_object() override { return levels_.pop_back(), value(); }
+  bool start_array(std::size_t) override { return levels_.push_back({true, 0, {}, {}}), true; }
+  bool end_array() override { return levels_.pop_back(), value(); }
+  bool parse_error(std::size_t, const std::string&, const Json::exception&) override { return stop(); }
 
  private:
   struct Level {
     bool array;
     size_t index;  // of the current element, in an array
     std::string key;  // of the current member, in an object
+    std::set<std::string> keys;  // seen so far, in an object
   };
   bool value() {
     if (!levels_.empty() && levels_.back().array) ++levels_.back().index;
     return true;
   }
+  bool stop() {
+    for (const Level& level : levels_) {
+      path += level.array ? "[" + std::to_string(level.index) + "]" : (path.empty() ? "" : ".") + printable(level.key);
+    }
+    return false;
+  }
   std::vector<Level> levels_;
 };
 
-}  // namespace
-
-Scene parse_scene(std::string_view json_text, const std::string& name, const std::filesystem::path& base_dir,
-                  const ObjFileLoader& load_obj) {
+// Parses a whole JSON document; every error names `name` and the line and column or JSON path.
+Json parse_document(std::string_view json_text, const std::string& name) {
   Json root;
   try {
     root = Json::parse(json_text);
@@ -333,14 +329,26 @@ Scene parse_scene(std::string_view json_text, const std::string& name, const std
     }
     throw InputError(name + ":" + line_and_column(json_text, error.byte == 0 ? 0 : error.byte - 1) + ": invalid JSON: " + detail);
   } catch (const Json::out_of_range& error) {
-    ErrorPathFinder finder;
-    Json::sax_parse(json_text, &finder);
+    JsonPathTracker tracker;
+    Json::sax_parse(json_text, &tracker);
     std::string detail = error.what();  // "[json.exception.out_of_range.406] number overflow parsing '1e999'"
     if (const size_t bracket = detail.find("] "); bracket != std::string::npos) detail = detail.substr(bracket + 2);
     if (detail.size() > 80) detail = detail.substr(0, 77) + "...";  // the number may have thousands of digits
-    throw InputError(name + ": " + (finder.path.empty() ? "top level" : finder.path) + ": number is not finite (" + detail + ")");
+    throw InputError(name + ": " + (tracker.path.empty() ? "top level" : tracker.path) + ": number is not finite (" + detail + ")");
   }
+  JsonPathTracker tracker;
+  if (!Json::sax_parse(json_text, &tracker) && !tracker.duplicate_key.empty()) {
+    throw InputError(name + ": " + tracker.path + ": the key '" + printable(tracker.duplicate_key) +
+                     "' appears twice in one object (which one is meant?)");
+  }
+  return root;
+}
 
+}  // namespace
+
+Scene parse_scene(std::string_view json_text, const std::string& name, const std::filesystem::path& base_dir,
+                  const ObjFileLoader& load_obj) {
+  const Json root = parse_document(json_text, name);
   const Node top(root, "", name);
   top.expect_object({"camera", "image", "spheres", "planes", "meshes"});
   Scene scene;
@@ -356,6 +364,11 @@ Scene parse_scene(std::string_view json_text, const std::string& name, const std
     for (const Node& mesh : top.at("meshes").elements()) scene.meshes.push_back(parse_mesh(mesh, base_dir, load_obj));
   }
   return scene;
+}
+
+Camera parse_camera_override(std::string_view json_text, const std::string& name, const Camera& base) {
+  const Json root = parse_document(json_text, name);
+  return parse_camera(Node(root, "", name), &base);
 }
 
 Scene load_scene_file(const std::filesystem::path& path) {

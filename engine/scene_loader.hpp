@@ -22,7 +22,12 @@ Scene load_scene_file(const std::filesystem::path& path);
 Scene parse_scene(std::string_view json_text, const std::string& name, const std::filesystem::path& base_dir,
                   const ObjFileLoader& load_obj);
 
-// The course scene, built in: a camera, a sphere, a ground plane, a handcrafted triangle mesh and
+// A camera object in the scene-file form whose keys are all optional ({"from": [0, 1, 5]}): each
+// replaces that part of `base`, checked as the scene file checks it. `name` stands for the source in
+// messages ("--camera"). Throws InputError.
+Camera parse_camera_override(std::string_view json_text, const std::string& name, const Camera& base);
+
+// The built-in scene: a camera, a sphere, a ground plane, a handcrafted triangle mesh and
 // a mesh that goes through the OBJ loader (from an OBJ text compiled into the binary).
 Scene default_scene();
 

@@ -255,6 +255,18 @@ TEST(SceneJson, ZeroUpVector) {
                "t.json: camera.up: ", "must not be the zero vector");
 }
 
+// The same key twice in one object is refused wherever it is, with the path of the second one;
+// the same key in two different objects is fine.
+TEST(SceneJson, DuplicateKeys) {
+  expect_error(parse_error(R"({"camera": {"from": [0, 0, 5], "to": [0, 0, 0], "fovy": 40, "fovy": 50}})"),
+               "t.json: camera.fovy: ", "the key 'fovy' appears twice in one object");
+  expect_error(parse_error(with_camera(R"("spheres": [{"center": [0, 0, 0], "radius": 1},
+                                                         {"radius": 1, "center": [0, 0, 0], "radius": 2}])")),
+               "t.json: spheres[1].radius: ", "appears twice");
+  expect_error(parse_error(with_camera(R"("image": {"width": 8}, "image": {"height": 8})")), "t.json: image: ",
+               "appears twice");
+}
+
 TEST(SceneJson, FromEqualsTo) {
   expect_error(parse_error(R"({"camera": {"from": [1, 2, 3], "to": [1, 2, 3], "fovy": 60}})"), "t.json: camera.to: ",
                "must differ from camera.from");

@@ -1,0 +1,34 @@
+#include "engine/nearest_name.hpp"
+
+#include <algorithm>
+#include <limits>
+
+namespace vkray {
+
+size_t edit_distance(std::string_view a, std::string_view b) {
+  std::vector<size_t> row(b.size() + 1);
+  for (size_t j = 0; j <= b.size(); ++j) row[j] = j;
+  for (size_t i = 1; i <= a.size(); ++i) {
+    size_t diagonal = row[0];
+    row[0] = i;
+    for (size_t j = 1; j <= b.size(); ++j) {
+      const size_t substitution = diagonal + (a[i - 1] == b[j - 1] ? 0 : 1);
+      diagonal = row[j];
+      row[j] = std::min({row[j] + 1, row[j - 1] + 1, substitution});
+    }
+  }
+  return row[b.size()];
+}
+
+std::optional<std::string> nearest_name(std::string_view given, const std::vector<std::string>& names) {
+  const std::string* nearest = nullptr;
+  size_t nearest_distance = std::numeric_limits<size_t>::max();
+  for (const std::string& name : names) {
+    const size_t distance = edit_distance(given, name);
+    if (distance < nearest_distance) nearest = &name, nearest_distance = distance;
+  }
+  if (!nearest || nearest_distance > std::max<size_t>(2, given.size() / 3)) return std::nullopt;
+  return *nearest;
+}
+
+}  // namespace vkray

@@ -1,0 +1,18 @@
+// "Did you mean ...?" for names a user typed: scene-file keys, subcommands.
+#pragma once
+
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace vkray {
+
+// Levenshtein distance: insertions, deletions and substitutions of one character each cost 1.
+size_t edit_distance(std::string_view a, std::string_view b);
+
+// The name in `names` closest to `given`, when it is close enough to be the one meant: at most 2
+// edits, or a third of the typed length for longer names (a typo, not a different word).
+std::optional<std::string> nearest_name(std::string_view given, const std::vector<std::string>& names);
+
+}  // namespace vkray
