@@ -63,17 +63,18 @@ class Stopwatch {
   std::chrono::steady_clock::time_point last_ = std::chrono::steady_clock::now();
 };
 
-void print_timing(const char* what, double ms) { std::printf("  %-22s %10.3f ms\n", what, ms); }
-
-// Usage errors that parsing cannot see. The output is always OpenEXR: the image writer picks the
-// format from the extension, so another one would silently write a different (8-bit, lossy) format,
-// or the preview would overwrite it. --check on uv alone would count every hit as a mismatch.
+// Usage errors that parsing cannot see. The output is always OpenEXR and the preview always PNG:
+// the image writer picks the format from the extension, so another one would silently write a
+// different format (8-bit, lossy, or none OpenImageIO knows), or the preview would overwrite the
+// EXR. --check on uv alone would count every hit as a mismatch.
 void check_render_options(const RenderOptions& options, const AovSet& aovs) {
-  std::string extension = std::filesystem::path(options.output).extension().string();
-  std::transform(extension.begin(), extension.end(), extension.begin(),
-                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  if (extension != ".exr") throw InputError("-o/--output: '" + options.output + "' must end in .exr (OpenEXR)");
-  if (options.preview && !options.no_preview &&
+  if (lower_extension(options.output) != ".exr") {
+    throw InputError("-o/--output: '" + options.output + "' must end in .exr (OpenEXR)");
+  }
+  if (options.preview && lower_extension(*options.preview) != ".png") {
+    throw InputError("--preview: '" + *options.preview + "' must end in .png (the preview is an 8-bit PNG)");
+  }
+  if (options.preview &&
       std::filesystem::path(*options.preview).lexically_normal() == std::filesystem::path(options.output).lexically_normal()) {
     throw InputError("--preview: '" + *options.preview + "' is the OpenEXR output; give another file");
   }
@@ -82,13 +83,20 @@ void check_render_options(const RenderOptions& options, const AovSet& aovs) {
     for (const char* name : exr_compressions) known += (known.empty() ? "" : ", ") + std::string(name);
     throw InputError("--compression: unknown '" + options.compression + "' (choose from " + known + ")");
   }
-  if (options.check && !options.reference && !aovs.needs_rays()) {
+  if (options.check && !aovs.needs_rays()) {
     throw InputError("--check compares depth and normal with the reference; add one of them to --aov");
   }
 }
 
+// One line of --timings; `depth` 1 is a part of the total, 2 a part of the part above it.
+void print_timing(int depth, const std::string& what, double ms, const std::string& note = "") {
+  std::printf("%*s%-*s %10.1f ms%s\n", 2 * depth + 2, "", 28 - 2 * depth, what.c_str(), ms,
+              note.empty() ? "" : ("  " + note).c_str());
+}
+
 int run_render(const RenderOptions& options) {
   Stopwatch stopwatch;
+  const auto start = std::chrono::steady_clock::now();
   const AovSet aovs = parse_aov_list(options.aovs);
   check_render_options(options, aovs);
   const std::filesystem::path preview =
@@ -104,7 +112,7 @@ int run_render(const RenderOptions& options) {
   std::optional<RenderTimings> gpu_timings;
   std::optional<SceneStats> scene_stats;
   double reference_ms = 0.0;
-  double device_ms = 0.0;
+  double device_ms = 0.0, upload_ms = 0.0, render_ms = 0.0;
   std::string device_name = "CPU reference (double precision)";
   std::optional<std::vector<ReferenceHit>> reference_hits;
   auto reference = [&]() -> const std::vector<ReferenceHit>& {
@@ -120,6 +128,7 @@ int run_render(const RenderOptions& options) {
 
   if (options.reference) {
     frame = reference_frame(reference(), scene.width, scene.height, aovs);
+    stopwatch.lap_ms();
   } else {
     GpuDevice device(options.device);
     device_name = device.info().name;
@@ -129,47 +138,58 @@ int run_render(const RenderOptions& options) {
     renderer_options.scene.bvh.progress = progress.callback();
     if (options.precision == "double") renderer_options.shader.precision = Precision::float64;
     Renderer renderer(device, scene, renderer_options);
+    upload_ms = stopwatch.lap_ms();
     frame = renderer.render(scene.camera, scene.width, scene.height, aovs);
+    render_ms = stopwatch.lap_ms();
     gpu_timings = renderer.timings();
     scene_stats = renderer.scene_stats();
   }
-  const double render_ms = stopwatch.lap_ms();
 
   std::optional<FrameError> error;
-  if (options.check && !options.reference) error = measure_error(frame, reference());
+  double measure_ms = 0.0;
+  if (options.check) {
+    const std::vector<ReferenceHit>& hits = reference();
+    Stopwatch measure_watch;
+    error = measure_error(frame, hits);
+    measure_ms = measure_watch.lap_ms();
+  }
   stopwatch.lap_ms();
 
   std::string written = options.output;
   write_outputs(options.output, options.no_preview ? nullptr : &preview, frame, options.compression);
   if (!options.no_preview) written += " and " + preview.string();
   const double write_ms = stopwatch.lap_ms();
+  const double total_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
 
   std::printf("vkray: wrote %s (%ux%u, %s) on %s\n", written.c_str(), scene.width, scene.height,
               aovs.names().c_str(), device_name.c_str());
   if (error) std::printf("error vs. double-precision reference: %s\n", error->summary().c_str());
   if (options.timings) {
-    std::printf("timings:\n");
-    print_timing("scene load", load_ms);
+    std::printf("timings (wall clock unless said; an indented line is a part of the line above it):\n");
+    print_timing(0, "total", total_ms, "from the start of 'render' to the files in place");
+    print_timing(1, "scene load", load_ms, "reading and checking the scene, the OBJ files it names");
     if (gpu_timings) {
-      print_timing("device open", device_ms);
-      print_timing("upload", gpu_timings->upload_ms);
-      if (scene_stats->bvh_nodes > 0) print_timing("  of which BVH build", gpu_timings->bvh_build_ms);
-      print_timing("pipeline creation", gpu_timings->pipeline_ms);
+      print_timing(1, "device open", device_ms);
+      print_timing(1, "upload", upload_ms, "the scene to the device");
+      if (scene_stats->bvh_nodes > 0) print_timing(2, "BVH build", gpu_timings->bvh_build_ms);
+      print_timing(1, "render", render_ms);
+      print_timing(2, "pipeline creation", gpu_timings->pipeline_ms);
+      const std::string dispatches =
+          std::to_string(gpu_timings->tiles) + (gpu_timings->tiles == 1 ? " dispatch" : " dispatches");
       if (gpu_timings->has_gpu_times) {
-        print_timing("dispatch (GPU)", gpu_timings->dispatch_gpu_ms);
+        print_timing(2, "dispatch (GPU time)", gpu_timings->dispatch_gpu_ms, dispatches + ", timestamp queries");
       } else {
-        std::printf("  %-22s %13s\n", "dispatch (GPU)", "n/a (device has no timestamps)");
+        std::printf("      %-24s %13s  %s\n", "dispatch (GPU time)", "n/a", "(the device has no timestamps)");
       }
-      print_timing("readback", gpu_timings->readback_ms);
-      print_timing("render (wall)", render_ms);
-      std::printf("  %-22s %10u\n", "tiles", gpu_timings->tiles);
+      print_timing(2, "readback", gpu_timings->readback_ms);
       if (gpu_timings->unfinished_rays > 0) {
-        std::printf("  %-22s %10llu (finished on the CPU in %.3f ms)\n", "rays past loop budget",
-                    static_cast<unsigned long long>(gpu_timings->unfinished_rays), gpu_timings->cpu_finish_ms);
+        print_timing(2, "finishing rays on the CPU", gpu_timings->cpu_finish_ms,
+                     std::to_string(gpu_timings->unfinished_rays) + " rays past the loop budget");
       }
     }
-    if (reference_hits) print_timing("reference (CPU)", reference_ms);
-    print_timing("file writing", write_ms);
+    if (reference_hits) print_timing(1, "reference (CPU)", reference_ms);
+    if (error) print_timing(1, "error measurement", measure_ms);
+    print_timing(1, "file writing", write_ms, options.no_preview ? "the EXR" : "the EXR and the PNG at the same time");
     if (scene_stats) {
       const SceneStats& stats = *scene_stats;
       std::printf("scene on the device: %u triangles, %u spheres, %.1f MiB", stats.triangles, stats.spheres,
@@ -191,28 +211,33 @@ Action add_render_command(CLI::App& app) {
   CLI::App* command = app.add_subcommand("render", "Render a scene (or the built-in one) to OpenEXR and a PNG preview.");
   auto options = std::make_shared<RenderOptions>();
   command->add_option("scene", options->scene_path,
-                      "Scene file (.json) or model (.obj, framed automatically); the built-in course scene when omitted");
+                      "Scene file (.json) or model (.obj, framed automatically); the built-in scene when omitted");
   command->add_option("--camera", options->camera,
-                      "Override the camera: 'from=X,Y,Z to=X,Y,Z up=X,Y,Z fovy=DEGREES', any of the keys");
+                      "Override the camera: 'from=X,Y,Z to=X,Y,Z up=X,Y,Z fovy=DEGREES' (any of the keys), or the "
+                      "scene file's camera as JSON '{\"from\": [0, 1, 5]}'");
   command->add_option("-o,--output", options->output, "OpenEXR file to write")->capture_default_str();
   command->add_option("--width", options->width, "Image width in pixels (overrides the scene)");
   command->add_option("--height", options->height, "Image height in pixels (overrides the scene)");
   command->add_option("--aov", options->aovs, std::string("Outputs to compute, comma-separated: ") + aov_names_help)
       ->capture_default_str();
-  command->add_option("--preview", options->preview, "PNG preview to write (default: the output with .png)");
-  command->add_flag("--no-preview", options->no_preview, "Write no PNG preview");
+  CLI::Option* preview = command->add_option("--preview", options->preview, "PNG preview to write (default: the output with .png)");
+  command->add_flag("--no-preview", options->no_preview, "Write no PNG preview")->excludes(preview);
   command->add_option("--compression", options->compression,
                       "OpenEXR compression, all lossless: zip (default), zips, piz, rle, none (fastest, largest)");
-  command->add_option("--device", options->device, "Use the Vulkan device whose name contains this text");
-  command->add_option("--precision", options->precision,
+  CLI::Option* device = command->add_option("--device", options->device, "Use the Vulkan device whose name contains this text");
+  CLI::Option* precision = command->add_option("--precision", options->precision,
                       "Shader arithmetic: float (float32, camera-relative) or double (float64: exact, slower; needs "
                       "shaderFloat64)")
       ->check(CLI::IsMember({"float", "double"}))
       ->capture_default_str();
   command->add_flag("--timings", options->timings, "Print where the time went");
-  command->add_flag("--check", options->check,
+  CLI::Option* check = command->add_flag("--check", options->check,
                     "Also render the double-precision CPU reference and print the GPU's error against it");
-  command->add_flag("--reference", options->reference, "Render with the double-precision CPU reference instead");
+  // The reference runs on the CPU in double: no device, no shader precision, nothing to check it against.
+  command->add_flag("--reference", options->reference, "Render with the double-precision CPU reference instead")
+      ->excludes(check)
+      ->excludes(device)
+      ->excludes(precision);
   return [options] { return run_render(*options); };
 }
 

@@ -18,6 +18,8 @@ double angle_between(const glm::dvec3& a, const glm::dvec3& b) {
 FrameError measure_error(const Frame& frame, const std::vector<ReferenceHit>& reference) {
   FrameError error;
   error.pixels = frame.pixel_count();
+  error.depth_compared = frame.aovs.has(Aov::depth);
+  error.normal_compared = frame.aovs.has(Aov::normal);
   std::vector<double> depth_errors, depth_ulps, normal_errors;
   const bool doubles = !frame.depth64.empty() || !frame.normal64.empty();
   for (size_t p = 0; p < error.pixels; ++p) {
@@ -57,12 +59,24 @@ FrameError measure_error(const Frame& frame, const std::vector<ReferenceHit>& re
 
 std::string FrameError::summary() const {
   char line[400];
-  std::snprintf(line, sizeof line,
-                "hit/miss mismatches %zu of %zu (%.4f%%); depth rel. error p50 %.2e p99 %.2e max %.2e; "
-                "normal error p50 %.2e p99 %.2e max %.2e deg",
-                hit_mismatches, pixels, 100.0 * mismatch_fraction(), depth_p50, depth_p99, depth_max, normal_deg_p50,
-                normal_deg_p99, normal_deg_max);
-  return line;
+  std::string text;
+  std::snprintf(line, sizeof line, "hit/miss mismatches %zu of %zu (%.4f%%); ", hit_mismatches, pixels,
+                100.0 * mismatch_fraction());
+  text += line;
+  if (depth_compared) {
+    std::snprintf(line, sizeof line, "depth rel. error p50 %.2e p99 %.2e max %.2e; ", depth_p50, depth_p99, depth_max);
+    text += line;
+  } else {
+    text += "depth error not computed (no depth output); ";
+  }
+  if (normal_compared) {
+    std::snprintf(line, sizeof line, "normal error p50 %.2e p99 %.2e max %.2e deg", normal_deg_p50, normal_deg_p99,
+                  normal_deg_max);
+    text += line;
+  } else {
+    text += "normal error not computed (no normal output)";
+  }
+  return text;
 }
 
 }  // namespace vkray

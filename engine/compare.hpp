@@ -15,6 +15,8 @@ struct FrameError {
   size_t hit_mismatches = 0;  // pixels where one says hit and the other miss
   size_t nan_pixels = 0;      // pixels with a NaN in depth or normal (counted among the misses too)
   size_t both_hit = 0;
+  // Which outputs the frame had: the figures of an output it did not compute are not errors of 0.
+  bool depth_compared = false, normal_compared = false;
   // Relative depth error |z - z_ref| / z_ref and normal angle error in degrees, over pixels where
   // both hit; percentiles by nearest rank.
   double depth_p50 = 0, depth_p99 = 0, depth_max = 0;

@@ -4,11 +4,14 @@
 
 #include <OpenImageIO/imageio.h>
 
+#include <fcntl.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <array>
 #include <atomic>
+#include <cerrno>
 #include <cstdio>
 #include <cstring>
 #include <exception>
@@ -34,6 +37,15 @@ std::atomic<unsigned> partial_counter{0};
 
 // A file written under a temporary name beside `target`, renamed onto it by commit() and removed
 // if never committed.
+// A file with no write permission bit for anyone is not replaced, even by root: cp refuses to
+// overwrite it, and the rename into place would replace it silently.
+void refuse_read_only(const std::filesystem::path& target) {
+  struct stat status {};
+  if (stat(target.c_str(), &status) == 0 && S_ISREG(status.st_mode) && (status.st_mode & 0222) == 0) {
+    throw std::runtime_error(target.string() + ": cannot write: the file is read-only (make it writable or remove it)");
+  }
+}
+
 class PartialFile {
  public:
   explicit PartialFile(const std::filesystem::path& target) : target_(target) {
@@ -60,6 +72,7 @@ class PartialFile {
 
   const std::filesystem::path& path() const { return temp_; }
   void commit() {
+    refuse_read_only(target_);
     std::error_code error;
     std::filesystem::rename(temp_, target_, error);
     if (error) throw std::runtime_error(target_.string() + ": cannot write: " + error.message());
@@ -92,10 +105,16 @@ void check_output_path(const std::filesystem::path& path) {
   if (!std::filesystem::is_directory(folder)) {
     throw std::runtime_error(path.string() + ": cannot write: folder '" + folder.string() + "' does not exist");
   }
-  if (access(folder.c_str(), W_OK) != 0) {
-    throw std::runtime_error(path.string() + ": cannot write: folder '" + folder.string() + "' is not writable");
-  }
   if (std::filesystem::is_directory(path)) throw std::runtime_error(path.string() + ": cannot write: it is a folder");
+  refuse_read_only(path);
+  // Creating the temporary file is the one check that sees everything that can stop the write
+  // (permissions, which root bypasses, a read-only file system, quotas on the folder).
+  const PartialFile probe(path);
+  const int descriptor = open(probe.path().c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
+  if (descriptor < 0) {
+    throw std::runtime_error(path.string() + ": cannot write in folder '" + folder.string() + "': " + std::strerror(errno));
+  }
+  close(descriptor);
 }
 
 void write_text_file(const std::filesystem::path& path, std::string_view text) {

@@ -21,8 +21,9 @@ bool is_exr_compression(std::string_view name);
 // into place once complete, so a failed or interrupted write never leaves a truncated file where a
 // good one was.
 
-// Throws std::runtime_error naming the path when it cannot be written: its folder is missing or not
-// writable, or it is a folder. For checking outputs before any work is done.
+// Throws std::runtime_error naming the path when it cannot be written: its folder is missing or
+// refuses a new file, it is a folder, or it is a read-only file (refused as cp refuses it, root
+// too). For checking outputs before any work is done.
 void check_output_path(const std::filesystem::path& path);
 
 // A text file (the bench's JSON and CSV), written the same way. Throws std::runtime_error.
