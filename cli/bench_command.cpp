@@ -26,7 +26,7 @@ struct BenchOptions {
   std::string variants;
   std::string device;
   std::string models = "../shared/models";
-  bool no_embree = false;
+  bool wide = false;
   std::string json, csv, plot, markdown;
   std::vector<std::string> compare;
 };
@@ -49,7 +49,6 @@ std::string command_line(const BenchOptions& options) {
   if (!options.suite.empty()) line += " --suite " + options.suite;
   line += " --size " + options.size + " --frames " + std::to_string(options.frames);
   if (!options.variants.empty()) line += " --variants " + options.variants;
-  if (options.no_embree) line += " --no-embree";
   if (!options.markdown.empty()) line += " --markdown " + options.markdown;
   return line;
 }
@@ -68,7 +67,6 @@ int run_bench(const BenchOptions& options) {
   settings.frames = options.frames;
   settings.variants = split_list(options.variants);
   for (const auto& name : settings.variants) find_bench_variant(name);  // unknown names fail before any work
-  settings.embree = !options.no_embree;
   settings.float32_ray_error = !options.markdown.empty();
   // Before any work: a bench must not run for minutes only to find it cannot be saved.
   for (const std::string& path : {options.json, options.csv, options.plot, options.markdown}) {
@@ -87,18 +85,19 @@ int run_bench(const BenchOptions& options) {
   for (const auto& path : options.scenes) {
     scenes.push_back({std::filesystem::path(path).filename().string(), load_scene_argument(path, width, height)});
   }
-  if (scenes.empty()) scenes.push_back({"default", load_scene_argument("", width, height)});
+  if (scenes.empty()) scenes.push_back({"built-in", load_scene_argument("", width, height)});
 
   GpuDevice device(options.device);
   BenchReport report = new_bench_report(device.info(), options.suite, options.frames);
-  std::printf("vkray bench on %s (%s), %ux%u, %u frames after a warm-up\n%s", device.info().name.c_str(),
-              device.info().driver.c_str(), width, height, options.frames, bench_table_header().c_str());
+  std::printf("vkray bench on %s\ndriver %s; %ux%u, %u frame%s after a warm-up\n%s%s", device.info().name.c_str(),
+              device.info().driver.c_str(), width, height, options.frames, options.frames == 1 ? "" : "s",
+              bench_table_legend(options.wide).c_str(), bench_table_header(options.wide).c_str());
   std::fflush(stdout);
   for (const auto& scene : scenes) {
     ProgressLine progress("reference for " + scene.name);
     settings.reference_progress = progress.callback();
     report.scenes.push_back(bench_scene(device, scene, settings));
-    std::fputs(bench_table_rows(report.scenes.back()).c_str(), stdout);
+    std::fputs(bench_table_rows(report.scenes.back(), options.wide).c_str(), stdout);
     std::fflush(stdout);
   }
 
@@ -124,28 +123,38 @@ Action add_bench_command(CLI::App& app) {
   CLI::App* command =
       app.add_subcommand("bench", "Time configurations of the renderer beside their error against the reference.");
   auto options = std::make_shared<BenchOptions>();
-  command->add_option("scenes", options->scenes,
-                      "Scene files (.json) or models (.obj, framed automatically); the built-in scene when neither "
-                      "these nor --suite are given");
-  command->add_option("--suite", options->suite, std::string("Built-in scenes: ") + bench_suite_names);
-  command->add_option("--size", options->size, "Image size WIDTHxHEIGHT")->capture_default_str();
-  command->add_option("--frames", options->frames, "Timed frames per variant, after one warm-up")
-      ->capture_default_str()
-      ->check(CLI::Range(1u, 100000u));
+  std::vector<CLI::Option*> measuring;
+  measuring.push_back(command->add_option("scenes", options->scenes,
+                                          "Scene files (.json) or models (.obj, framed automatically); the built-in "
+                                          "scene when neither these nor --suite are given"));
+  measuring.push_back(command->add_option("--suite", options->suite, std::string("Built-in scenes: ") + bench_suite_names));
+  measuring.push_back(command->add_option("--size", options->size, "Image size WIDTHxHEIGHT")->capture_default_str());
+  measuring.push_back(command->add_option("--frames", options->frames, "Timed frames per variant, after one warm-up")
+                          ->capture_default_str()
+                          ->check(CLI::Range(1u, 100000u)));
   std::string variant_names;
   for (const auto& variant : bench_variants()) variant_names += "\n  " + variant.name + ": " + variant.description;
-  command->add_option("--variants", options->variants,
-                      "Comma-separated variants; default: every one that applies to the scene:" + variant_names);
-  command->add_option("--device", options->device, "Use the Vulkan device whose name contains this text");
-  command->add_option("--models", options->models, "Folder of .obj files for --suite models")->capture_default_str();
-  command->add_flag("--no-embree", options->no_embree, "Leave out the Embree CPU baseline");
-  command->add_option("--json", options->json, "Write every figure as JSON (schema: README, 'vkray bench')");
-  command->add_option("--csv", options->csv, "Write every figure as CSV, a line per row");
-  command->add_option("--markdown", options->markdown,
-                      "Write the accuracy document (docs/accuracy.md) of this run: use with --suite accuracy");
-  command->add_option("--plot", options->plot, "Plot error against time as PNG (needs python3-matplotlib)");
-  command->add_option("--compare", options->compare, "Compare two JSON files of earlier runs (A B): ratios B/A")
-      ->expected(2);
+  measuring.push_back(command->add_option("--variants", options->variants,
+                                          "Comma-separated variants; default: every one that applies to the scene:" +
+                                              variant_names));
+  measuring.push_back(command->add_option("--device", options->device, "Use the Vulkan device whose name contains this text"));
+  measuring.push_back(
+      command->add_option("--models", options->models, "Folder of .obj files for --suite models")->capture_default_str());
+  measuring.push_back(command->add_flag("--wide", options->wide,
+                                        "Print every column (about 160 characters wide; the default fits 100)"));
+  measuring.push_back(
+      command->add_option("--json", options->json, "Write every figure as JSON (schema: README, 'vkray bench')"));
+  measuring.push_back(command->add_option("--csv", options->csv, "Write every figure as CSV, a line per row"));
+  measuring.push_back(command->add_option("--markdown", options->markdown,
+                                          "Write the accuracy document (docs/accuracy.md) of this run: use with --suite "
+                                          "accuracy"));
+  measuring.push_back(
+      command->add_option("--plot", options->plot, "Plot error against time as PNG (needs python3-matplotlib)"));
+  CLI::Option* compare =
+      command->add_option("--compare", options->compare, "Compare two JSON files of earlier runs (A B): ratios B/A")
+          ->expected(2);
+  // --compare reads two finished runs and measures nothing: an option of a run beside it would be ignored.
+  for (CLI::Option* option : measuring) compare->excludes(option);
   return [options] { return run_bench(*options); };
 }
 

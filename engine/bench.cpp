@@ -5,8 +5,8 @@
 
 #include <algorithm>
 #include <chrono>
+#include <optional>
 #include <thread>
-#include <tuple>
 
 namespace vkray {
 namespace {
@@ -20,7 +20,7 @@ double elapsed_ms(Clock::time_point start) {
 size_t finite_primitives(const Scene& scene) { return scene.triangle_count() + scene.spheres.size(); }
 
 BenchVariant search_variant(std::string name, std::string description, PrimitiveSearch search, size_t max_primitives) {
-  BenchVariant variant{std::move(name), std::move(description), {}, {}};
+  BenchVariant variant{std::move(name), std::move(description), {}, CpuBaseline::none, {}};
   variant.options.scene.search = search;
   variant.applies = [max_primitives](const Scene& scene) {
     return finite_primitives(scene) > 0 && finite_primitives(scene) <= max_primitives;
@@ -30,8 +30,15 @@ BenchVariant search_variant(std::string name, std::string description, Primitive
 
 BenchVariant shader_variant(std::string name, std::string description, ShaderVariant shader,
                             std::function<bool(const Scene&)> applies = [](const Scene&) { return true; }) {
-  BenchVariant variant{std::move(name), std::move(description), {}, std::move(applies)};
+  BenchVariant variant{std::move(name), std::move(description), {}, CpuBaseline::none, std::move(applies)};
   variant.options.shader = shader;
+  return variant;
+}
+
+BenchVariant cpu_baseline(std::string name, std::string description, CpuBaseline baseline) {
+  BenchVariant variant{std::move(name), std::move(description), {}, baseline, [](const Scene& scene) {
+                         return finite_primitives(scene) > 0;  // Embree has nothing to trace for planes alone
+                       }};
   return variant;
 }
 
@@ -93,6 +100,8 @@ const std::vector<BenchVariant>& bench_variants() {
       shader_variant("naive", "every textbook choice: b^2 - c spheres, Moeller-Trumbore, float32 world coordinates",
                      naive),
       shader_variant("float64", "the shader in double precision (--precision double)", float64),
+      cpu_baseline("embree-1", "Embree 3 on the CPU, all threads, one ray at a time", CpuBaseline::embree_single),
+      cpu_baseline("embree-8", "Embree 3 on the CPU, all threads, packets of 8 rays", CpuBaseline::embree_packet),
   };
   return variants;
 }
@@ -148,9 +157,22 @@ BenchSceneResult bench_scene(GpuDevice& device, const BenchScene& bench, const B
   if (settings.variants.empty()) {
     for (const auto& variant : bench_variants()) chosen.push_back(&variant);
   }
+  std::optional<EmbreeResult> embree;  // one trace gives both Embree rows
   for (const BenchVariant* variant : chosen) {
     if (!variant->applies(scene)) {
       if (!settings.variants.empty()) result.skipped.push_back(variant->name + " (does not apply)");
+      continue;
+    }
+    if (variant->cpu != CpuBaseline::none) {
+      if (!embree) embree = trace_with_embree(scene, scene.width, scene.height, settings.frames);
+      BenchRow row;
+      row.variant = variant->name;
+      row.on_gpu = false;
+      row.bvh_build_ms = embree->build_ms;
+      row.gpu = variant->cpu == CpuBaseline::embree_single ? embree->single : embree->packet;
+      row.mrays_per_s = static_cast<double>(scene.width) * scene.height / (row.gpu.median_ms * 1e3);
+      row.error = measure_error(embree->frame, reference);
+      result.rows.push_back(row);
       continue;
     }
     try {
@@ -160,21 +182,6 @@ BenchSceneResult bench_scene(GpuDevice& device, const BenchScene& bench, const B
     }
   }
 
-  if (settings.embree && (scene.triangle_count() > 0 || !scene.spheres.empty())) {
-    const EmbreeResult embree = trace_with_embree(scene, scene.width, scene.height, settings.frames);
-    const FrameError error = measure_error(embree.frame, reference);
-    const double pixels = static_cast<double>(scene.width) * scene.height;
-    for (const auto& [name, times] : {std::tuple{"embree-1", embree.single}, std::tuple{"embree-8", embree.packet}}) {
-      BenchRow row;
-      row.variant = name;
-      row.on_gpu = false;
-      row.bvh_build_ms = embree.build_ms;
-      row.gpu = times;
-      row.mrays_per_s = pixels / (times.median_ms * 1e3);
-      row.error = error;
-      result.rows.push_back(row);
-    }
-  }
   mark_pareto_front(result.rows);
   return result;
 }

@@ -15,16 +15,21 @@
 
 namespace vkray {
 
+// A row that is not vkray: Embree 3 on all CPU threads, same rays, as the baseline.
+enum class CpuBaseline { none, embree_single, embree_packet };
+
 struct BenchVariant {
   std::string name;
   std::string description;  // what it changes against the default
   RendererOptions options;
+  CpuBaseline cpu = CpuBaseline::none;
   // Whether the variant means anything for a scene (a sphere formula for a scene without spheres
   // does not, brute force over a million triangles would only take minutes to say so).
   std::function<bool(const Scene&)> applies;
 };
 
-// Every variant, by name: the default (what `vkray render` does) first, then one change each.
+// Every variant, by name: the default (what `vkray render` does) first, then one change each, then
+// Embree's rows.
 const std::vector<BenchVariant>& bench_variants();
 
 // Brute force over more triangles and spheres than this is left out of the bench: its time grows
@@ -64,7 +69,6 @@ struct BenchSceneResult {
 struct BenchSettings {
   uint32_t frames = 5;                       // timed frames per variant, after one warm-up
   std::vector<std::string> variants;         // names; empty: every variant that applies
-  bool embree = true;                        // the Embree rows
   bool float32_ray_error = false;            // also BenchSceneResult::float32_ray (docs/accuracy.md)
   std::function<void(double)> reference_progress;  // fraction done of the reference, from any thread
 };

@@ -2,6 +2,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <bit>
 #include <cinttypes>
 #include <cstdio>
@@ -98,18 +99,37 @@ struct Fnv1a {
   void add(uint64_t value) { add_bytes(&value, sizeof value); }
 };
 
-const BenchRow* fastest_gpu_row(const BenchSceneResult& scene) {
-  const BenchRow* fastest = nullptr;
-  for (const auto& row : scene.rows) {
-    if (row.on_gpu && (!fastest || row.gpu.median_ms < fastest->gpu.median_ms)) fastest = &row;
-  }
-  return fastest;
-}
-
 std::string format(const char* pattern, auto... values) {
   char line[512];
   std::snprintf(line, sizeof line, pattern, values...);
   return line;
+}
+
+// A scene name cut to fit its column, keeping its end (a file name's end tells models apart).
+std::string short_name(const std::string& name, size_t width) {
+  return name.size() <= width ? name : "..." + name.substr(name.size() - (width - 3));
+}
+
+// The rows on the Pareto front, fastest first, each with its time against the default's and its
+// error: what the time it saves costs.
+std::string pareto_summary(const BenchSceneResult& scene) {
+  std::vector<const BenchRow*> front;
+  const BenchRow* baseline = nullptr;
+  for (const auto& row : scene.rows) {
+    if (row.pareto) front.push_back(&row);
+    if (row.variant == "default") baseline = &row;
+  }
+  if (front.size() < 2 && (front.empty() || front[0] == baseline)) return "";
+  std::sort(front.begin(), front.end(), [](const BenchRow* a, const BenchRow* b) { return a->gpu.median_ms < b->gpu.median_ms; });
+  if (!baseline) baseline = front.front();
+  std::string text = format("%s: Pareto front, fastest first; time against %s, then the error it comes with:\n",
+                            short_name(scene.name, 24).c_str(), baseline->variant.c_str());
+  for (const BenchRow* row : front) {
+    text += format("  %-16s %6.2fx the time  %7zu flips  depth p99 %8.2e  normal p99 %8.2e deg\n",
+                   row->variant.c_str(), row->gpu.median_ms / baseline->gpu.median_ms, row->error.hit_mismatches,
+                   row->error.depth_p99, row->error.normal_deg_p99);
+  }
+  return text;
 }
 
 }  // namespace
@@ -145,24 +165,39 @@ std::string scene_hash(const Scene& scene) {
   return format("%016" PRIx64, fnv.hash);
 }
 
-std::string bench_table_header() {
-  return format("%-24s %-18s %9s %6s %8s %8s %8s %8s %8s %7s %6s %9s %9s %9s %9s\n", "scene", "variant", "triangles",
-                "B/tri", "build ms", "gpu med", "gpu min", "frame ms", "Mrays/s", "flips", "unfin", "depth p99",
-                "depth max", "norm p99", "norm max") +
-         "(gpu med/min: GPU ms per frame, or the CPU's wall time for Embree; frame ms: host wall time with readback;\n"
-         " flips: hit/miss differences from the double-precision reference; depth: relative error; norm: degrees;\n"
-         " *: on the Pareto front of time and error)\n";
+std::string bench_table_legend(bool wide) {
+  return wide ? "gpu med/min: GPU ms per frame (Embree: the CPU's wall time); frame ms: host wall time with readback;\n"
+                "flips: hit/miss differences from the double-precision reference; depth: relative error; norm: degrees;\n"
+                "B/tri: device bytes a triangle; unfin: rays finished on the CPU; *: on the Pareto front of time and error\n"
+              : "ms: GPU time per frame, median (Embree: the CPU's wall time); flips: hit/miss differences from the\n"
+                "double-precision reference; depth: relative error; normal: degrees; B/tri: device bytes a triangle;\n"
+                "*: on the Pareto front of time and error (--wide, --json or --csv for every figure)\n";
 }
 
-std::string bench_table_rows(const BenchSceneResult& scene) {
+std::string bench_table_header(bool wide) {
+  if (wide) {
+    return format("%-24s %-18s %9s %6s %8s %8s %8s %8s %8s %7s %6s %9s %9s %9s %9s\n", "scene", "variant", "triangles",
+                  "B/tri", "build ms", "gpu med", "gpu min", "frame ms", "Mrays/s", "flips", "unfin", "depth p99",
+                  "depth max", "norm p99", "norm max");
+  }
+  return format("%-18s %-17s %9s %8s %6s %7s %9s %9s\n", "scene", "variant", "ms", "Mrays/s", "B/tri", "flips",
+                "depth p99", "normal p99");
+}
+
+std::string bench_table_rows(const BenchSceneResult& scene, bool wide) {
   std::string text;
   for (const auto& row : scene.rows) {
     const double bytes_per_triangle =
         row.stats.triangles ? static_cast<double>(row.stats.geometry_bytes) / row.stats.triangles : 0.0;
     const std::string variant = row.variant + (row.pareto ? " *" : "");
-    if (row.on_gpu) {
-      text += format("%-24s %-18s %9u %6.1f %8.1f %8.2f %8.2f %8.2f %8.2f %7zu %6" PRIu64 " %9.2e %9.2e %9.2e %9.2e\n",
-                     scene.name.c_str(), variant.c_str(), row.stats.triangles, bytes_per_triangle, row.bvh_build_ms,
+    const std::string bytes = row.on_gpu && row.stats.triangles ? format("%6.1f", bytes_per_triangle) : format("%6s", "");
+    if (!wide) {
+      text += format("%-18s %-17s %9.2f %8.2f %s %7zu %9.2e %9.2e\n", short_name(scene.name, 18).c_str(),
+                     variant.c_str(), row.gpu.median_ms, row.mrays_per_s, bytes.c_str(), row.error.hit_mismatches,
+                     row.error.depth_p99, row.error.normal_deg_p99);
+    } else if (row.on_gpu) {
+      text += format("%-24s %-18s %9u %s %8.1f %8.2f %8.2f %8.2f %8.2f %7zu %6" PRIu64 " %9.2e %9.2e %9.2e %9.2e\n",
+                     scene.name.c_str(), variant.c_str(), row.stats.triangles, bytes.c_str(), row.bvh_build_ms,
                      row.gpu.median_ms, row.gpu.min_ms, row.frame_median_ms, row.mrays_per_s,
                      row.error.hit_mismatches, row.unfinished_rays, row.error.depth_p99, row.error.depth_max,
                      row.error.normal_deg_p99, row.error.normal_deg_max);
@@ -173,13 +208,7 @@ std::string bench_table_rows(const BenchSceneResult& scene) {
                      row.error.normal_deg_p99, row.error.normal_deg_max);
     }
   }
-  const BenchRow* fastest = fastest_gpu_row(scene);
-  for (const auto& row : scene.rows) {
-    if (fastest && row.variant == "embree-8") {
-      text += format("%-24s fastest GPU variant (%s) against Embree's 8-wide packets on the CPU: %.2fx the time\n",
-                     scene.name.c_str(), fastest->variant.c_str(), fastest->gpu.median_ms / row.gpu.median_ms);
-    }
-  }
+  text += pareto_summary(scene);
   for (const auto& skipped : scene.skipped) text += scene.name + ": skipped " + skipped + "\n";
   return text;
 }
@@ -288,30 +317,51 @@ std::string compare_bench(const BenchReport& before, const BenchReport& after) {
   text += format("%-24s %-16s %10s %10s %8s %7s %7s %9s %9s %8s %9s %9s %8s\n", "scene", "variant", "A gpu ms",
                  "B gpu ms", "B/A", "A flips", "B flips", "A depth99", "B depth99", "B/A", "A norm99", "B norm99", "B/A");
   auto ratio = [](double b, double a) { return a > 0.0 ? format("%8.3f", b / a) : format("%8s", b > 0.0 ? "inf" : "-"); };
+  // Scenes pair by name, image size and hash: two different meshes both called mesh.obj, or one
+  // mesh seen from another camera, are not the same measurement.
+  auto same_scene = [](const BenchSceneResult& a, const BenchSceneResult& b) {
+    return a.name == b.name && a.width == b.width && a.height == b.height && a.hash == b.hash;
+  };
+  auto label = [](const BenchSceneResult& scene) {
+    return scene.name + " (" + std::to_string(scene.width) + "x" + std::to_string(scene.height) + ", hash " + scene.hash + ")";
+  };
+  std::vector<std::string> unpaired;
+  for (const auto& scene_a : before.scenes) {
+    if (std::none_of(after.scenes.begin(), after.scenes.end(), [&](const auto& b) { return same_scene(scene_a, b); })) {
+      unpaired.push_back("only in A: " + label(scene_a));
+    }
+  }
   size_t matched = 0;
   for (const auto& scene_b : after.scenes) {
-    for (const auto& scene_a : before.scenes) {
-      if (scene_a.name != scene_b.name || scene_a.width != scene_b.width || scene_a.height != scene_b.height) continue;
-      if (scene_a.hash != scene_b.hash) {
-        text += scene_b.name + ": the scene hashes differ (" + scene_a.hash + ", " + scene_b.hash +
-                "): not the same geometry or camera; compared anyway\n";
+    const auto scene_a = std::find_if(before.scenes.begin(), before.scenes.end(),
+                                      [&](const auto& a) { return same_scene(a, scene_b); });
+    if (scene_a == before.scenes.end()) {
+      unpaired.push_back("only in B: " + label(scene_b));
+      continue;
+    }
+    for (const auto& row_b : scene_b.rows) {
+      const auto row_a = std::find_if(scene_a->rows.begin(), scene_a->rows.end(),
+                                      [&](const BenchRow& row) { return row.variant == row_b.variant; });
+      if (row_a == scene_a->rows.end()) {
+        unpaired.push_back("only in B: " + scene_b.name + " " + row_b.variant);
+        continue;
       }
-      for (const auto& row_b : scene_b.rows) {
-        for (const auto& row_a : scene_a.rows) {
-          if (row_a.variant != row_b.variant) continue;
-          ++matched;
-          text += format("%-24s %-16s %10.3f %10.3f %s %7zu %7zu %9.2e %9.2e %s %9.2e %9.2e %s\n", scene_b.name.c_str(),
-                         row_b.variant.c_str(), row_a.gpu.median_ms, row_b.gpu.median_ms,
-                         ratio(row_b.gpu.median_ms, row_a.gpu.median_ms).c_str(), row_a.error.hit_mismatches,
-                         row_b.error.hit_mismatches, row_a.error.depth_p99, row_b.error.depth_p99,
-                         ratio(row_b.error.depth_p99, row_a.error.depth_p99).c_str(), row_a.error.normal_deg_p99,
-                         row_b.error.normal_deg_p99,
-                         ratio(row_b.error.normal_deg_p99, row_a.error.normal_deg_p99).c_str());
-        }
+      ++matched;
+      text += format("%-24s %-16s %10.3f %10.3f %s %7zu %7zu %9.2e %9.2e %s %9.2e %9.2e %s\n", scene_b.name.c_str(),
+                     row_b.variant.c_str(), row_a->gpu.median_ms, row_b.gpu.median_ms,
+                     ratio(row_b.gpu.median_ms, row_a->gpu.median_ms).c_str(), row_a->error.hit_mismatches,
+                     row_b.error.hit_mismatches, row_a->error.depth_p99, row_b.error.depth_p99,
+                     ratio(row_b.error.depth_p99, row_a->error.depth_p99).c_str(), row_a->error.normal_deg_p99,
+                     row_b.error.normal_deg_p99, ratio(row_b.error.normal_deg_p99, row_a->error.normal_deg_p99).c_str());
+    }
+    for (const auto& row_a : scene_a->rows) {
+      if (std::none_of(scene_b.rows.begin(), scene_b.rows.end(), [&](const BenchRow& row) { return row.variant == row_a.variant; })) {
+        unpaired.push_back("only in A: " + scene_a->name + " " + row_a.variant);
       }
     }
   }
-  if (matched == 0) text += "no row in common (rows match by scene name, image size and variant)\n";
+  if (matched == 0) text += "no row in common (rows pair by scene name, image size, scene hash and variant)\n";
+  for (const auto& line : unpaired) text += "not compared, " + line + "\n";
   return text;
 }
 

@@ -29,10 +29,12 @@ BenchReport new_bench_report(const GpuDeviceInfo& device, std::string suite, uin
 // as 16 hex digits: two runs timed the same scene when their hashes match.
 std::string scene_hash(const Scene& scene);
 
-// The readable table: a header, then a scene's rows ("*": on the Pareto front), and how vkray's
-// fastest variant compares with Embree's packets.
-std::string bench_table_header();
-std::string bench_table_rows(const BenchSceneResult& scene);
+// The readable table: a legend, a header, then each scene's rows ("*": on the Pareto front) and its
+// Pareto front, fastest first, with the time against `default` and the error each row comes with.
+// Narrow fits 100 columns; wide has every column the terminal shows (the files have them all).
+std::string bench_table_legend(bool wide);
+std::string bench_table_header(bool wide);
+std::string bench_table_rows(const BenchSceneResult& scene, bool wide);
 
 std::string bench_json(const BenchReport& report);
 std::string bench_csv(const BenchReport& report);
@@ -40,8 +42,8 @@ std::string bench_csv(const BenchReport& report);
 // Throws InputError naming the file (and the field) when it is not a bench JSON file.
 BenchReport read_bench_json(const std::filesystem::path& path);
 
-// Per row present in both (same scene name, size and variant): time and error of `after` against
-// `before`, as ratios.
+// Per row present in both (same scene name, size, hash and variant): time and error of `after`
+// against `before`, as ratios; then every scene and row that could not be paired.
 std::string compare_bench(const BenchReport& before, const BenchReport& after);
 
 }  // namespace vkray

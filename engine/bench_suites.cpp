@@ -28,7 +28,7 @@ std::vector<BenchScene> basic_suite(uint32_t width, uint32_t height) {
   Scene built_in = default_scene();
   built_in.width = width;
   built_in.height = height;
-  scenes.push_back({"default", std::move(built_in)});
+  scenes.push_back({"built-in", std::move(built_in)});
 
   Scene sphere = empty_scene(width, height);
   sphere.spheres.push_back({glm::dvec3(0.0), 1.0});

@@ -241,13 +241,68 @@ TEST(BenchReport, CompareGivesRatiosPerMatchingRow) {
   BenchReport after = sample_report();
   after.scenes[0].rows[0].gpu.median_ms *= 2.0;     // twice the time
   after.scenes[0].rows[0].error.depth_p99 *= 0.5;   // half the error
-  after.scenes[0].hash = "ffffffffffffffff";
   const std::string text = compare_bench(before, after);
   EXPECT_NE(text.find("2.000"), std::string::npos) << text;
   EXPECT_NE(text.find("0.500"), std::string::npos) << text;
-  EXPECT_NE(text.find("hashes differ"), std::string::npos) << text;
+  EXPECT_EQ(text.find("not compared"), std::string::npos) << text;
   after.scenes[0].name = "another scene";
   EXPECT_NE(compare_bench(before, after).find("no row in common"), std::string::npos);
+}
+
+// Two different meshes that share a file name (both "mesh.obj") are two scenes: their hashes
+// differ, so no row pairs, and both are named as left out.
+TEST(BenchReport, CompareNeverPairsScenesWhoseHashesDiffer) {
+  BenchReport before = sample_report();
+  BenchReport after = sample_report();
+  before.scenes[0].name = after.scenes[0].name = "mesh.obj";
+  after.scenes[0].hash = "ffffffffffffffff";
+  const std::string text = compare_bench(before, after);
+  EXPECT_NE(text.find("no row in common"), std::string::npos) << text;
+  EXPECT_NE(text.find("not compared, only in A: mesh.obj (64x48, hash 00000000deadbeef)"), std::string::npos) << text;
+  EXPECT_NE(text.find("not compared, only in B: mesh.obj (64x48, hash ffffffffffffffff)"), std::string::npos) << text;
+  // A variant only one side ran is named too.
+  after = sample_report();
+  after.scenes[0].name = "mesh.obj";
+  after.scenes[0].rows.pop_back();
+  EXPECT_NE(compare_bench(before, after).find("not compared, only in A: mesh.obj embree-8"), std::string::npos);
+}
+
+// The summary under a scene's rows follows the Pareto front: a fast row with a large error is shown
+// with that error beside its time, against the default, never as "the fastest" alone.
+TEST(BenchReport, SummaryListsTheParetoFrontWithTheErrorOfEachRow) {
+  BenchSceneResult scene;
+  scene.name = "built-in";
+  scene.rows = {row("default", 10.0, 0, 1e-6, 0.05), row("naive", 8.0, 12, 1.1, 170.0), row("generic", 20.0, 0, 1e-6, 0.05),
+                row("embree-8", 5.0, 3, 2e-7, 179.0)};
+  scene.rows[3].on_gpu = false;
+  mark_pareto_front(scene.rows);
+  const std::string text = bench_table_rows(scene, false);
+  EXPECT_EQ(text.find("fastest"), text.find("fastest first")) << text;
+  const size_t front = text.find("built-in: Pareto front, fastest first; time against default");
+  ASSERT_NE(front, std::string::npos) << text;
+  const std::string summary = text.substr(front);
+  const size_t embree = summary.find("embree-8"), naive = summary.find("naive"), ours = summary.find("  default");
+  ASSERT_TRUE(embree != std::string::npos && naive != std::string::npos && ours != std::string::npos) << summary;
+  EXPECT_TRUE(embree < naive && naive < ours) << summary;  // fastest first
+  EXPECT_EQ(summary.find("generic"), std::string::npos) << summary;  // dominated by default
+  EXPECT_NE(summary.find("naive              0.80x the time       12 flips  depth p99 1.10e+00"), std::string::npos)
+      << summary;
+  EXPECT_NE(summary.find("default            1.00x the time        0 flips  depth p99 1.00e-06"), std::string::npos)
+      << summary;
+}
+
+// The default table fits 100 columns, with its legend above the header, not between it and the rows.
+TEST(BenchReport, NarrowTableFitsOneHundredColumns) {
+  const BenchReport report = sample_report();
+  BenchSceneResult scene = report.scenes[0];
+  scene.name = "a-model-with-a-long-file-name-from-a-dataset.obj";
+  const std::string table = bench_table_legend(false) + bench_table_header(false) + bench_table_rows(scene, false);
+  std::istringstream lines(table);
+  for (std::string line; std::getline(lines, line);) EXPECT_LE(line.size(), 100u) << line;
+  EXPECT_NE(table.find("\n...m-a-dataset.obj default *"), std::string::npos) << table;  // its end tells models apart
+  const std::string wide = bench_table_header(true) + bench_table_rows(scene, true);
+  EXPECT_NE(wide.find("depth max"), std::string::npos);
+  EXPECT_NE(wide.find(scene.name), std::string::npos);
 }
 
 TEST(BenchScenes, HashesAreDeterministicAndSeeEveryBit) {
