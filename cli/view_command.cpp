@@ -30,6 +30,9 @@ int run_view(const ViewCommandOptions& options) {
   if (options.size) std::tie(width, height) = parse_size(*options.size);
   const auto output = aov_from_name(options.output);
   if (!output) throw InputError("--output: unknown output '" + options.output + "' (choose from " + aov_names_help + ")");
+  if (options.screenshot && lower_extension(*options.screenshot) != ".png") {
+    throw InputError("--screenshot: '" + *options.screenshot + "' must end in .png (what the window shows, 8 bits)");
+  }
   if (options.screenshot) check_output_path(*options.screenshot);
   viewer.load_scene = [options, width, height] {
     Scene scene = load_scene_argument(options.scene_path, width, height);
@@ -60,7 +63,8 @@ Action add_view_command(CLI::App& app) {
                       "Scene file (.json, reloaded when it changes) or model (.obj); the built-in scene when omitted");
   command->add_option("--size", options->size, "Window size WIDTHxHEIGHT (default: the scene's image size)");
   command->add_option("--camera", options->camera,
-                      "Override the camera: 'from=X,Y,Z to=X,Y,Z up=X,Y,Z fovy=DEGREES', any of the keys");
+                      "Override the camera: 'from=X,Y,Z to=X,Y,Z up=X,Y,Z fovy=DEGREES' (any of the keys), or the "
+                      "scene file's camera as JSON '{\"from\": [0, 1, 5]}'");
   command->add_option("--output", options->output, std::string("Output shown first: ") + aov_names_help)
       ->capture_default_str();
   command->add_option("--device", options->device, "Use the Vulkan device whose name contains this text");

@@ -251,6 +251,25 @@ TEST_F(ViewerTest, ScreenshotAfterNFramesMatchesRenderPixelForPixel) {
   }
 }
 
+// --stats counts the frames --frames asked for (the screenshot shows the last one again: not a
+// frame), and its frames per second and mean frame time come from the same intervals: 1000 / mean.
+TEST_F(ViewerTest, StatsCountTheFramesAndAgreeWithThemselves) {
+  const fs::path shot = dir_ / "shot.png";
+  Process viewer;
+  run_vkray("view --no-overlay --frames 6 --size 64x48 --stats --screenshot " + shell_quote(shot.string()), &viewer);
+  const std::string out = viewer.stdout_text();
+  std::smatch stats;
+  ASSERT_TRUE(std::regex_search(out, stats, std::regex(R"(vkray view: ([0-9]+) frames presented, ([0-9]+) renders dispatched; )"
+                                                       R"(([0-9.]+) frames/s \(mean frame ([0-9.]+) ms, median ([0-9.]+) ms)")))
+      << out;
+  EXPECT_EQ(stats[1], "6") << out;
+  EXPECT_EQ(stats[2], "6") << out;
+  const double fps = std::stod(stats[3]), mean_ms = std::stod(stats[4]);
+  ASSERT_GT(mean_ms, 0.0) << out;
+  // Printed to 0.1 frames/s and 0.01 ms.
+  EXPECT_NEAR(fps, 1000.0 / mean_ms, 0.05 + 1000.0 * 0.005 / (mean_ms * mean_ms)) << out;
+}
+
 TEST_F(ViewerTest, WithoutADisplayOneLineNamesRender) {
   Process viewer = start_vkray("view", false);
   EXPECT_EQ(viewer.wait(start_timeout), 1);

@@ -94,12 +94,13 @@ class Viewer {
   // decides it).
   vk::Extent2D sized_for_;
   uint64_t renders_ = 0, presents_ = 0;
-  std::vector<double> frame_ms_;  // of every render and present, for --stats
+  std::vector<double> frame_ms_;  // of every render and present, for the overlay
+  std::vector<double> present_intervals_ms_;  // between one present and the next, for --stats
   double gpu_ms_ = 0.0;
   // What the overlay shows, refreshed every overlay_refresh_s.
   double shown_frame_ms_ = 0.0, shown_gpu_ms_ = 0.0;
   Clock::time_point shown_at_{};
-  Clock::time_point first_present_{}, last_present_{};
+  Clock::time_point last_present_{};
 };
 
 Viewer::Viewer(const ViewerOptions& options)
@@ -178,16 +179,18 @@ void Viewer::run() {
                 display_.extent().height);
   }
   if (options_.stats) {
-    std::vector<double> sorted = frame_ms_;
+    // Both figures from the same intervals between presents, so that frames/s is 1000 / the mean
+    // frame: start-up (scene upload, pipeline creation) comes before the first present and stays out.
+    std::vector<double> sorted = present_intervals_ms_;
     std::sort(sorted.begin(), sorted.end());
     const double median = sorted.empty() ? 0.0 : sorted[sorted.size() / 2];
-    // Frames per second between the first and the last present: start-up (scene upload, pipeline
-    // creation) stays out.
-    const double span_s = std::chrono::duration<double>(last_present_ - first_present_).count();
-    std::printf("vkray view: %llu frames presented, %llu renders dispatched; %.1f frames/s, median frame %.1f ms, "
-                "last GPU time %.1f ms\n",
+    double sum_ms = 0.0;
+    for (double ms : sorted) sum_ms += ms;
+    const double mean = sorted.empty() ? 0.0 : sum_ms / static_cast<double>(sorted.size());
+    std::printf("vkray view: %llu frames presented, %llu renders dispatched; %.1f frames/s (mean frame %.2f ms, "
+                "median %.2f ms, from present to present), last GPU time %.1f ms\n",
                 static_cast<unsigned long long>(presents_), static_cast<unsigned long long>(renders_),
-                span_s > 0.0 ? double(presents_ - 1) / span_s : 0.0, median, gpu_ms_);
+                mean > 0.0 ? 1000.0 / mean : 0.0, mean, median, gpu_ms_);
   }
 }
 
@@ -308,11 +311,12 @@ bool Viewer::present(std::vector<uint8_t>* capture) {
     shown = display_.present(preview_.picture(), nullptr, capture);
   }
   damaged_ = !shown;
-  if (shown) {
+  if (shown && !capture) {  // the screenshot's present shows the last frame again: not a frame
+    const Clock::time_point now = Clock::now();
+    if (presents_ > 0) present_intervals_ms_.push_back(std::chrono::duration<double, std::milli>(now - last_present_).count());
     ++presents_;
-    last_present_ = Clock::now();
-    if (presents_ == 1) first_present_ = last_present_;
-  } else {
+    last_present_ = now;
+  } else if (!shown) {
     stale_ = true;
   }
   return shown;
