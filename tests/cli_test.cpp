@@ -686,8 +686,8 @@ TEST_F(CliTest, OnePixelImage) {
   const RunResult run = vkray({"render", "--width", "1", "--height", "1", "-o", "one.exr", "--timings"});
   ASSERT_EQ(run.exit_code, 0) << run.err;
   EXPECT_TRUE(starts_with(run.out, "vkray: wrote one.exr and one.png (1x1, depth,normal) on ")) << run.out;
-  EXPECT_TRUE(has_line_starting_with(run.out, "timings:")) << run.out;
-  EXPECT_TRUE(has_line_starting_with(run.out, "  dispatch (GPU)")) << run.out;
+  EXPECT_TRUE(has_line_starting_with(run.out, "timings ")) << run.out;
+  EXPECT_TRUE(has_line_starting_with(run.out, "      dispatch (GPU time)")) << run.out;
   Image exr;
   ASSERT_NO_FATAL_FAILURE(read_image(path("one.exr"), exr, true));
   EXPECT_EQ(exr.width, 1);
@@ -867,7 +867,7 @@ TEST_F(CliTest, BenchBasicSuiteJsonHasEveryFieldAndSaneFigures) {
   for (const char* field : {"name", "type", "driver", "api_version"}) {
     EXPECT_FALSE(json.at("device").at(field).get<std::string>().empty()) << field;
   }
-  const std::vector<std::string> names = {"default", "one-sphere", "spheres-on-plane", "sphere-mesh-80k"};
+  const std::vector<std::string> names = {"built-in", "one-sphere", "spheres-on-plane", "sphere-mesh-80k"};
   ASSERT_EQ(json.at("scenes").size(), names.size());
   const std::vector<std::string> row_fields = {
       "variant", "on_gpu", "device_triangles", "device_geometry_bytes", "bvh_nodes", "bvh_depth", "loop_budget",
@@ -953,7 +953,7 @@ TEST_F(CliTest, BenchPlotWritesAPng) {
     GTEST_SKIP() << "/usr/bin/python3 with matplotlib is missing (Debian: python3-matplotlib)";
   }
   const RunResult run = vkray({"bench", "--size", "32x24", "--frames", "1", "--variants", "default,generic",
-                               "--no-embree", "--plot", "plot.png"});
+                               "--plot", "plot.png"});
   ASSERT_EQ(run.exit_code, 0) << run.err;
   const std::string png = read_text(path("plot.png"));
   ASSERT_GT(png.size(), 8u);
@@ -989,6 +989,146 @@ TEST_F(CliTest, EveryCompressionWritesTheSameFloats) {
 TEST_F(CliTest, LossyOrUnknownCompressionExitsTwo) {
   expect_error(vkray({"render", "--compression", "b44"}), 2, {"--compression", "'b44'"});
   expect_error(vkray({"render", "--compression", "zip2"}), 2, {"--compression", "'zip2'"});
+}
+
+// ---------------------------------------------------------------------------------------------
+// 9. What a new user trips over: each of these failed before its fix
+
+TEST_F(CliTest, CheckSaysWhatItDidNotCompute) {
+  const RunResult run = vkray({"render", "--width", "32", "--height", "24", "--aov", "depth", "--check", "--no-preview"});
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_NE(run.out.find("normal error not computed"), std::string::npos) << run.out;
+  EXPECT_EQ(run.out.find("normal error p50"), std::string::npos) << run.out;
+  EXPECT_NE(run.out.find("depth rel. error p50"), std::string::npos) << run.out;
+}
+
+// --timings has a total, and the lines indented under it are parts of it: they add up to no more
+// than the total (each printed to 0.1 ms).
+TEST_F(CliTest, TimingsHaveATotalThatHoldsItsParts) {
+  const RunResult run = vkray({"render", "--width", "64", "--height", "48", "--timings", "--check"});
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  std::smatch total;
+  ASSERT_TRUE(std::regex_search(run.out, total, std::regex(R"(\n  total +([0-9.]+) ms)"))) << run.out;
+  double parts = 0.0;
+  size_t count = 0;
+  std::istringstream lines(run.out);
+  for (std::string line; std::getline(lines, line);) {
+    std::smatch part;
+    if (std::regex_match(line, part, std::regex(R"(    [a-zA-Z(][^ ].*? +([0-9.]+) ms.*)"))) parts += std::stod(part[1]), ++count;
+  }
+  for (const char* part : {"scene load", "device open", "upload", "render", "reference (CPU)", "file writing"}) {
+    EXPECT_TRUE(has_line_starting_with(run.out, std::string("    ") + part)) << part << " missing:\n" << run.out;
+  }
+  EXPECT_GE(count, 6u) << run.out;
+  EXPECT_LE(parts, std::stod(total[1]) + 0.05 * static_cast<double>(count + 1)) << run.out;
+  EXPECT_TRUE(has_line_starting_with(run.out, "      pipeline creation")) << run.out;  // a part of render
+}
+
+// Output formats are the documented ones and are checked before the scene is even read: the
+// scene named here does not exist, and the error is about the output, naming the user's path.
+TEST_F(CliTest, OutputFormatsAndFoldersAreCheckedBeforeAnyWork) {
+  expect_error(vkray({"render", "missing.json", "--preview", "x.bmpx"}), 2, {"--preview", "'x.bmpx'", ".png"});
+  expect_error(vkray({"render", "missing.json", "--preview", "x.jpg"}), 2, {"--preview", "'x.jpg'", ".png"});
+  expect_error(vkray({"view", "--screenshot", "x.exr"}), 2, {"--screenshot", "'x.exr'", ".png"});
+  // A folder the user cannot create files in (even as root: /proc takes no new files).
+  const RunResult run = vkray({"render", "missing.json", "-o", "/proc/vkray-out.exr"});
+  expect_error(run, 1, {"/proc/vkray-out.exr", "cannot write"});
+  EXPECT_EQ(run.err.find(".vkray-"), std::string::npos) << "a temporary name the user never gave: " << run.err;
+}
+
+TEST_F(CliTest, ConflictingOptionsAreRefused) {
+  expect_error(vkray({"render", "--no-preview", "--preview", "x.png"}), 2, {"--no-preview", "--preview"});
+  expect_error(vkray({"render", "--reference", "--check"}), 2, {"--reference", "--check"});
+  expect_error(vkray({"render", "--reference", "--precision", "double"}), 2, {"--reference", "--precision"});
+  expect_error(vkray({"render", "--reference", "--device", "llvmpipe"}), 2, {"--reference", "--device"});
+  expect_error(vkray({"bench", "--compare", "a.json", "b.json", "--suite", "basic"}), 2, {"--compare", "--suite"});
+}
+
+// A read-only file is not replaced, as cp refuses to (root included, whom permissions do not stop).
+TEST_F(CliTest, ReadOnlyOutputIsRefusedAndKept) {
+  const auto output = write("kept.exr", "older contents\n");
+  fs::permissions(output, fs::perms::owner_read | fs::perms::group_read | fs::perms::others_read);
+  const RunResult run = vkray({"render", "--width", "8", "--height", "8", "-o", "kept.exr", "--no-preview"});
+  EXPECT_EQ(run.exit_code, 1);
+  EXPECT_EQ(count_lines(run.err), 1u) << run.err;
+  EXPECT_NE(run.err.find("kept.exr: cannot write: the file is read-only"), std::string::npos) << run.err;
+  EXPECT_EQ(read_text(output), "older contents\n");
+  fs::permissions(output, fs::perms::owner_write, fs::perm_options::add);
+}
+
+TEST_F(CliTest, DuplicateSceneKeysAreRefused) {
+  write("twice.json", R"({"camera": {"from": [0, 0, 5], "to": [0, 0, 0], "fovy": 40, "fovy": 50}})");
+  expect_error(vkray({"render", "twice.json"}), 2, {"twice.json", "camera.fovy", "'fovy'", "twice"});
+}
+
+TEST_F(CliTest, AMistypedCommandGetsTheNearestOne) {
+  expect_error(vkray({"rendr"}), 2, {"unknown command 'rendr'", "did you mean 'render'?"});
+  expect_error(vkray({"benhc", "--size", "8x8"}), 2, {"'benhc'", "'bench'"});
+  expect_error(vkray({"paint"}), 2, {"'paint'", "render, info, bench, view"});
+}
+
+TEST_F(CliTest, AFolderAsTheSceneIsNamedAFolder) {
+  fs::create_directory(path("scenes"));
+  expect_error(vkray({"render", "scenes"}), 2, {"scenes", "is a folder"});
+}
+
+// --camera takes the scene file's JSON forms too: [x, y, z] vectors in key=value, or the camera
+// object itself; each renders what the plain form renders, and a malformed one shows the forms.
+TEST_F(CliTest, CameraOptionTakesTheSceneFilesJsonForms) {
+  expect_error(vkray({"render", "--camera", "from=[0,1,5"}), 2, {"--camera", "from", "'{\"from\": [0, 1, 5]"});
+  expect_error(vkray({"render", "--camera", R"({"from": [0, 1]})"}), 2, {"--camera", "from", "3 numbers"});
+  expect_error(vkray({"render", "--camera", R"({"form": [0, 1, 5]})"}), 2, {"--camera", "'form'", "did you mean 'from'"});
+  write("sphere.json", sphere_scene);
+  for (const char* camera : {"from=0,0,10", "from=[0,0,10]", "from=[0, 0, 10];fovy=30", R"({"from": [0, 0, 10]})"}) {
+    SCOPED_TRACE(camera);
+    const RunResult run = vkray({"render", "sphere.json", "--camera", camera, "--aov", "depth", "-o", "far.exr"});
+    ASSERT_EQ(run.exit_code, 0) << run.err;
+    Image exr;
+    ASSERT_NO_FATAL_FAILURE(read_image(path("far.exr"), exr, true));
+    EXPECT_EQ(exr.at("Z", 16, 16), 9.0f);
+  }
+}
+
+// Embree's rows are variants like any other: named in --variants, left out by leaving them out.
+TEST_F(CliTest, EmbreeRowsAreChosenByTheVariantList) {
+  RunResult run = vkray({"bench", "--size", "32x24", "--frames", "1", "--variants", "default,embree-8"});
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_NE(run.out.find("embree-8"), std::string::npos) << run.out;
+  EXPECT_EQ(run.out.find("embree-1"), std::string::npos) << run.out;
+  run = vkray({"bench", "--size", "32x24", "--frames", "1", "--variants", "default"});
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_EQ(run.out.find("embree"), std::string::npos) << run.out;
+  expect_error(vkray({"bench", "--no-embree"}), 2, {"--no-embree"});
+}
+
+// The bench's table fits 100 columns, the legend stands above the header, and the built-in scene is
+// not called "default" beside the variant of that name.
+TEST_F(CliTest, BenchTableFitsOneHundredColumns) {
+  const RunResult run = vkray({"bench", "--size", "32x24", "--frames", "1", "--variants", "default,naive,embree-8"});
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  std::istringstream lines(run.out);
+  std::vector<std::string> table;
+  for (std::string line; std::getline(lines, line);) {
+    EXPECT_LE(line.size(), 100u) << line;
+    table.push_back(line);
+  }
+  const auto header = std::find_if(table.begin(), table.end(), [](const std::string& line) { return starts_with(line, "scene "); });
+  ASSERT_NE(header, table.end()) << run.out;
+  ASSERT_NE(header + 1, table.end());
+  EXPECT_TRUE(starts_with(*(header + 1), "built-in ")) << "rows must follow the header: " << run.out;
+  EXPECT_EQ(run.out.find("default default"), std::string::npos) << run.out;
+  const RunResult wide = vkray({"bench", "--size", "32x24", "--frames", "1", "--variants", "default", "--wide"});
+  ASSERT_EQ(wide.exit_code, 0) << wide.err;
+  EXPECT_NE(wide.out.find("depth max"), std::string::npos) << wide.out;
+}
+
+// The help speaks the user's words: a scene, not the course it came from.
+TEST_F(CliTest, HelpSpeaksOfScenes) {
+  for (const char* command : {"", "render", "bench", "view", "info"}) {
+    const RunResult run = command[0] ? vkray({command, "--help"}) : vkray({"--help"});
+    ASSERT_EQ(run.exit_code, 0) << command;
+    EXPECT_EQ(run.out.find("course"), std::string::npos) << command << ":\n" << run.out;
+  }
 }
 
 }  // namespace
