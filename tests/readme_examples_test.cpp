@@ -1,0 +1,126 @@
+// Every vkray command the README shows in a ```sh block runs and exits 0, in the README's order,
+// in a temporary copy of the layout the README assumes (build/vkray, ../shared/models, docs/, a
+// scene.json made of the README's own scene example). So an option renamed, removed or misspelt in
+// the README fails here. To keep the suite short, image sizes are cut to 64x36 and the bench to one
+// frame: what this checks is that each command is accepted and works, not the figures beside it
+// (those come from the commands as printed, re-run by hand). `view` commands run under xvfb-run for
+// two frames. The setup and test commands (install-deps, cmake, ctest) are what CI itself runs.
+#include "tests/temp_dir_test.hpp"
+
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <regex>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#ifndef VKRAY_BINARY
+#error "VKRAY_BINARY comes from CMake"
+#endif
+#ifndef VKRAY_MODELS_DIR
+#error "VKRAY_MODELS_DIR comes from CMake"
+#endif
+
+namespace {
+
+namespace fs = std::filesystem;
+
+const fs::path readme_path = fs::path(__FILE__).parent_path().parent_path() / "README.md";
+
+std::string read_text(const fs::path& path) {
+  std::ifstream file(path, std::ios::binary);
+  std::ostringstream contents;
+  contents << file.rdbuf();
+  return contents.str();
+}
+
+// The lines of the README's ```sh blocks, trailing comments removed.
+std::vector<std::string> shell_lines(const std::string& readme) {
+  std::vector<std::string> lines;
+  std::istringstream text(readme);
+  bool in_block = false;
+  for (std::string line; std::getline(text, line);) {
+    if (line.starts_with("```")) {
+      in_block = !in_block && line == "```sh";
+      continue;
+    }
+    if (!in_block) continue;
+    if (const size_t comment = line.find("  #"); comment != std::string::npos) line.resize(comment);
+    while (!line.empty() && line.back() == ' ') line.pop_back();
+    if (!line.empty()) lines.push_back(line);
+  }
+  return lines;
+}
+
+// The README's scene-file example: the first ```json block.
+std::string scene_example(const std::string& readme) {
+  const size_t start = readme.find("```json\n");
+  if (start == std::string::npos) return "";
+  const size_t body = start + 8;
+  return readme.substr(body, readme.find("```", body) - body);
+}
+
+// The command as the test runs it: small images, one bench frame, viewers for two frames on a
+// virtual display.
+std::string shrunk(std::string command) {
+  command = std::regex_replace(command, std::regex(R"(--size [0-9]+x[0-9]+)"), "--size 64x36");
+  command = std::regex_replace(command, std::regex(R"(--width [0-9]+)"), "--width 64");
+  command = std::regex_replace(command, std::regex(R"(--height [0-9]+)"), "--height 36");
+  const bool bench = command.starts_with("build/vkray bench"), view = command.starts_with("build/vkray view");
+  if (bench && command.find("--compare") == std::string::npos) {
+    command = std::regex_replace(command, std::regex(R"(--frames [0-9]+)"), "--frames 1");
+    if (command.find("--frames") == std::string::npos) command += " --frames 1";
+    if (command.find("--size") == std::string::npos) command += " --size 64x36";
+  }
+  if (view) {
+    if (command.find("--size") == std::string::npos) command += " --size 64x36";
+    if (command.find("--frames") == std::string::npos) command += " --frames 2";
+    command = "xvfb-run -a " + command;
+  }
+  return command;
+}
+
+class ReadmeExamplesTest : public vkray::test::TempDirTest {};
+
+TEST_F(ReadmeExamplesTest, EveryVkrayCommandRuns) {
+  if (!fs::is_directory(VKRAY_MODELS_DIR)) GTEST_SKIP() << "no models folder at " << VKRAY_MODELS_DIR << " (the README's examples use it)";
+  if (std::system("command -v xvfb-run >/dev/null 2>&1") != 0) GTEST_SKIP() << "xvfb-run is missing (Debian: xvfb, xauth)";
+  const std::string readme = read_text(readme_path);
+  ASSERT_FALSE(readme.empty()) << readme_path;
+
+  // The layout the README's commands assume, from the repository root.
+  const fs::path repo = dir_ / "repo";
+  fs::create_directories(repo / "build");
+  fs::create_directories(repo / "docs");
+  fs::create_directories(repo / "models");
+  fs::create_directories(dir_ / "shared");
+  fs::create_symlink(VKRAY_BINARY, repo / "build" / "vkray");
+  fs::create_directory_symlink(fs::absolute(VKRAY_MODELS_DIR), dir_ / "shared" / "models");
+  fs::create_symlink(fs::absolute(VKRAY_MODELS_DIR) / "stanford-bunny.obj", repo / "models" / "bunny.obj");
+  const std::string scene = scene_example(readme);
+  ASSERT_FALSE(scene.empty()) << "no ```json scene example in the README";
+  std::ofstream(repo / "scene.json") << scene;
+
+  size_t ran = 0;
+  for (const std::string& line : shell_lines(readme)) {
+    if (!line.starts_with("build/vkray ")) {
+      std::printf("not run here (CI runs the setup and test commands): %s\n", line.c_str());
+      continue;
+    }
+    const std::string command = shrunk(line);
+    SCOPED_TRACE(command);
+    const fs::path log = dir_ / "log.txt";
+    const std::string shell = "cd '" + repo.string() + "' && timeout 600 " + command + " >'" + log.string() + "' 2>&1 </dev/null";
+    const int status = std::system(shell.c_str());
+    EXPECT_TRUE(status != -1 && WIFEXITED(status) && WEXITSTATUS(status) == 0)
+        << "README command failed: " << line << "\nran as: " << command << "\n" << read_text(log);
+    ++ran;
+  }
+  EXPECT_GE(ran, 8u) << "the README's sh blocks hold fewer vkray commands than expected";
+}
+
+}  // namespace
