@@ -37,8 +37,8 @@ std::atomic<unsigned> partial_counter{0};
 
 // A file written under a temporary name beside `target`, renamed onto it by commit() and removed
 // if never committed.
-// A file with no write permission bit for anyone is not replaced, even by root: cp refuses to
-// overwrite it, and the rename into place would replace it silently.
+// vkray's own rule: a file with no write permission bit for anyone is not replaced, by root either
+// (cp refuses such a file to other users, and the rename into place would replace it silently).
 void refuse_read_only(const std::filesystem::path& target) {
   struct stat status {};
   if (stat(target.c_str(), &status) == 0 && S_ISREG(status.st_mode) && (status.st_mode & 0222) == 0) {

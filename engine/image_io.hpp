@@ -22,8 +22,8 @@ bool is_exr_compression(std::string_view name);
 // good one was.
 
 // Throws std::runtime_error naming the path when it cannot be written: its folder is missing or
-// refuses a new file, it is a folder, or it is a read-only file (refused as cp refuses it, root
-// too). For checking outputs before any work is done.
+// refuses a new file, it is a folder, or it is a read-only file (no write bit for anyone: refused
+// to root too). For checking outputs before any work is done.
 void check_output_path(const std::filesystem::path& path);
 
 // A text file (the bench's JSON and CSV), written the same way. Throws std::runtime_error.
