@@ -81,7 +81,8 @@ void check_render_options(const RenderOptions& options, const AovSet& aovs) {
   if (!is_exr_compression(options.compression)) {
     std::string known;
     for (const char* name : exr_compressions) known += (known.empty() ? "" : ", ") + std::string(name);
-    throw InputError("--compression: unknown '" + options.compression + "' (choose from " + known + ")");
+    throw InputError("--compression: unknown '" + options.compression + "' (choose from " + known +
+                     "; zip and zips also with a deflate level, zip:1 to zip:9)");
   }
   if (options.check && !aovs.needs_rays()) {
     throw InputError("--check compares depth and normal with the reference; add one of them to --aov");
@@ -223,7 +224,9 @@ Action add_render_command(CLI::App& app) {
   CLI::Option* preview = command->add_option("--preview", options->preview, "PNG preview to write (default: the output with .png)");
   command->add_flag("--no-preview", options->no_preview, "Write no PNG preview")->excludes(preview);
   command->add_option("--compression", options->compression,
-                      "OpenEXR compression, all lossless: zip (default), zips, piz, rle, none (fastest, largest)");
+                      "OpenEXR compression, all lossless: zip, zips, piz, rle, none (fastest, largest); zip and zips "
+                      "also with a deflate level from 1 (fastest) to 9, as zip:9")
+      ->capture_default_str();
   CLI::Option* device = command->add_option("--device", options->device, "Use the Vulkan device whose name contains this text");
   CLI::Option* precision = command->add_option("--precision", options->precision,
                       "Shader arithmetic: float (float32, camera-relative) or double (float64: exact, slower; needs "

@@ -2,7 +2,13 @@
 
 #include "engine/preview.hpp"
 
-#include <OpenImageIO/imageio.h>
+#include <OpenEXR/ImfChannelList.h>
+#include <OpenEXR/ImfFrameBuffer.h>
+#include <OpenEXR/ImfHeader.h>
+#include <OpenEXR/ImfOutputFile.h>
+#include <OpenEXR/ImfStringAttribute.h>
+#include <OpenEXR/ImfThreading.h>
+#include <png.h>
 
 #include <fcntl.h>
 #include <sys/stat.h>
@@ -17,9 +23,11 @@
 #include <exception>
 #include <fstream>
 #include <future>
+#include <mutex>
 #include <optional>
 #include <stdexcept>
 #include <string>
+#include <thread>
 #include <vector>
 
 namespace vkray {
@@ -85,13 +93,55 @@ class PartialFile {
   bool committed_ = false;
 };
 
-void write_image(const std::filesystem::path& path, const OIIO::ImageSpec& spec, OIIO::TypeDesc type, const void* pixels,
-                 const std::filesystem::path& shown_path) {
-  auto output = OIIO::ImageOutput::create(path.string());
-  if (!output) throw std::runtime_error(shown_path.string() + ": cannot write: " + OIIO::geterror());
-  if (!output->open(path.string(), spec) || !output->write_image(type, pixels) || !output->close()) {
-    throw std::runtime_error(shown_path.string() + ": cannot write: " + output->geterror());
+// 8-bit RGB rows as PNG, through libpng directly: OpenImageIO would load ~260 shared libraries
+// (OpenCV, FFmpeg, GDAL...) whose symbol binding took 0.2 s of every vkray process.
+// Deflate level 1 with the "up" filter on every row: 4x faster than libpng's defaults (level 6, a
+// filter chosen per row) for a 20% larger file (the bunny's 3840x1080 preview: 34 against 139 ms,
+// 0.54 against 0.44 MB). libpng reports errors by longjmp: no C++ object with a destructor lives
+// in the function that calls setjmp. Returns false with `error` set on failure.
+void on_png_error(png_structp png, png_const_charp message) {
+  auto* error = static_cast<std::array<char, 256>*>(png_get_error_ptr(png));
+  std::snprintf(error->data(), error->size(), "%s", message);
+  png_longjmp(png, 1);
+}
+
+void on_png_warning(png_structp, png_const_charp) {}
+
+bool write_png_rows(std::FILE* file, const uint8_t* rgb, uint32_t width, uint32_t height,
+                    std::array<char, 256>& error) {
+  png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, &error, on_png_error, on_png_warning);
+  if (!png) return false;
+  png_infop info = png_create_info_struct(png);
+  if (!info || setjmp(png_jmpbuf(png))) {
+    png_destroy_write_struct(&png, &info);
+    return false;
   }
+  png_init_io(png, file);
+  png_set_IHDR(png, info, width, height, 8, PNG_COLOR_TYPE_RGB, PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT,
+               PNG_FILTER_TYPE_DEFAULT);
+  png_set_compression_level(png, 1);
+  png_set_filter(png, PNG_FILTER_TYPE_BASE, PNG_FILTER_UP);
+  png_write_info(png, info);
+  for (uint32_t row = 0; row < height; ++row) png_write_row(png, rgb + size_t{row} * width * 3);
+  png_write_end(png, nullptr);
+  png_destroy_write_struct(&png, &info);
+  return true;
+}
+
+void write_png(const std::filesystem::path& path, size_t width, size_t height, const uint8_t* rgb,
+               const std::filesystem::path& shown_path) {
+  if (width > PNG_UINT_31_MAX || height > PNG_UINT_31_MAX) {
+    throw std::runtime_error(shown_path.string() + ": cannot write: too large for PNG");
+  }
+  std::FILE* file = std::fopen(path.c_str(), "wb");
+  if (!file) throw std::runtime_error(shown_path.string() + ": cannot write: " + std::strerror(errno));
+  std::array<char, 256> error{"libpng failed"};
+  const bool written = write_png_rows(file, rgb, static_cast<uint32_t>(width), static_cast<uint32_t>(height), error);
+  const bool flushed = std::fflush(file) == 0 && !std::ferror(file);
+  const int saved_errno = errno;
+  std::fclose(file);
+  if (!written) throw std::runtime_error(shown_path.string() + ": cannot write: " + error.data());
+  if (!flushed) throw std::runtime_error(shown_path.string() + ": cannot write: " + std::strerror(saved_errno));
 }
 
 void write_exr_to(const PartialFile& file, const std::filesystem::path& target, const Frame& frame,
@@ -133,7 +183,12 @@ void remove_partial_outputs() noexcept {
 }
 
 bool is_exr_compression(std::string_view name) {
-  return std::find(std::begin(exr_compressions), std::end(exr_compressions), name) != std::end(exr_compressions);
+  const size_t colon = name.find(':');
+  const std::string_view method = name.substr(0, colon);
+  if (std::find(std::begin(exr_compressions), std::end(exr_compressions), method) == std::end(exr_compressions)) return false;
+  if (colon == std::string_view::npos) return true;
+  const std::string_view level = name.substr(colon + 1);
+  return (method == "zip" || method == "zips") && level.size() == 1 && level[0] >= '1' && level[0] <= '9';
 }
 
 void write_exr(const std::filesystem::path& path, const Frame& frame, std::string_view compression) {
@@ -150,48 +205,75 @@ void write_preview_png(const std::filesystem::path& path, const Frame& frame) {
 
 void write_rgb_png(const std::filesystem::path& path, uint32_t width, uint32_t height, const std::vector<uint8_t>& rgb) {
   PartialFile file(path);
-  const OIIO::ImageSpec spec(static_cast<int>(width), static_cast<int>(height), 3, OIIO::TypeDesc::UINT8);
-  write_image(file.path(), spec, OIIO::TypeDesc::UINT8, rgb.data(), path);
+  if (rgb.size() != size_t{width} * height * 3) throw std::invalid_argument("write_rgb_png: not width x height RGB pixels");
+  write_png(file.path(), width, height, rgb.data(), path);
   file.commit();
 }
 
 namespace {
 
+// OpenEXR's compression and zip level for a name is_exr_compression accepts; level 0 is
+// OpenEXR's default.
+std::pair<Imf::Compression, int> exr_compression(std::string_view name) {
+  const size_t colon = name.find(':');
+  const std::string_view method = name.substr(0, colon);
+  const int level = colon == std::string_view::npos ? 0 : name[colon + 1] - '0';
+  if (method == "zip") return {Imf::ZIP_COMPRESSION, level};
+  if (method == "zips") return {Imf::ZIPS_COMPRESSION, level};
+  if (method == "piz") return {Imf::PIZ_COMPRESSION, level};
+  if (method == "rle") return {Imf::RLE_COMPRESSION, level};
+  return {Imf::NO_COMPRESSION, level};
+}
+
+// OpenEXR compresses blocks of rows on its own thread pool, one thread a core.
+void start_exr_threads() {
+  static std::once_flag started;
+  std::call_once(started, [] { Imf::setGlobalThreadCount(static_cast<int>(std::max(1u, std::thread::hardware_concurrency()))); });
+}
+
 void write_exr_to(const PartialFile& file, const std::filesystem::path& path, const Frame& frame,
                   std::string_view compression) {
   if (!is_exr_compression(compression)) throw std::invalid_argument("unknown EXR compression " + std::string(compression));
-  const bool has_hits = frame.aovs.needs_rays();
-  std::vector<std::string> names;
-  if (frame.aovs.has(Aov::depth)) names.push_back("Z");
-  if (frame.aovs.has(Aov::normal)) names.insert(names.end(), {"N.X", "N.Y", "N.Z"});
-  if (frame.aovs.has(Aov::uv)) names.insert(names.end(), {"U", "V"});
-  if (has_hits) names.push_back("A");
-  if (names.empty()) throw std::runtime_error(path.string() + ": no outputs to write");
-
-  const size_t channels = names.size();
-  std::vector<float> pixels(frame.pixel_count() * channels);
-  for (size_t p = 0; p < frame.pixel_count(); ++p) {
-    float* out = &pixels[p * channels];
-    if (frame.aovs.has(Aov::depth)) *out++ = frame.depth[p];
-    if (frame.aovs.has(Aov::normal)) {
-      const glm::vec3 n = frame.normal_at(p);
-      *out++ = n.x, *out++ = n.y, *out++ = n.z;
-    }
-    if (frame.aovs.has(Aov::uv)) {
-      const glm::vec2 uv = frame.uv_at(p);
-      *out++ = uv.x, *out++ = uv.y;
-    }
-    if (has_hits) *out++ = frame.hit(p) ? 1.0f : 0.0f;
+  if (!frame.aovs.has(Aov::depth) && !frame.aovs.has(Aov::normal) && !frame.aovs.has(Aov::uv)) {
+    throw std::runtime_error(path.string() + ": no outputs to write");
   }
-
-  OIIO::ImageSpec spec(static_cast<int>(frame.width), static_cast<int>(frame.height), static_cast<int>(channels),
-                       OIIO::TypeDesc::FLOAT);
-  spec.channelnames = names;
-  spec.alpha_channel = has_hits ? static_cast<int>(channels) - 1 : -1;
-  spec.z_channel = frame.aovs.has(Aov::depth) ? 0 : -1;
-  spec.attribute("compression", std::string(compression));
-  spec.attribute("Software", "vkray");
-  write_image(file.path(), spec, OIIO::TypeDesc::FLOAT, pixels.data(), path);
+  start_exr_threads();
+  const auto [method, level] = exr_compression(compression);
+  Imf::Header header(static_cast<int>(frame.width), static_cast<int>(frame.height));
+  header.compression() = method;
+  if (level > 0) header.zipCompressionLevel() = level;
+  header.insert("software", Imf::StringAttribute("vkray"));
+  // OpenEXR reads each channel from the frame's own planes (a slice with its strides): no copy.
+  Imf::FrameBuffer slices;
+  auto add_channel = [&](const char* name, const float* plane) {
+    header.channels().insert(name, Imf::Channel(Imf::FLOAT));
+    slices.insert(name, Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(const_cast<float*>(plane)), sizeof(float),
+                                   sizeof(float) * frame.width));
+  };
+  const size_t pixels = frame.pixel_count();
+  if (frame.aovs.has(Aov::depth)) add_channel("Z", frame.depth.data());
+  if (frame.aovs.has(Aov::normal)) {
+    add_channel("N.X", frame.normal.data());
+    add_channel("N.Y", frame.normal.data() + pixels);
+    add_channel("N.Z", frame.normal.data() + 2 * pixels);
+  }
+  if (frame.aovs.has(Aov::uv)) {
+    add_channel("U", frame.uv.data());
+    add_channel("V", frame.uv.data() + pixels);
+  }
+  std::vector<float> alpha;
+  if (frame.aovs.needs_rays()) {
+    alpha.resize(pixels);
+    for (size_t p = 0; p < pixels; ++p) alpha[p] = frame.hit(p) ? 1.0f : 0.0f;
+    add_channel("A", alpha.data());
+  }
+  try {
+    Imf::OutputFile output(file.path().c_str(), header);
+    output.setFrameBuffer(slices);
+    output.writePixels(static_cast<int>(frame.height));
+  } catch (const std::exception& failure) {
+    throw std::runtime_error(path.string() + ": cannot write: " + failure.what());
+  }
 }
 
 void write_preview_png_to(const PartialFile& file, const std::filesystem::path& path, const Frame& frame) {
@@ -209,8 +291,7 @@ void write_preview_png_to(const PartialFile& file, const std::filesystem::path& 
     }
   }
 
-  OIIO::ImageSpec spec(static_cast<int>(row_width), static_cast<int>(height), 3, OIIO::TypeDesc::UINT8);
-  write_image(file.path(), spec, OIIO::TypeDesc::UINT8, rgb.data(), path);
+  write_png(file.path(), row_width, height, rgb.data(), path);
 }
 
 }  // namespace

@@ -967,9 +967,10 @@ TEST_F(CliTest, BenchPlotWritesAPng) {
 // Every offered compression is lossless: the channels read back bit for bit the same.
 TEST_F(CliTest, EveryCompressionWritesTheSameFloats) {
   Image reference;
-  for (const char* compression : {"zip", "zips", "piz", "rle", "none"}) {
+  for (const char* compression : {"zip", "zip:1", "zips:9", "zips", "piz", "rle", "none"}) {
     SCOPED_TRACE(compression);
-    const std::string name = std::string(compression) + ".exr";
+    std::string name = std::string(compression) + ".exr";
+    std::replace(name.begin(), name.end(), ':', '-');
     const RunResult run = vkray({"render", "--width", "40", "--height", "30", "--aov", "depth,normal,uv",
                                  "--compression", compression, "--no-preview", "-o", name});
     ASSERT_EQ(run.exit_code, 0) << run.err;
@@ -989,6 +990,9 @@ TEST_F(CliTest, EveryCompressionWritesTheSameFloats) {
 TEST_F(CliTest, LossyOrUnknownCompressionExitsTwo) {
   expect_error(vkray({"render", "--compression", "b44"}), 2, {"--compression", "'b44'"});
   expect_error(vkray({"render", "--compression", "zip2"}), 2, {"--compression", "'zip2'"});
+  expect_error(vkray({"render", "--compression", "zip:0"}), 2, {"--compression", "'zip:0'", "zip:1 to zip:9"});
+  expect_error(vkray({"render", "--compression", "piz:3"}), 2, {"--compression", "'piz:3'"});
+  expect_error(vkray({"render", "--compression", "zip:"}), 2, {"--compression", "'zip:'"});
 }
 
 // ---------------------------------------------------------------------------------------------
