@@ -73,7 +73,8 @@ BenchRow run_variant(GpuDevice& device, const Scene& scene, const BenchVariant& 
 const std::vector<BenchVariant>& bench_variants() {
   auto has_spheres = [](const Scene& scene) { return !scene.spheres.empty(); };
   auto has_triangles = [](const Scene& scene) { return scene.triangle_count() > 0; };
-  ShaderVariant naive_sphere, moller_trumbore, generic, scene_anchor, absolute, float64, naive;
+  ShaderVariant naive_sphere, moller_trumbore, generic, stack_in_memory, scene_anchor, absolute, float64, naive;
+  stack_in_memory.stack_in_registers = false;
   naive_sphere.sphere_formula = VKRAY_SPHERE_NAIVE;
   moller_trumbore.triangle_test = VKRAY_TRIANGLE_MOLLER_TRUMBORE;
   generic.generic = true;
@@ -90,6 +91,10 @@ const std::vector<BenchVariant>& bench_variants() {
       search_variant("bvh-per-ray", "BVH, each ray its own stack", PrimitiveSearch::bvh_per_ray, SIZE_MAX),
       search_variant("bvh-packet", "BVH, a subgroup's rays walk together", PrimitiveSearch::bvh_packet, SIZE_MAX),
       shader_variant("generic", "not specialized: every primitive type and output, counts at run time", generic),
+      shader_variant("stack-in-memory", "the tree walk's stack in an array, not registers", stack_in_memory,
+                     [](const Scene& scene) {
+                       return choose_search(scene.triangle_count(), scene.spheres.size()) != PrimitiveSearch::brute_force;
+                     }),
       shader_variant("rows-8x8", "8x8 workgroups row by row instead of Morton order", with_workgroup(8, 8, false)),
       shader_variant("wg-16x16", "16x16 workgroups in Morton order", with_workgroup(16, 16, true)),
       shader_variant("wg-64x1", "64x1 workgroups", with_workgroup(64, 1, false)),

@@ -84,6 +84,13 @@ uint64_t fixed_loop_iterations(const GpuScene& scene) {
   return iterations;
 }
 
+// VKRAY_SPEC_STACK_REGISTERS for a tree `depth` edges deep: a walk holds at most one stack entry per
+// inner node on its path, `depth` of them.
+uint32_t stack_registers_for_depth(uint32_t depth) {
+  if (depth > VKRAY_STACK_REGISTERS_MAX) return 0;
+  return std::max<uint32_t>(4, (depth + 3) / 4 * 4);
+}
+
 }  // namespace
 
 struct Renderer::Impl {
@@ -380,6 +387,8 @@ Renderer::Renderer(GpuDevice& device, const Scene& scene, RendererOptions option
     specialization.tree_has_triangles = gpu_scene.tree_has_triangles;
     specialization.tree_has_spheres = gpu_scene.tree_has_spheres;
     specialization.loop_budget = r.stats.loop_budget;
+    const bool stack_in_registers = options.shader.stack_in_registers && !options.shader.generic;
+    specialization.stack_registers = stack_in_registers ? stack_registers_for_depth(gpu_scene.bvh_depth) : 0;
     specialization.variant = options.shader;
     r.counts = run_time_counts(gpu_scene);
     r.pipeline.emplace(r.context, specialization);

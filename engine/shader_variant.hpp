@@ -29,6 +29,9 @@ struct ShaderVariant {
   // Every primitive type's code compiled in, counts and search mode read at run time (see
   // VKRAY_SPEC_GENERIC); renders must then request every output, since the shader writes them all.
   bool generic = false;
+  // The tree walk's stack in registers where the tree is shallow enough (VKRAY_SPEC_STACK_REGISTERS),
+  // else in a private array, as the generic variant always has it.
+  bool stack_in_registers = true;
 };
 
 // The default variant with another workgroup shape and order.

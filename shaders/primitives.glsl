@@ -18,6 +18,7 @@ layout(constant_id = VKRAY_SPEC_TREE_HAS_TRIANGLES) const bool TREE_HAS_TRIANGLE
 layout(constant_id = VKRAY_SPEC_TREE_HAS_SPHERES) const bool TREE_HAS_SPHERES = false;
 layout(constant_id = VKRAY_SPEC_LOOP_BUDGET) const uint LOOP_BUDGET = 0;
 layout(constant_id = VKRAY_SPEC_GENERIC) const bool GENERIC = false;
+layout(constant_id = VKRAY_SPEC_STACK_REGISTERS) const uint STACK_REGISTERS = 0;
 // What the tree may hold: in the generic variant, both kinds.
 const bool TREE_TRIANGLES = GENERIC || TREE_HAS_TRIANGLES;
 const bool TREE_SPHERES = GENERIC || TREE_HAS_SPHERES;
@@ -182,6 +183,37 @@ PrimitiveHit nearest_primitive_brute_force(RayFrame frame, Origin origin, real3 
 
 const uint no_node = 0x7fffffffu;  // `current` once the stack has run dry; no node has this index
 
+// The walk's stack in registers (see VKRAY_SPEC_STACK_REGISTERS): the top entry in top.x, each
+// vector's w spilling into the next one's x. Every vector past STACK_REGISTERS is removed by
+// specialization, with its moves.
+struct RegisterStack {
+  uvec4 top, r1, r2, r3, r4, r5, r6, r7;
+};
+
+void push_registers(inout RegisterStack s, uint entry) {
+  if (STACK_REGISTERS > 28) s.r7 = uvec4(s.r6.w, s.r7.xyz);
+  if (STACK_REGISTERS > 24) s.r6 = uvec4(s.r5.w, s.r6.xyz);
+  if (STACK_REGISTERS > 20) s.r5 = uvec4(s.r4.w, s.r5.xyz);
+  if (STACK_REGISTERS > 16) s.r4 = uvec4(s.r3.w, s.r4.xyz);
+  if (STACK_REGISTERS > 12) s.r3 = uvec4(s.r2.w, s.r3.xyz);
+  if (STACK_REGISTERS > 8) s.r2 = uvec4(s.r1.w, s.r2.xyz);
+  if (STACK_REGISTERS > 4) s.r1 = uvec4(s.top.w, s.r1.xyz);
+  s.top = uvec4(entry, s.top.xyz);
+}
+
+uint pop_registers(inout RegisterStack s) {
+  uint entry = s.top.x;
+  s.top = uvec4(s.top.yzw, s.r1.x);
+  if (STACK_REGISTERS > 4) s.r1 = uvec4(s.r1.yzw, s.r2.x);
+  if (STACK_REGISTERS > 8) s.r2 = uvec4(s.r2.yzw, s.r3.x);
+  if (STACK_REGISTERS > 12) s.r3 = uvec4(s.r3.yzw, s.r4.x);
+  if (STACK_REGISTERS > 16) s.r4 = uvec4(s.r4.yzw, s.r5.x);
+  if (STACK_REGISTERS > 20) s.r5 = uvec4(s.r5.yzw, s.r6.x);
+  if (STACK_REGISTERS > 24) s.r6 = uvec4(s.r6.yzw, s.r7.x);
+  if (STACK_REGISTERS > 28) s.r7 = uvec4(s.r7.yzw, 0u);
+  return entry;
+}
+
 // The tree walk, nearer child first, the other on a stack; boxes entered beyond the nearest hit so
 // far are skipped. Each iteration takes one step down the tree and tests one primitive of the leaf
 // found last: llvmpipe runs both sides of every branch masked, so an iteration costs the node step
@@ -203,7 +235,9 @@ PrimitiveHit nearest_primitive_in_tree(RayFrame frame, Origin origin, real3 dir,
 #endif
   SlotHit hit = SlotHit(t_max, no_primitive);
   bool unfinished = false;
-  uint stack[VKRAY_BVH_MAX_DEPTH];
+  uint stack[VKRAY_BVH_MAX_DEPTH];  // STACK_REGISTERS == 0 only
+  RegisterStack registers = RegisterStack(uvec4(0u), uvec4(0u), uvec4(0u), uvec4(0u), uvec4(0u), uvec4(0u), uvec4(0u),
+                                          uvec4(0u));
   uint stack_size = 0;
   uint current = 0;  // the root, always an inner node
   uint leaf_next = 0;  // the leaf's primitives still to test: [leaf_next, leaf_end)
@@ -240,7 +274,13 @@ PrimitiveHit nearest_primitive_in_tree(RayFrame frame, Origin origin, real3 dir,
                        subgroupBallotBitCount(subgroupBallot(prefers_first));
       }
       if (hits.x && hits.y) {
-        stack[stack_size++] = second_first ? children.x : children.y;
+        uint later = second_first ? children.x : children.y;
+        if (STACK_REGISTERS > 0) {
+          push_registers(registers, later);
+        } else {
+          stack[stack_size] = later;
+        }
+        ++stack_size;
         current = second_first ? children.y : children.x;
       } else if (hits.x || hits.y) {
         current = hits.x ? children.x : children.y;
@@ -248,7 +288,14 @@ PrimitiveHit nearest_primitive_in_tree(RayFrame frame, Origin origin, real3 dir,
         pop = true;
       }
     }
-    if (pop) current = stack_size > 0 ? stack[--stack_size] : no_node;
+    if (pop) {
+      if (stack_size == 0) {
+        current = no_node;
+      } else {
+        --stack_size;
+        current = STACK_REGISTERS > 0 ? pop_registers(registers) : stack[stack_size];
+      }
+    }
   }
   PrimitiveHit result = PrimitiveHit(hit.t, real3(0.0), unfinished);
   if (hit.slot != no_primitive) result.normal = primitive_normal(hit.slot, origin, dir);

@@ -31,19 +31,22 @@ void expect_same_bits(const Frame& expected, const Frame& actual) {
   EXPECT_EQ(differing, 0u) << "values differing from the default variant";
 }
 
-// Each pixel's ray and tests are the same whatever workgroup computes it, and the generic pipeline
-// runs the same code with counts read at run time: every bit must match. 37x29 leaves partial
+// Each pixel's ray and tests are the same whatever workgroup computes it, the generic pipeline
+// runs the same code with counts read at run time, and the tree walk's stack holds the same
+// entries in registers as in memory: every bit must match. 37x29 leaves partial
 // workgroups on two borders; the basic suite covers brute force (the built-in scene's six
 // triangles and one sphere), spheres alone, spheres in a tree with a plane, and a mesh in a tree.
 TEST(ShaderVariants, LayoutAndGenericVariantsChangeNoBit) {
-  ShaderVariant generic;
+  ShaderVariant generic, stack_in_memory;
   generic.generic = true;
+  stack_in_memory.stack_in_registers = false;
   const std::vector<std::pair<const char*, ShaderVariant>> variants = {
       {"rows-8x8", with_workgroup(8, 8, false)},
       {"wg-16x16", with_workgroup(16, 16, true)},
       {"wg-64x1", with_workgroup(64, 1, false)},
       {"wg-4x16", with_workgroup(4, 16, false)},
       {"generic", generic},
+      {"stack-in-memory", stack_in_memory},
   };
   for (const auto& scene : bench_suite("basic", 37, 29, "")) {
     SCOPED_TRACE(scene.name);

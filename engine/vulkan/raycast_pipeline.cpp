@@ -62,6 +62,7 @@ const vk::raii::Pipeline& RaycastPipeline::pipeline(AovSet aovs, bool lo_parts, 
   values[VKRAY_SPEC_COORDINATES] = variant.coordinates;
   values[VKRAY_SPEC_LO_PARTS] = lo_parts ? 1u : 0u;
   values[VKRAY_SPEC_IMAGE_TARGET] = image_target ? 1u : 0u;
+  values[VKRAY_SPEC_STACK_REGISTERS] = specialization_.stack_registers;
   std::array<vk::SpecializationMapEntry, values.size()> entries;
   for (uint32_t id = 0; id < entries.size(); ++id) entries[id] = vk::SpecializationMapEntry(id, id * 4u, 4u);
   const vk::SpecializationInfo specialization(entries, vk::ArrayProxyNoTemporaries<const uint32_t>(values));

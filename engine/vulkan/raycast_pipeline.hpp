@@ -21,6 +21,7 @@ struct PipelineSpecialization {
   bool tree_has_triangles = false;
   bool tree_has_spheres = false;
   uint32_t loop_budget = 0;
+  uint32_t stack_registers = 0;  // VKRAY_SPEC_STACK_REGISTERS
   ShaderVariant variant;
 };
 
