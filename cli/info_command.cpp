@@ -1,5 +1,6 @@
 #include "cli/commands.hpp"
 #include "engine/gpu_device.hpp"
+#include "engine/gpu_scene.hpp"
 
 #include <iostream>
 #include <memory>
@@ -31,6 +32,12 @@ Action add_info_command(CLI::App& app) {
               << "  timestamps                 "
               << (d.timestamp_period_ns > 0.0 ? std::to_string(d.timestamp_period_ns) + " ns per tick" : "none") << '\n'
               << "  shaderFloat64              " << (d.shader_float64 ? "yes" : "no") << '\n';
+    const GeometryLayout layout;
+    std::cout << "\ngeometry on the device, bytes (render --timings gives a scene's bytes a triangle)\n"
+              << "  a triangle or tree sphere  " << layout.primitive_slot << " + a normal of " << layout.normal_float32
+              << " (" << layout.normal_float64 << " with --precision double)\n"
+              << "  a distinct vertex          " << layout.vertex << " (position in two float parts, or a double)\n"
+              << "  a tree node                " << layout.tree_node << " (two children's boxes)\n";
     return 0;
   };
 }

@@ -12,6 +12,7 @@
 #include <cstring>
 #include <limits>
 #include <tuple>
+#include <unordered_map>
 
 namespace vkray {
 namespace {
@@ -64,13 +65,56 @@ FloatBox outward(const glm::dvec3& lower, const glm::dvec3& upper) {
           {float_above(upper.x), float_above(upper.y), float_above(upper.z)}};
 }
 
-// A triangle or sphere relative to the anchor, encoded, with its float box rounded outward from
-// the exact (double) primitive: it holds both the double and the float32 hi/lo primitive up to
-// the one-step widening of every node box (widened).
+// A triangle or sphere as its record (indices into the vertex buffer) and its normal, with its
+// float box rounded outward from the exact (double) primitive: it holds both the double and the
+// float32 hi/lo primitive up to the one-step widening of every node box (widened).
 struct EncodedPrimitive {
   gpu::GpuPrimitive primitive;
+  glm::dvec3 normal;  // triangles' unit normal; 0 for spheres
   FloatBox box;
 };
+
+// The vertex buffer: each distinct position (relative to the anchor, exact in double) once.
+class VertexTable {
+ public:
+  VertexTable(std::vector<gpu::GpuPoint>& vertices, Precision precision) : vertices_(vertices), precision_(precision) {}
+
+  uint32_t index(const glm::dvec3& position) {
+    const auto [entry, inserted] = indices_.try_emplace(position, static_cast<uint32_t>(vertices_.size()));
+    if (inserted) add(position, 0.0);
+    return entry->second;
+  }
+  // A point of its own (a sphere's centre and radius in w).
+  uint32_t add(const glm::dvec3& position, double w) {
+    // Encoded into a named value first: pushing encode_point's result straight into the vector, GCC
+    // 12 at -O3 stored zeros for the lo parts' x and y whenever the push reallocated
+    // (RandomScenes.EightDecadesInOneSceneWithinTheEnvelope caught it).
+    const gpu::GpuPoint point = encode_point(glm::dvec4(position, w), precision_);
+    vertices_.push_back(point);
+    return static_cast<uint32_t>(vertices_.size() - 1);
+  }
+
+ private:
+  struct BitHash {
+    size_t operator()(const glm::dvec3& p) const {
+      const auto bits = [](double v) { return std::bit_cast<uint64_t>(v == 0.0 ? 0.0 : v); };  // -0 as +0
+      return std::hash<uint64_t>()(bits(p.x) ^ (bits(p.y) * 0x9e3779b97f4a7c15ull) ^ (bits(p.z) * 0xc2b2ae3d27d4eb4full));
+    }
+  };
+  std::vector<gpu::GpuPoint>& vertices_;
+  Precision precision_;
+  std::unordered_map<glm::dvec3, uint32_t, BitHash> indices_;
+};
+
+// A slot's normal texels (VKRAY_TEXELS_PER_NORMAL_*).
+void append_normal(std::vector<glm::vec4>& texels, const glm::dvec3& normal, Precision precision) {
+  if (precision == Precision::float64) {
+    const gpu::GpuPoint point = encode_point(glm::dvec4(normal, 0.0), precision);
+    texels.insert(texels.end(), {point.first, point.second});
+  } else {
+    texels.push_back(glm::vec4(glm::dvec4(normal, 0.0)));
+  }
+}
 
 // Brute force beats the tree up to about this many triangles and spheres on lavapipe. Measured
 // with `vkray bench --size 640x480 --variants brute-force,bvh-per-ray` (best of 5 frames):
@@ -118,8 +162,9 @@ GpuScene make_gpu_scene(const Scene& scene, const GpuSceneOptions& options, cons
   }
   set_plane_heights(gpu.planes, scene.planes, scene.camera.from, gpu.precision);
 
-  // Triangles relative to the anchor; each vertex is encoded from the same double in every
+  // Triangles relative to the anchor; each vertex position is stored once and indexed by every
   // triangle that shares it, so they see bit-identical values: the watertight test needs that.
+  VertexTable vertex_table(gpu.vertices, gpu.precision);
   std::vector<EncodedPrimitive> triangles;
   for (const auto& mesh : scene.meshes) {
     for (const auto& corners : mesh.triangles) {
@@ -136,8 +181,11 @@ GpuScene make_gpu_scene(const Scene& scene, const GpuSceneOptions& options, cons
       const glm::dvec3 cross = glm::cross(v1 - v0, v2 - v0);
       if (cross == glm::dvec3(0.0)) continue;
       const glm::dvec3 normal = unit_vector(cross);
-      triangles.push_back({{encode(v0, normal.x), encode(v1, normal.y), encode(v2, normal.z)},
-                           outward(glm::min(v0, glm::min(v1, v2)), glm::max(v0, glm::max(v1, v2)))});
+      const uint32_t i0 = vertex_table.index(v0);  // one statement each: vertices stored in triangle order
+      const uint32_t i1 = vertex_table.index(v1);
+      const uint32_t i2 = vertex_table.index(v2);
+      const gpu::GpuPrimitive record{glm::uvec4(i0, i1, i2, VKRAY_PRIMITIVE_TRIANGLE)};
+      triangles.push_back({record, normal, outward(glm::min(v0, glm::min(v1, v2)), glm::max(v0, glm::max(v1, v2)))});
     }
   }
   gpu.triangle_count = static_cast<uint32_t>(triangles.size());
@@ -147,9 +195,14 @@ GpuScene make_gpu_scene(const Scene& scene, const GpuSceneOptions& options, cons
 
   if (gpu.search == PrimitiveSearch::brute_force) {
     for (const auto& sphere : scene.spheres) gpu.spheres.push_back({encode(sphere.center - gpu.anchor, sphere.radius)});
-    for (const auto& triangle : triangles) gpu.primitives.push_back(triangle.primitive);
-    gpu.primitives.resize((gpu.primitives.size() + VKRAY_TRIANGLE_BATCH - 1) / VKRAY_TRIANGLE_BATCH * VKRAY_TRIANGLE_BATCH,
-                          gpu::GpuPrimitive{});
+    for (const auto& triangle : triangles) {
+      gpu.primitives.push_back(triangle.primitive);
+      append_normal(gpu.normal_texels, triangle.normal, gpu.precision);
+    }
+    while (gpu.primitives.size() % VKRAY_TRIANGLE_BATCH != 0) {
+      gpu.primitives.push_back(gpu::GpuPrimitive{});
+      append_normal(gpu.normal_texels, glm::dvec3(0.0), gpu.precision);
+    }
     return gpu;
   }
 
@@ -162,8 +215,8 @@ GpuScene make_gpu_scene(const Scene& scene, const GpuSceneOptions& options, cons
   const bool spheres_apart = !unordered.empty() && scene.spheres.size() <= brute_force_max_primitives;
   for (const auto& sphere : spheres_apart ? std::vector<Sphere>{} : scene.spheres) {
     const glm::dvec3 centre = sphere.center - gpu.anchor;
-    unordered.push_back({{encode(centre, sphere.radius), encode(centre, VKRAY_SPHERE_MARK), encode(centre, 0.0)},
-                         outward(centre - sphere.radius, centre + sphere.radius)});
+    const gpu::GpuPrimitive record{glm::uvec4(vertex_table.add(centre, sphere.radius), 0, 0, VKRAY_PRIMITIVE_SPHERE)};
+    unordered.push_back({record, glm::dvec3(0.0), outward(centre - sphere.radius, centre + sphere.radius)});
   }
   if (spheres_apart) {
     for (const auto& sphere : scene.spheres) gpu.spheres.push_back({encode(sphere.center - gpu.anchor, sphere.radius)});
@@ -175,7 +228,10 @@ GpuScene make_gpu_scene(const Scene& scene, const GpuSceneOptions& options, cons
   for (const auto& primitive : unordered) boxes.push_back({glm::dvec3(primitive.box.lower), glm::dvec3(primitive.box.upper)});
   const Bvh bvh = build_bvh(boxes, options.bvh);
   gpu.primitives.reserve(unordered.size() + VKRAY_BVH_MAX_LEAF_SIZE);
-  for (uint32_t i : bvh.primitive_order) gpu.primitives.push_back(unordered[i].primitive);
+  for (uint32_t i : bvh.primitive_order) {
+    gpu.primitives.push_back(unordered[i].primitive);
+    append_normal(gpu.normal_texels, unordered[i].normal, gpu.precision);
+  }
   // Node boxes hold their primitives' boxes, then are widened (see safe_inverse in
   // shaders/intersect.glsl).
   const auto bounds = child_bounds<FloatBox>(bvh, [&](uint32_t slot) { return unordered[bvh.primitive_order[slot]].box; });

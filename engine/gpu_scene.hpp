@@ -38,9 +38,14 @@ struct GpuScene {
   // (the tree then holds the triangles alone).
   std::vector<gpu::GpuSphere> spheres;
   // With the tree: every triangle and sphere in leaf order. Without: the triangles, padded to whole
-  // VKRAY_TRIANGLE_BATCHes with all-zero ones. Zero-area triangles are left out (no ray can hit
-  // them). See GpuPrimitive in gpu_layout.h.
+  // VKRAY_TRIANGLE_BATCHes with all-zero ones (vertex 0 three times: never hit). Zero-area
+  // triangles are left out (no ray can hit them). See GpuPrimitive in gpu_layout.h.
   std::vector<gpu::GpuPrimitive> primitives;
+  // What the primitives index: each distinct vertex position once, and the tree's spheres.
+  std::vector<gpu::GpuPoint> vertices;
+  // The triangles' unit normals by primitive slot, VKRAY_TEXELS_PER_NORMAL_* texels each (zero for
+  // spheres and padding).
+  std::vector<glm::vec4> normal_texels;
   std::vector<gpu::GpuBvhNode> bvh_nodes;  // empty without the tree
   uint32_t bvh_depth = 0;
   PrimitiveSearch search = PrimitiveSearch::brute_force;  // never automatic here
@@ -56,8 +61,19 @@ struct GpuScene {
   // Bytes of device memory the triangles, spheres and their tree take.
   size_t geometry_bytes() const {
     return spheres.size() * sizeof(gpu::GpuSphere) + primitives.size() * sizeof(gpu::GpuPrimitive) +
+           vertices.size() * sizeof(gpu::GpuPoint) + normal_texels.size() * sizeof(glm::vec4) +
            bvh_nodes.size() * sizeof(gpu::GpuBvhNode);
   }
+};
+
+// Device bytes of each kind of geometry record (`vkray info`): a mesh of n vertices and about 2n
+// triangles takes slot + normal + vertex / 2 bytes a triangle, plus its share of the tree's nodes.
+struct GeometryLayout {
+  size_t primitive_slot = sizeof(gpu::GpuPrimitive);
+  size_t normal_float32 = VKRAY_TEXELS_PER_NORMAL_FLOAT32 * sizeof(glm::vec4);
+  size_t normal_float64 = VKRAY_TEXELS_PER_NORMAL_FLOAT64 * sizeof(glm::vec4);
+  size_t vertex = sizeof(gpu::GpuPoint);
+  size_t tree_node = sizeof(gpu::GpuBvhNode);
 };
 
 // The centre of the bounding box of the finite primitives (spheres, meshes); the camera for a

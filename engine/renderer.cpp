@@ -105,7 +105,7 @@ struct Renderer::Impl {
   // Bound wherever the scene lacks a primitive type or an output is off.
   GpuBuffer placeholder;
   TexelBuffer placeholder_texels;
-  std::optional<TexelBuffer> spheres, planes, primitives, bvh_nodes;
+  std::optional<TexelBuffer> spheres, planes, primitives, vertices, normals, bvh_nodes;
   std::vector<gpu::GpuPlane> gpu_planes;  // what `planes` holds, its heights set per render
   std::vector<Plane> scene_planes;
   SceneStats stats;
@@ -158,7 +158,9 @@ struct Renderer::Impl {
     RaycastPipeline::Resources resources{};
     resources.texel_views[VKRAY_BINDING_SPHERES] = geometry(spheres);
     resources.texel_views[VKRAY_BINDING_PLANES] = geometry(planes);
-    resources.texel_views[VKRAY_BINDING_PRIMITIVES] = geometry(primitives);
+    resources.texel_views[VKRAY_BINDING_PRIMITIVES] = uints(primitives);
+    resources.texel_views[VKRAY_BINDING_VERTICES] = geometry(vertices);
+    resources.texel_views[VKRAY_BINDING_NORMALS] = geometry(normals);
     resources.texel_views[VKRAY_BINDING_BVH_BOUNDS] = floats(bvh_nodes);
     resources.texel_views[VKRAY_BINDING_BVH_LINKS] = uints(bvh_nodes);
     resources.buffers[VKRAY_BINDING_DEPTH] = output(tile.depth);
@@ -339,6 +341,8 @@ Renderer::Renderer(GpuDevice& device, const Scene& scene, RendererOptions option
       r.scene_planes = scene.planes;
     }
     r.primitives = upload(gpu_scene.primitives, "triangles and spheres");
+    r.vertices = upload(gpu_scene.vertices, "vertices");
+    r.normals = upload(gpu_scene.normal_texels, "triangle normals");
     r.bvh_nodes = upload(gpu_scene.bvh_nodes, "BVH nodes");
     r.stats = SceneStats{gpu_scene.triangle_count, static_cast<uint32_t>(scene.spheres.size()),
                          gpu_scene.geometry_bytes(), static_cast<uint32_t>(gpu_scene.bvh_nodes.size()),

@@ -28,7 +28,7 @@ using uvec4 = glm::uvec4;
 // or the chosen outputs do not need get a 16-byte placeholder and are never read.
 #define VKRAY_BINDING_SPHERES 0      // texels, RGBA32F: one per sphere tested without the tree
 #define VKRAY_BINDING_PLANES 1       // texels, RGBA32F: one per plane
-#define VKRAY_BINDING_PRIMITIVES 2   // texels, RGBA32F: three per primitive slot (GpuPrimitive)
+#define VKRAY_BINDING_PRIMITIVES 2   // texels, RGBA32UI: one per primitive slot (GpuPrimitive)
 #define VKRAY_BINDING_DEPTH 3        // storage buffer
 #define VKRAY_BINDING_NORMAL 4       // storage buffer
 #define VKRAY_BINDING_UV 5           // storage buffer
@@ -39,7 +39,9 @@ using uvec4 = glm::uvec4;
 // of the buffers above, and the range of its finite depths (DepthRangeBits) for the preview's grey.
 #define VKRAY_BINDING_IMAGE 9        // storage image, RGBA32F
 #define VKRAY_BINDING_DEPTH_RANGE 10 // storage buffer
-#define VKRAY_BINDING_COUNT 11
+#define VKRAY_BINDING_VERTICES 11    // texels, RGBA32F: a GpuPoint per vertex (and per sphere in the tree)
+#define VKRAY_BINDING_NORMALS 12     // texels, RGBA32F: a triangle's unit normal per primitive slot
+#define VKRAY_BINDING_COUNT 13
 
 // How the shader finds the nearest triangle or sphere (VKRAY_SPEC_SEARCH_MODE). Planes are
 // infinite: they stay outside the tree, in their own loop.
@@ -133,23 +135,29 @@ struct GpuPlane {
 };
 VKRAY_CHECK_SIZE(GpuPlane, 64);
 
-// A primitive the tree holds (or a triangle tested by brute force): three GpuPoints.
-// - Triangle: its vertices, and its unit geometric normal spread over their three w components. The
-//   normal is computed in double on the host, so needle triangles get an accurate one; the shader
-//   reads it only for the winning triangle.
-// - Sphere: (centre, radius), then (centre, VKRAY_SPHERE_MARK), then (centre, 0). The mark tells it
-//   from a triangle (normal components are within [-1, 1]); read as a triangle, its three equal
-//   vertices have a zero determinant and are never hit.
-// Primitives are stored in the order of the BVH's leaves, so a leaf is a contiguous range, and
-// triangles pre-gathered rather than indexed.
+// A primitive the tree holds (or a triangle tested by brute force), 16 bytes: indices into the
+// vertex buffer (VKRAY_BINDING_VERTICES), where each distinct position of the scene is stored
+// once, so a mesh of n vertices and about 2n triangles takes 16 + 32 / 2 bytes a triangle for
+// both, 59.5 for the bunny with its tree and normals, where three GpuPoints a triangle took 107.6.
+// Every triangle that shares a vertex reads the same texels: bit-identical values, as the
+// watertight test needs.
+// - Triangle: its three vertices (in lexicographic order of position: copies of a triangle with
+//   another winding or first vertex then test the same arithmetic), w = VKRAY_PRIMITIVE_TRIANGLE.
+//   Its unit geometric normal is in the normal buffer at the same slot, computed in double on the
+//   host so that needle triangles get an accurate one; the shader reads it only for the winner.
+// - Sphere: x = the vertex holding (centre, radius), w = VKRAY_PRIMITIVE_SPHERE.
+// Primitives are stored in the order of the BVH's leaves, so a leaf is a contiguous range of slots.
 struct GpuPrimitive {
-  GpuPoint a;
-  GpuPoint b;
-  GpuPoint c;
+  uvec4 indices;
 };
-VKRAY_CHECK_SIZE(GpuPrimitive, 96);
+VKRAY_CHECK_SIZE(GpuPrimitive, 16);
+#define VKRAY_PRIMITIVE_TRIANGLE 0u
+#define VKRAY_PRIMITIVE_SPHERE 1u
 #define VKRAY_TEXELS_PER_POINT 2
-#define VKRAY_SPHERE_MARK 4.0
+// A triangle's normal: (x, y, z, 0) in float32 shaders; in float64 shaders a GpuPoint holding the
+// doubles (x, y, z, 0), two texels.
+#define VKRAY_TEXELS_PER_NORMAL_FLOAT32 1
+#define VKRAY_TEXELS_PER_NORMAL_FLOAT64 2
 
 // The brute-force path tests triangles in batches of this many, padded with all-zero triangles
 // (never hit: their determinant is 0), in one loop iteration with a constant trip count the

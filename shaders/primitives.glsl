@@ -29,7 +29,9 @@ const bool TREE_SPHERES = GENERIC || TREE_HAS_SPHERES;
 #define GeometryTexels samplerBuffer
 #endif
 layout(binding = VKRAY_BINDING_SPHERES) uniform GeometryTexels spheres;        // GpuSphere
-layout(binding = VKRAY_BINDING_PRIMITIVES) uniform GeometryTexels primitives;  // GpuPrimitive
+layout(binding = VKRAY_BINDING_PRIMITIVES) uniform usamplerBuffer primitives;   // GpuPrimitive
+layout(binding = VKRAY_BINDING_VERTICES) uniform GeometryTexels vertices;      // GpuPoint
+layout(binding = VKRAY_BINDING_NORMALS) uniform GeometryTexels normals;        // by primitive slot
 layout(binding = VKRAY_BINDING_BVH_BOUNDS) uniform samplerBuffer bvh_bounds;   // GpuBvhNode: 4 texels
 layout(binding = VKRAY_BINDING_BVH_LINKS) uniform usamplerBuffer bvh_links;    // the same, as uints
 
@@ -71,14 +73,6 @@ real3 point_from_origin(Point point, Origin origin) {
 #endif
 }
 
-real point_w(Point point) {
-#ifdef VKRAY_FLOAT64
-  return point.value.w;
-#else
-  return point.hi.w;
-#endif
-}
-
 // A sphere given as (centre, radius): `normal` receives (hit - centre) / radius.
 real intersect_sphere_point(Point sphere, Origin origin, real3 dir, real t_max, out real3 normal) {
 #ifdef VKRAY_FLOAT64
@@ -104,21 +98,33 @@ struct SlotHit {
   uint slot;
 };
 
-// The vertices of a triangle relative to the ray origin and its normal (w of its three points).
-void fetch_triangle(int slot, Origin origin, out real3 v0, out real3 v1, out real3 v2, out real3 normal) {
-  int point = 3 * slot;
-  Point a = fetch_point(primitives, point);
-  Point b = fetch_point(primitives, point + 1);
-  Point c = fetch_point(primitives, point + 2);
-  v0 = point_from_origin(a, origin);
-  v1 = point_from_origin(b, origin);
-  v2 = point_from_origin(c, origin);
-  normal = real3(point_w(a), point_w(b), point_w(c));
+// The vertices of a triangle relative to the ray origin.
+void fetch_triangle(int slot, Origin origin, out real3 v0, out real3 v1, out real3 v2) {
+  uvec4 record = texelFetch(primitives, slot);
+  v0 = point_from_origin(fetch_point(vertices, int(record.x)), origin);
+  v1 = point_from_origin(fetch_point(vertices, int(record.y)), origin);
+  v2 = point_from_origin(fetch_point(vertices, int(record.z)), origin);
+}
+
+// A triangle's unit normal (see VKRAY_TEXELS_PER_NORMAL_*).
+real3 fetch_normal(int slot) {
+#ifdef VKRAY_FLOAT64
+  uvec4 first = texelFetch(normals, VKRAY_TEXELS_PER_NORMAL_FLOAT64 * slot);
+  uvec4 second = texelFetch(normals, VKRAY_TEXELS_PER_NORMAL_FLOAT64 * slot + 1);
+  return dvec3(packDouble2x32(first.xy), packDouble2x32(first.zw), packDouble2x32(second.xy));
+#else
+  return texelFetch(normals, VKRAY_TEXELS_PER_NORMAL_FLOAT32 * slot).xyz;
+#endif
+}
+
+// The point holding a tree sphere's centre and radius.
+Point fetch_sphere(int slot) {
+  return fetch_point(vertices, int(texelFetch(primitives, slot).x));
 }
 
 void test_triangle(RayFrame frame, Origin origin, real3 dir, uint slot, inout SlotHit hit) {
-  real3 v0, v1, v2, normal;
-  fetch_triangle(int(slot), origin, v0, v1, v2, normal);
+  real3 v0, v1, v2;
+  fetch_triangle(int(slot), origin, v0, v1, v2);
   real t = intersect_triangle(frame, dir, v0, v1, v2, hit.t);
   if (t < hit.t) {
     hit.t = t;
@@ -126,11 +132,11 @@ void test_triangle(RayFrame frame, Origin origin, real3 dir, uint slot, inout Sl
   }
 }
 
-// Whether the slot's second point carries VKRAY_SPHERE_MARK (trees of both kinds only).
+// Whether the slot holds a sphere (read from its record in trees of both kinds only).
 bool is_sphere(int slot) {
   if (!TREE_TRIANGLES) return true;
   if (!TREE_SPHERES) return false;
-  return point_w(fetch_point(primitives, 3 * slot + 1)) == VKRAY_SPHERE_MARK;
+  return texelFetch(primitives, slot).w == VKRAY_PRIMITIVE_SPHERE;
 }
 
 // One primitive slot. Specialized on what the tree holds: a tree of triangles alone has no sphere
@@ -140,7 +146,7 @@ void test_primitive(RayFrame frame, Origin origin, real3 dir, uint slot, inout S
   if (TREE_TRIANGLES && !sphere) test_triangle(frame, origin, dir, slot, hit);
   if (TREE_SPHERES && sphere) {
     real3 normal;
-    real t = intersect_sphere_point(fetch_point(primitives, 3 * int(slot)), origin, dir, hit.t, normal);
+    real t = intersect_sphere_point(fetch_sphere(int(slot)), origin, dir, hit.t, normal);
     if (t < hit.t) {
       hit.t = t;
       hit.slot = slot;
@@ -153,11 +159,10 @@ void test_primitive(RayFrame frame, Origin origin, real3 dir, uint slot, inout S
 real3 primitive_normal(uint slot, Origin origin, real3 dir) {
   real3 normal;
   if (TREE_SPHERES && is_sphere(int(slot))) {
-    intersect_sphere_point(fetch_point(primitives, 3 * int(slot)), origin, dir, uintBitsToFloat(0x7f800000u), normal);
+    intersect_sphere_point(fetch_sphere(int(slot)), origin, dir, uintBitsToFloat(0x7f800000u), normal);
     return normal;
   }
-  real3 v0, v1, v2;
-  fetch_triangle(int(slot), origin, v0, v1, v2, normal);
+  normal = fetch_normal(int(slot));
   return dot(normal, dir) > 0.0 ? -normal : normal;
 }
 

@@ -2,6 +2,8 @@
 // MODELS.md): each loads with the triangle count of fan triangulation and one position per `v `
 // line, and the truncated Crytek Sponza is reported with its line. When the folder is absent (it is
 // never part of the repository), the tests skip.
+#include "engine/gpu_scene.hpp"
+#include "engine/mesh_generators.hpp"
 #include "engine/obj_loader.hpp"
 
 #include <glm/common.hpp>
@@ -157,6 +159,29 @@ std::string model_name(const testing::TestParamInfo<Model>& info) {
 }
 
 INSTANTIATE_TEST_SUITE_P(SharedModels, RealModel, testing::ValuesIn(models), model_name);
+
+// A mesh above 10k triangles takes at most 64 bytes a triangle on the device, everything counted
+// (records, distinct vertices with their lo parts, normals, tree nodes), as the default float32
+// shader reads it: every shared model that size, and a generated closed sphere.
+double device_bytes_a_triangle(vkray::Mesh mesh) {
+  vkray::Scene scene;
+  scene.meshes.push_back(std::move(mesh));
+  const vkray::GpuScene gpu = vkray::make_gpu_scene(scene);
+  EXPECT_TRUE(gpu.has_tree());
+  return static_cast<double>(gpu.geometry_bytes()) / gpu.triangle_count;
+}
+
+TEST(DeviceLayout, MeshesAboveTenThousandTrianglesTakeAtMost64BytesATriangle) {
+  EXPECT_LE(device_bytes_a_triangle(vkray::make_sphere_mesh(20000)), 64.0) << "generated sphere";
+  SKIP_WITHOUT_MODELS();
+  size_t checked = 0;
+  for (const Model& model : models) {
+    if (model.triangles <= 10000) continue;
+    EXPECT_LE(device_bytes_a_triangle(vkray::load_obj_file(models_dir / model.file)), 64.0) << model.file;
+    ++checked;
+  }
+  EXPECT_GE(checked, 10u);
+}
 
 TEST(TruncatedModel, ReportsTheCutOffLine) {
   SKIP_WITHOUT_MODELS();
