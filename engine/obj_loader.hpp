@@ -1,7 +1,8 @@
-// Wavefront OBJ meshes through tinyobjloader. Polygons are triangulated, negative (relative)
-// indices work, and every group and object merges into one mesh. Before tinyobjloader parses a
-// file, a strict pass checks what it would accept silently (missing coordinates, NaN, bad or
-// out-of-range indices, a face line cut off at the end of a truncated file) and reports the line.
+// Wavefront OBJ meshes. Polygons are triangulated (by tinyobjloader), negative (relative) indices
+// work, and every group and object merges into one mesh. One strict pass checks every statement
+// (missing coordinates, NaN, bad or out-of-range indices, a face line cut off at the end of a
+// truncated file) and reports the line; where every face is a triangle it builds the mesh itself,
+// else tinyobjloader parses the file again to triangulate its polygons.
 #pragma once
 
 #include "engine/scene.hpp"

@@ -92,6 +92,33 @@ TEST(ObjText, HexagonBecomesFourTriangles) {
   EXPECT_NEAR(total_area(mesh), 4.0, 1e-12);
 }
 
+// A file of triangles alone is built by the checking pass; one polygon sends the whole file through
+// tinyobjloader. Both must give the same positions and triangles (the polygon's aside).
+void expect_both_paths_agree(const std::string& triangles_text) {
+  const Mesh direct = vkray::load_obj_text(triangles_text, "t.obj");
+  const Mesh through_tinyobj = vkray::load_obj_text(triangles_text + "v 9 9 9\nv 10 9 9\nv 10 10 9\nv 9 10 9\nf -4 -3 -2 -1\n", "t.obj");
+  ASSERT_EQ(through_tinyobj.positions.size(), direct.positions.size() + 4);
+  ASSERT_EQ(through_tinyobj.triangles.size(), direct.triangles.size() + 2);
+  EXPECT_TRUE(std::equal(direct.positions.begin(), direct.positions.end(), through_tinyobj.positions.begin()));
+  EXPECT_TRUE(std::equal(direct.triangles.begin(), direct.triangles.end(), through_tinyobj.triangles.begin()));
+}
+
+TEST(ObjText, TrianglesReadAlikeWithAndWithoutTinyobjloader) {
+  expect_both_paths_agree(tri_vertices + "f 1 2 3\nv 1 1 0\nf -3 -2 -1\nvn 0 0 1\nf 3//1 1//1 2//1\nf 2 4 3 # c\n"
+                          "v +1.5e-3 -0.25 1e2 7\nvt 0 0\nf 5/1 4/1 1/1\n");
+}
+
+TEST(ObjText, SharedModelsReadAlikeWithAndWithoutTinyobjloader) {
+  const std::filesystem::path models = VKRAY_MODELS_DIR;
+  if (!std::filesystem::is_directory(models)) GTEST_SKIP() << "shared models folder " << models << " is absent";
+  for (const char* name : {"stanford-bunny.obj", "armadillo-50k.obj"}) {
+    SCOPED_TRACE(name);
+    std::ifstream file(models / name, std::ios::binary);
+    const std::string text((std::istreambuf_iterator<char>(file)), std::istreambuf_iterator<char>());
+    expect_both_paths_agree(text);
+  }
+}
+
 TEST(ObjText, NegativeIndicesCountBackFromTheNewestVertex) {
   const Mesh mesh = vkray::load_obj_text(tri_vertices + "f -3 -2 -1\nv 1 1 0\nf -3 -2 -1\nf -1 1 -3\n", "t.obj");
   ASSERT_EQ(mesh.positions.size(), 4u);
