@@ -378,9 +378,15 @@ real3 safe_inverse(real3 dir) {
 // exact camera. See safe_inverse for rays parallel to a slab.
 bvec2 ray_hits_boxes(vec4 bounds_x, vec4 bounds_y, vec4 bounds_z, real3 origin, vec3 margin, real3 inv_dir,
                      real t_max, out real2 enter) {
-  real4 tx = (real4(bounds_x + vec4(-margin.x, -margin.x, margin.x, margin.x)) - origin.x) * inv_dir.x;
-  real4 ty = (real4(bounds_y + vec4(-margin.y, -margin.y, margin.y, margin.y)) - origin.y) * inv_dir.y;
-  real4 tz = (real4(bounds_z + vec4(-margin.z, -margin.z, margin.z, margin.z)) - origin.z) * inv_dir.z;
+  // Without lo parts the margin is 0: leaving the additions out saves 12 of a node's ~60 operations.
+  if (use_lo_parts) {
+    bounds_x += vec4(-margin.x, -margin.x, margin.x, margin.x);
+    bounds_y += vec4(-margin.y, -margin.y, margin.y, margin.y);
+    bounds_z += vec4(-margin.z, -margin.z, margin.z, margin.z);
+  }
+  real4 tx = (real4(bounds_x) - origin.x) * inv_dir.x;
+  real4 ty = (real4(bounds_y) - origin.y) * inv_dir.y;
+  real4 tz = (real4(bounds_z) - origin.z) * inv_dir.z;
   real2 near = max(max(min(tx.xy, tx.zw), min(ty.xy, ty.zw)), max(min(tz.xy, tz.zw), real2(0.0)));
   const real gamma3 = 1.7881396e-7;  // 3 * 2^-24 / (1 - 3 * 2^-24), rounded up
   real2 far = min(min(max(tx.xy, tx.zw), max(ty.xy, ty.zw)), max(tz.xy, tz.zw)) * (1.0 + 2.0 * gamma3);
