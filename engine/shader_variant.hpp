@@ -14,6 +14,13 @@ namespace vkray {
 // needs a device with shaderFloat64.
 enum class Precision : uint32_t { float32, float64 };
 
+// How float32 shaders evaluate the watertight triangle test's edge functions exactly in sign
+// (shaders/intersect.glsl): in float with an error-free fallback where they are small, or as
+// differences of products of floats taken in double (exact products). automatic: double on CPU
+// devices with shaderFloat64 (lavapipe runs the fallback masked on every test; doubles cost it less),
+// float elsewhere (most GPUs run doubles at a fraction of float speed, and skip the fallback).
+enum class EdgeArithmetic : uint32_t { automatic, float_error_free, double_products };
+
 struct ShaderVariant {
   Precision precision = Precision::float32;
   // How float32 shaders hold positions (VKRAY_COORDINATES_*): camera-relative by default; the
@@ -32,6 +39,7 @@ struct ShaderVariant {
   // The tree walk's stack in registers where the tree is shallow enough (VKRAY_SPEC_STACK_REGISTERS),
   // else in a private array, as the generic variant always has it.
   bool stack_in_registers = true;
+  EdgeArithmetic edges = EdgeArithmetic::automatic;
 };
 
 // The default variant with another workgroup shape and order.

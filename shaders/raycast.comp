@@ -2,8 +2,9 @@
 // One primary ray per pixel through the pixel centre; the nearest hit over every primitive wins.
 // Writes the requested outputs (depth, normal, uv) for one tile of rows of the image into buffers,
 // or one output into a storage image (IMAGE_TARGET, the viewer's frame). Compiled
-// twice: float32, and float64 with VKRAY_FLOAT64 defined (`--precision double`), which writes depth
-// and normals as doubles.
+// three times: float32; float32 with VKRAY_DOUBLE_EDGES defined (triangle edge functions from
+// exact double products, for CPU devices: see intersect.glsl); and float64 with VKRAY_FLOAT64
+// defined (`--precision double`), which writes depth and normals as doubles.
 #extension GL_GOOGLE_include_directive : require
 #extension GL_KHR_shader_subgroup_arithmetic : require
 

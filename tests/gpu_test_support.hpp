@@ -22,6 +22,14 @@ inline Frame render(const Scene& scene, AovSet aovs = {Aov::depth, Aov::normal})
   return renderer.render(scene.camera, scene.width, scene.height, aovs);
 }
 
+// Depth and normals rendered with `shader`.
+inline Frame render(const Scene& scene, const ShaderVariant& shader) {
+  RendererOptions options;
+  options.shader = shader;
+  Renderer renderer(device(), scene, options);
+  return renderer.render(scene.camera, scene.width, scene.height, {Aov::depth, Aov::normal});
+}
+
 enum class Percentiles { checked, ill_conditioned };
 
 // Every pixel within the envelope derived in reference_envelope.cpp. On ordinary views also the

@@ -102,6 +102,14 @@ void expect_random_scenes_within_envelope(Magnitudes magnitudes) {
     EXPECT_EQ(bad_normal, 0u);
     const test::EnvelopeReport report = test::check_against_reference(scene, frame);
     EXPECT_EQ(report.failures, 0u) << report.describe();
+    // On a CPU device the default takes triangle edge functions from double products; the float
+    // arithmetic with its error-free fallback, which GPUs run, must meet the same envelope.
+    if (scene.triangle_count() > 0) {
+      ShaderVariant float_edges;
+      float_edges.edges = EdgeArithmetic::float_error_free;
+      const test::EnvelopeReport float_report = test::check_against_reference(scene, test::render(scene, float_edges));
+      EXPECT_EQ(float_report.failures, 0u) << "float-edges: " << float_report.describe();
+    }
   }
   // Not a vacuous pass: a good share of all pixels see something.
   EXPECT_GT(hits, size_t{scenes} * width * height / 5);

@@ -1,5 +1,6 @@
 #include "engine/vulkan/raycast_pipeline.hpp"
 
+#include "raycast.comp.VKRAY_DOUBLE_EDGES.spv.h"
 #include "raycast.comp.VKRAY_FLOAT64.spv.h"
 #include "raycast.comp.spv.h"
 
@@ -23,9 +24,24 @@ RaycastPipeline::RaycastPipeline(VulkanContext& context, PipelineSpecialization 
   if (float64 && !context.info.shader_float64) {
     throw GpuError(context.info.name + " has no float64 arithmetic in shaders (shaderFloat64); use --precision float");
   }
-  shader_ = float64 ? vk::raii::ShaderModule(context.device, vk::ShaderModuleCreateInfo({}, sizeof(raycast_comp_VKRAY_FLOAT64),
-                                                                                        raycast_comp_VKRAY_FLOAT64))
-                    : vk::raii::ShaderModule(context.device, vk::ShaderModuleCreateInfo({}, sizeof(raycast_comp), raycast_comp));
+  EdgeArithmetic edges = specialization.variant.edges;
+  if (edges == EdgeArithmetic::automatic) {
+    edges = context.info.type == "cpu" && context.info.shader_float64 ? EdgeArithmetic::double_products
+                                                                      : EdgeArithmetic::float_error_free;
+  }
+  if (!float64 && edges == EdgeArithmetic::double_products && !context.info.shader_float64) {
+    throw GpuError(context.info.name + " has no float64 arithmetic in shaders (shaderFloat64) for double edge functions");
+  }
+  auto module = [&](const auto& spirv) {
+    return vk::raii::ShaderModule(context.device, vk::ShaderModuleCreateInfo({}, sizeof(spirv), spirv));
+  };
+  if (float64) {
+    shader_ = module(raycast_comp_VKRAY_FLOAT64);
+  } else if (edges == EdgeArithmetic::double_products) {
+    shader_ = module(raycast_comp_VKRAY_DOUBLE_EDGES);
+  } else {
+    shader_ = module(raycast_comp);
+  }
 
   std::vector<vk::DescriptorPoolSize> pool_sizes;
   for (const auto& [type, count] : descriptors) pool_sizes.emplace_back(type, count);
