@@ -64,10 +64,10 @@ class Stopwatch {
   std::chrono::steady_clock::time_point last_ = std::chrono::steady_clock::now();
 };
 
-// Usage errors that parsing cannot see. The output is always OpenEXR and the preview always PNG:
-// the image writer picks the format from the extension, so another one would silently write a
-// different format (8-bit, lossy, or none OpenImageIO knows), or the preview would overwrite the
-// EXR. --check on uv alone would count every hit as a mismatch.
+// Usage errors that parsing cannot see. The output is always OpenEXR and the preview always PNG,
+// so a name with another extension (x.jpg holding a PNG) would mislead whoever opens it, and a
+// preview named like the EXR would replace it. --check on uv alone would count every hit as a
+// mismatch.
 void check_render_options(const RenderOptions& options, const AovSet& aovs) {
   if (lower_extension(options.output) != ".exr") {
     throw InputError("-o/--output: '" + options.output + "' must end in .exr (OpenEXR)");

@@ -57,7 +57,7 @@ void refuse_read_only(const std::filesystem::path& target) {
 class PartialFile {
  public:
   explicit PartialFile(const std::filesystem::path& target) : target_(target) {
-    // The extension stays last: OpenImageIO picks the format by it.
+    // The extension stays last, so the temporary file is still recognised by its kind.
     temp_ = target.parent_path() / ("." + target.stem().string() + ".vkray-" + std::to_string(getpid()) + "-" +
                                     std::to_string(partial_counter++) + target.extension().string());
     const std::string text = temp_.string();
