@@ -65,19 +65,15 @@ class Stopwatch {
 };
 
 // Usage errors that parsing cannot see. The output is always OpenEXR and the preview always PNG,
-// so a name with another extension (x.jpg holding a PNG) would mislead whoever opens it, and a
-// preview named like the EXR would replace it. --check on uv alone would count every hit as a
-// mismatch.
+// so a name with another extension (x.jpg holding a PNG) would mislead whoever opens it; the two
+// extensions also keep the preview from ever replacing the EXR. --check on uv alone would count
+// every hit as a mismatch.
 void check_render_options(const RenderOptions& options, const AovSet& aovs) {
   if (lower_extension(options.output) != ".exr") {
     throw InputError("-o/--output: '" + options.output + "' must end in .exr (OpenEXR)");
   }
   if (options.preview && lower_extension(*options.preview) != ".png") {
     throw InputError("--preview: '" + *options.preview + "' must end in .png (the preview is an 8-bit PNG)");
-  }
-  if (options.preview &&
-      std::filesystem::path(*options.preview).lexically_normal() == std::filesystem::path(options.output).lexically_normal()) {
-    throw InputError("--preview: '" + *options.preview + "' is the OpenEXR output; give another file");
   }
   if (!is_exr_compression(options.compression)) {
     std::string known;
