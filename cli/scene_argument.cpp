@@ -1,6 +1,5 @@
 #include "cli/scene_argument.hpp"
 
-#include "engine/framing.hpp"
 #include "engine/nearest_name.hpp"
 #include "engine/scene_loader.hpp"
 
@@ -100,26 +99,8 @@ std::string camera_json(const std::string& text) {
 
 }  // namespace
 
-std::string lower_extension(const std::string& path) {
-  std::string extension = std::filesystem::path(path).extension().string();
-  std::transform(extension.begin(), extension.end(), extension.begin(),
-                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  return extension;
-}
-
 Scene load_scene_argument(const std::string& path, std::optional<uint32_t> width, std::optional<uint32_t> height) {
-  const std::string extension = lower_extension(path);
-  if (!path.empty() && std::filesystem::is_directory(path)) {
-    throw InputError(path + ": is a folder, not a scene file (.json) or a model (.obj)");
-  }
-  if (!path.empty() && extension != ".json" && extension != ".obj") {
-    throw InputError(path + ": unknown kind of file '" + extension + "' (a scene is .json, a model .obj)");
-  }
-  Scene scene = path.empty() ? default_scene() : extension == ".obj" ? load_model_file(path) : load_scene_file(path);
-  if (width) scene.width = *width;
-  if (height) scene.height = *height;
-  check_image_size(scene.width, scene.height);
-  if (extension == ".obj") scene.camera = frame_scene(scene, scene.width, scene.height);
+  Scene scene = load_scene_or_model(path, width, height);
   if (const size_t dropped = scene.zero_area_triangle_count(); dropped > 0) {
     std::fprintf(stderr, "vkray: note: %s: %zu zero-area triangle%s dropped (no ray can hit them)\n",
                  path.empty() ? "built-in scene" : path.c_str(), dropped, dropped == 1 ? "" : "s");

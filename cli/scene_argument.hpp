@@ -9,13 +9,8 @@
 
 namespace vkray::cli {
 
-// A scene file (.json), or a model (.obj) alone in a scene with a camera that frames it
-// (engine/framing.hpp); the built-in scene for an empty path. `width`/`height` override the image
-// size, and the framing is done at the final size. Throws InputError naming the file.
+// engine's load_scene_or_model, with a note on stderr of the zero-area triangles it drops.
 Scene load_scene_argument(const std::string& path, std::optional<uint32_t> width, std::optional<uint32_t> height);
-
-// A path's extension in lower case, with its dot (".exr"); empty when it has none.
-std::string lower_extension(const std::string& path);
 
 // A --size value "WIDTHxHEIGHT" (bench, view). Throws InputError for anything else or a size
 // check_image_size refuses.

@@ -1,5 +1,6 @@
 #include "cli/commands.hpp"
 #include "cli/scene_argument.hpp"
+#include "engine/scene_loader.hpp"
 #include "engine/image_io.hpp"
 #include "engine/viewer/viewer.hpp"
 

@@ -72,6 +72,7 @@ struct EncodedPrimitive {
   gpu::GpuPrimitive primitive;
   glm::dvec3 normal;  // triangles' unit normal; 0 for spheres
   FloatBox box;
+  ObjectPrimitive source;
 };
 
 // The vertex buffer: each distinct position (relative to the anchor, exact in double) once.
@@ -152,6 +153,8 @@ GpuScene make_gpu_scene(const Scene& scene, const GpuSceneOptions& options, cons
   gpu.precision = shader.precision;
   const bool world_origin = shader.precision == Precision::float64 || shader.coordinates == VKRAY_COORDINATES_ABSOLUTE;
   gpu.anchor = world_origin ? glm::dvec3(0.0) : scene_anchor(scene);
+  gpu.hit_sources.first_sphere_object = static_cast<uint32_t>(scene.meshes.size());
+  gpu.hit_sources.first_plane_object = static_cast<uint32_t>(scene.meshes.size() + scene.spheres.size());
   auto encode = [&](const glm::dvec3& position, double w) { return encode_point(glm::dvec4(position, w), gpu.precision); };
   for (const auto& sphere : scene.spheres) gpu.radius = std::max(gpu.radius, glm::length(sphere.center - gpu.anchor) + sphere.radius);
   for (const auto& mesh : scene.meshes) {
@@ -166,8 +169,10 @@ GpuScene make_gpu_scene(const Scene& scene, const GpuSceneOptions& options, cons
   // triangle that shares it, so they see bit-identical values: the watertight test needs that.
   VertexTable vertex_table(gpu.vertices, gpu.precision);
   std::vector<EncodedPrimitive> triangles;
-  for (const auto& mesh : scene.meshes) {
-    for (const auto& corners : mesh.triangles) {
+  for (uint32_t mesh_index = 0; mesh_index < scene.meshes.size(); ++mesh_index) {
+    const Mesh& mesh = scene.meshes[mesh_index];
+    for (uint32_t triangle_index = 0; triangle_index < mesh.triangles.size(); ++triangle_index) {
+      const auto& corners = mesh.triangles[triangle_index];
       // Vertices in a canonical order (lexicographic): the shader's normal faces the ray whatever
       // the winding, and the watertight test accepts either orientation, so the order is free, and
       // fixing it makes copies of a triangle with another winding or starting vertex give
@@ -185,7 +190,8 @@ GpuScene make_gpu_scene(const Scene& scene, const GpuSceneOptions& options, cons
       const uint32_t i1 = vertex_table.index(v1);
       const uint32_t i2 = vertex_table.index(v2);
       const gpu::GpuPrimitive record{glm::uvec4(i0, i1, i2, VKRAY_PRIMITIVE_TRIANGLE)};
-      triangles.push_back({record, normal, outward(glm::min(v0, glm::min(v1, v2)), glm::max(v0, glm::max(v1, v2)))});
+      triangles.push_back({record, normal, outward(glm::min(v0, glm::min(v1, v2)), glm::max(v0, glm::max(v1, v2))),
+                           {mesh_index, triangle_index}});
     }
   }
   gpu.triangle_count = static_cast<uint32_t>(triangles.size());
@@ -198,10 +204,12 @@ GpuScene make_gpu_scene(const Scene& scene, const GpuSceneOptions& options, cons
     for (const auto& triangle : triangles) {
       gpu.primitives.push_back(triangle.primitive);
       append_normal(gpu.normal_texels, triangle.normal, gpu.precision);
+      gpu.hit_sources.slots.push_back(triangle.source);
     }
     while (gpu.primitives.size() % VKRAY_TRIANGLE_BATCH != 0) {
       gpu.primitives.push_back(gpu::GpuPrimitive{});
       append_normal(gpu.normal_texels, glm::dvec3(0.0), gpu.precision);
+      gpu.hit_sources.slots.push_back({});
     }
     return gpu;
   }
@@ -213,10 +221,12 @@ GpuScene make_gpu_scene(const Scene& scene, const GpuSceneOptions& options, cons
   // the built-in scene at 960x540 took 46-54 ms a frame with its sphere in the tree, 19-21 ms apart
   // (fastest of 20 frames, two runs of `vkray bench --variants default`).
   const bool spheres_apart = !unordered.empty() && scene.spheres.size() <= brute_force_max_primitives;
-  for (const auto& sphere : spheres_apart ? std::vector<Sphere>{} : scene.spheres) {
+  for (uint32_t k = 0; k < (spheres_apart ? 0 : scene.spheres.size()); ++k) {
+    const Sphere& sphere = scene.spheres[k];
     const glm::dvec3 centre = sphere.center - gpu.anchor;
     const gpu::GpuPrimitive record{glm::uvec4(vertex_table.add(centre, sphere.radius), 0, 0, VKRAY_PRIMITIVE_SPHERE)};
-    unordered.push_back({record, glm::dvec3(0.0), outward(centre - sphere.radius, centre + sphere.radius)});
+    unordered.push_back({record, glm::dvec3(0.0), outward(centre - sphere.radius, centre + sphere.radius),
+                         {gpu.hit_sources.first_sphere_object + k, k}});
   }
   if (spheres_apart) {
     for (const auto& sphere : scene.spheres) gpu.spheres.push_back({encode(sphere.center - gpu.anchor, sphere.radius)});
@@ -231,6 +241,7 @@ GpuScene make_gpu_scene(const Scene& scene, const GpuSceneOptions& options, cons
   for (uint32_t i : bvh.primitive_order) {
     gpu.primitives.push_back(unordered[i].primitive);
     append_normal(gpu.normal_texels, unordered[i].normal, gpu.precision);
+    gpu.hit_sources.slots.push_back(unordered[i].source);
   }
   // Node boxes hold their primitives' boxes, then are widened (see safe_inverse in
   // shaders/intersect.glsl).
@@ -249,6 +260,20 @@ GpuScene make_gpu_scene(const Scene& scene, const GpuSceneOptions& options, cons
   gpu.bvh_depth = bvh.depth;
   gpu.bvh_build_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   return gpu;
+}
+
+ObjectPrimitive HitSources::operator()(uint32_t hit) const {
+  if (hit == VKRAY_HIT_NONE) return {};
+  const uint32_t index = hit & VKRAY_HIT_INDEX_MASK;
+  if (hit & VKRAY_HIT_PLANE) return {first_plane_object + index, index};
+  if (hit & VKRAY_HIT_SPHERE_APART) return {first_sphere_object + index, index};
+  return slots[index];
+}
+
+gpu::GpuRay encode_ray(const glm::dvec3& origin, const glm::dvec3& direction, const glm::dvec3& anchor,
+                       Precision precision) {
+  return {encode_point(glm::dvec4(origin - anchor, 0.0), precision),
+          encode_point(glm::dvec4(unit_vector(direction), 0.0), precision)};
 }
 
 uint32_t GpuScene::search_mode() const {

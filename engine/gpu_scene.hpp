@@ -25,6 +25,14 @@ struct GpuSceneOptions {
   BvhBuildOptions bvh;
 };
 
+// The object and primitive behind each value of VKRAY_BINDING_HITS (host memory only).
+struct HitSources {
+  std::vector<ObjectPrimitive> slots;  // by primitive slot; none for padding
+  uint32_t first_sphere_object = 0;    // ObjectPrimitive::object of the first sphere
+  uint32_t first_plane_object = 0;     // and of the first plane
+  ObjectPrimitive operator()(uint32_t hit) const;
+};
+
 struct GpuScene {
   // Every position on the GPU is stored relative to this point (see GpuPoint in gpu_layout.h): the
   // centre of the scene's box, so that the split into hi and lo float parts covers the scene with
@@ -47,6 +55,7 @@ struct GpuScene {
   // spheres and padding).
   std::vector<glm::vec4> normal_texels;
   std::vector<gpu::GpuBvhNode> bvh_nodes;  // empty without the tree
+  HitSources hit_sources;
   uint32_t bvh_depth = 0;
   PrimitiveSearch search = PrimitiveSearch::brute_force;  // never automatic here
   bool tree_has_triangles = false;
@@ -91,6 +100,10 @@ GpuScene make_gpu_scene(const Scene& scene, const GpuSceneOptions& options = {},
 void set_plane_heights(std::vector<gpu::GpuPlane>& planes, const std::vector<Plane>& scene_planes,
                        const glm::dvec3& origin, Precision precision);
 
+// A given ray as the shader reads it (GpuRay): the origin relative to `anchor`, the direction
+// normalized in double.
+gpu::GpuRay encode_ray(const glm::dvec3& origin, const glm::dvec3& direction, const glm::dvec3& anchor,
+                       Precision precision);
 // RayGenParams.counts: what the generic shader variant reads instead of specialization constants.
 glm::uvec4 run_time_counts(const GpuScene& scene);
 

@@ -1,5 +1,6 @@
 #include "engine/reference.hpp"
 
+#include "engine/parallel.hpp"
 #include "engine/unit_vector.hpp"
 #include "shaders/gpu_layout.h"
 
@@ -71,6 +72,7 @@ ReferenceScene::ReferenceScene(const Scene& scene) : spheres_(scene.spheres), pl
   uint32_t index = 0;
   std::vector<Box> boxes;
   for (const auto& mesh : scene.meshes) {
+    first_triangle_of_mesh_.push_back(index);
     for (const auto& corners : mesh.triangles) {
       const glm::dvec3& v0 = mesh.positions[corners[0]];
       const glm::dvec3& v1 = mesh.positions[corners[1]];
@@ -230,22 +232,57 @@ ReferenceHit ReferenceScene::trace_brute_force(const glm::dvec3& origin, const g
   return trace_with(origin, dir, true);
 }
 
+ObjectPrimitive ReferenceScene::source(const ReferenceHit& hit) const {
+  const auto meshes = static_cast<uint32_t>(first_triangle_of_mesh_.size());
+  switch (hit.kind) {
+    case PrimitiveKind::triangle: {
+      // The last mesh whose first triangle is at or before the hit's (empty meshes share a first).
+      const auto next = std::upper_bound(first_triangle_of_mesh_.begin(), first_triangle_of_mesh_.end(), hit.index);
+      const auto mesh = static_cast<uint32_t>(next - first_triangle_of_mesh_.begin()) - 1;
+      return {mesh, hit.index - first_triangle_of_mesh_[mesh]};
+    }
+    case PrimitiveKind::sphere:
+      return {meshes + hit.index, hit.index};
+    case PrimitiveKind::plane:
+      return {meshes + static_cast<uint32_t>(spheres_.size()) + hit.index, hit.index};
+    default:
+      return {};
+  }
+}
+
 std::vector<ReferenceHit> render_reference_hits(const ReferenceScene& scene, const CameraBasis& camera,
                                                 uint32_t width, uint32_t height,
                                                 const std::function<void(double)>& progress) {
   std::vector<ReferenceHit> hits(size_t{width} * height);
   const unsigned workers = std::max(1u, std::min(std::thread::hardware_concurrency(), height));
-  std::vector<std::jthread> threads;
-  for (unsigned worker = 0; worker < workers; ++worker) {
-    threads.emplace_back([&, worker] {
-      for (uint32_t j = worker; j < height; j += workers) {
-        for (uint32_t i = 0; i < width; ++i) {
-          hits[size_t{j} * width + i] = scene.trace(camera.origin, camera.direction(pixel_uv(i, j, width, height)));
+  {  // the workers join at the end of this block, before `hits` is returned
+    std::vector<std::jthread> threads;
+    for (unsigned worker = 0; worker < workers; ++worker) {
+      threads.emplace_back([&, worker] {
+        for (uint32_t j = worker; j < height; j += workers) {
+          for (uint32_t i = 0; i < width; ++i) {
+            hits[size_t{j} * width + i] = scene.trace(camera.origin, camera.direction(pixel_uv(i, j, width, height)));
+          }
+          if (progress && worker == 0) progress(static_cast<double>(j + 1) / height);
         }
-        if (progress && worker == 0) progress(static_cast<double>(j + 1) / height);
-      }
-    });
+      });
+    }
   }
+  return hits;
+}
+
+std::vector<ReferenceHit> trace_reference_rays(const ReferenceScene& scene, std::span<const GivenRay> rays) {
+  check_given_rays(rays);
+  std::vector<ReferenceHit> hits(rays.size());
+  parallel_for_chunks(
+      rays.size(),
+      [&](size_t begin, size_t end) {
+        for (size_t k = begin; k < end; ++k) {
+          const GivenRay& ray = rays[k];
+          hits[k] = scene.trace({ray[0], ray[1], ray[2]}, unit_vector({ray[3], ray[4], ray[5]}));
+        }
+      },
+      1);
   return hits;
 }
 

@@ -46,6 +46,8 @@ class ReferenceScene {
   ReferenceHit trace(const glm::dvec3& origin, const glm::dvec3& dir) const;
   // The same with every triangle tested: the check on the tree.
   ReferenceHit trace_brute_force(const glm::dvec3& origin, const glm::dvec3& dir) const;
+  // The hit's object and primitive as the outputs number them (see ObjectPrimitive).
+  ObjectPrimitive source(const ReferenceHit& hit) const;
 
  private:
   struct Triangle {
@@ -62,6 +64,7 @@ class ReferenceScene {
   void nearest_in_tree(const glm::dvec3& origin, const glm::dvec3& dir, ReferenceHit& hit) const;
   ReferenceHit trace_with(const glm::dvec3& origin, const glm::dvec3& dir, bool brute_force) const;
 
+  std::vector<uint32_t> first_triangle_of_mesh_;  // in the numbering of ReferenceHit::index
   std::vector<Sphere> spheres_;
   std::vector<Plane> planes_;
   std::vector<Triangle> triangles_;  // zero-area triangles left out: no ray can hit them
@@ -76,6 +79,10 @@ class ReferenceScene {
 std::vector<ReferenceHit> render_reference_hits(const ReferenceScene& scene, const CameraBasis& camera,
                                                 uint32_t width, uint32_t height,
                                                 const std::function<void(double)>& progress = {});
+
+// The hit of each given ray (checked first: check_given_rays), its direction normalized, on all
+// cores.
+std::vector<ReferenceHit> trace_reference_rays(const ReferenceScene& scene, std::span<const GivenRay> rays);
 
 // Pixel `pixel` of `frame`'s outputs (depth and normal; uv is the camera's) from a reference hit,
 // rounded to float only here.

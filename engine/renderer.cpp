@@ -2,7 +2,9 @@
 
 #include "engine/camera.hpp"
 #include "engine/gpu_scene.hpp"
+#include "engine/parallel.hpp"
 #include "engine/reference.hpp"
+#include "engine/unit_vector.hpp"
 #include "engine/vulkan/buffer.hpp"
 #include "engine/vulkan/image.hpp"
 #include "engine/vulkan/raycast_pipeline.hpp"
@@ -65,8 +67,12 @@ struct TileOutputs {
   uint32_t rows = 0;
   uint32_t aov_bits = 0;
   uint64_t image_id = 0;  // ImageTarget::id
+  RaycastMode mode = RaycastMode::image_buffers;
   std::optional<OutputBuffer> depth, normal, uv;
   std::optional<OutputBuffer> overflow;  // only where a loop budget applies
+  // RaycastMode::given_rays: the tile's rays (GpuRay, written by the host) and what each hit.
+  std::optional<TexelBuffer> rays;
+  std::optional<OutputBuffer> hits;
 };
 
 // A pixel of a storage-image target written by the host: a ray the CPU finished.
@@ -106,6 +112,7 @@ struct Renderer::Impl {
   GpuBuffer placeholder;
   TexelBuffer placeholder_texels;
   std::optional<TexelBuffer> spheres, planes, primitives, vertices, normals, bvh_nodes;
+  HitSources hit_sources;
   std::vector<gpu::GpuPlane> gpu_planes;  // what `planes` holds, its heights set per render
   std::vector<Plane> scene_planes;
   SceneStats stats;
@@ -130,16 +137,27 @@ struct Renderer::Impl {
   }
 
   // Output buffers and bindings for tiles of `width` x `rows` writing `aovs` to buffers, or to
-  // `target` when given.
-  void prepare_tile(uint32_t width, uint32_t rows, AovSet aovs, const ImageTarget* target) {
+  // `target` when given; with given rays, their buffer and the hits' too.
+  void prepare_tile(uint32_t width, uint32_t rows, AovSet aovs, const ImageTarget* target,
+                    RaycastMode mode = RaycastMode::image_buffers) {
     const uint64_t image_id = target ? target->id() : 0;
-    if (tile.width == width && tile.rows == rows && tile.aov_bits == aovs.bits() && tile.image_id == image_id) return;
-    tile = TileOutputs{width, rows, aovs.bits(), image_id, {}, {}, {}, {}};
+    if (tile.width == width && tile.rows == rows && tile.aov_bits == aovs.bits() && tile.image_id == image_id &&
+        tile.mode == mode) {
+      return;
+    }
+    tile = TileOutputs{width, rows, aovs.bits(), image_id, mode, {}, {}, {}, {}, {}, {}};
     const vk::DeviceSize pixels = vk::DeviceSize{width} * rows;
     if (!target) {
       if (aovs.has(Aov::depth)) tile.depth = make_output(pixels * depth_bytes(precision()));
       if (aovs.has(Aov::normal)) tile.normal = make_output(pixels * normal_bytes(precision()));
       if (aovs.has(Aov::uv)) tile.uv = make_output(pixels * uv_bytes);
+    }
+    if (mode == RaycastMode::given_rays) {
+      const vk::DeviceSize bytes = pixels * sizeof(gpu::GpuRay);
+      tile.rays.emplace(TexelBuffer{create_upload_buffer(context, bytes, vk::BufferUsageFlagBits::eUniformTexelBuffer)});
+      tile.rays->floats = create_texel_view(context, tile.rays->buffer, vk::Format::eR32G32B32A32Sfloat);
+      tile.rays->uints = create_texel_view(context, tile.rays->buffer, vk::Format::eR32G32B32A32Uint);
+      tile.hits = make_output(pixels * sizeof(uint32_t));
     }
     if (stats.loop_budget > 0 && aovs.needs_rays()) tile.overflow = make_output((pixels + 1) * sizeof(uint32_t));
     auto floats = [&](const std::optional<TexelBuffer>& texels) {
@@ -161,6 +179,8 @@ struct Renderer::Impl {
     resources.texel_views[VKRAY_BINDING_PRIMITIVES] = uints(primitives);
     resources.texel_views[VKRAY_BINDING_VERTICES] = geometry(vertices);
     resources.texel_views[VKRAY_BINDING_NORMALS] = geometry(normals);
+    resources.texel_views[VKRAY_BINDING_RAYS] = geometry(tile.rays);
+    resources.buffers[VKRAY_BINDING_HITS] = output(tile.hits);
     resources.texel_views[VKRAY_BINDING_BVH_BOUNDS] = floats(bvh_nodes);
     resources.texel_views[VKRAY_BINDING_BVH_LINKS] = uints(bvh_nodes);
     resources.buffers[VKRAY_BINDING_DEPTH] = output(tile.depth);
@@ -175,29 +195,35 @@ struct Renderer::Impl {
   // Rays listed in the overflow buffer ran out of the loop budget with part of the tree not yet
   // visited: they are traced again, exactly, by the double-precision reference. Rare: a primary ray
   // visits tens to hundreds of nodes, the budget is ~65000 on lavapipe.
-  // `finish` receives each pixel (i, j) and its hit.
+  // `finish` receives each such ray's index within the tile (row-major).
   template <typename Finish>
-  void finish_unfinished_rays(const CameraBasis& basis, uint32_t width, uint32_t height, uint32_t first_row,
-                              Finish&& finish) {
+  void finish_unfinished(Finish&& finish) {
     const auto* overflow = static_cast<const uint32_t*>(tile.overflow->host());
     const uint32_t count = overflow[0];
     if (count == 0) return;
     const auto start = Clock::now();
     if (!reference) reference.emplace(*scene_for_unfinished);
-    for (uint32_t k = 0; k < count; ++k) {
-      const uint32_t i = overflow[1 + k] % width;
-      const uint32_t j = first_row + overflow[1 + k] / width;
-      finish(i, j, reference->trace(basis.origin, basis.direction(pixel_uv(i, j, width, height))));
-    }
+    for (uint32_t k = 0; k < count; ++k) finish(overflow[1 + k]);
     timings.unfinished_rays += count;
     timings.cpu_finish_ms += elapsed_ms(start);
+  }
+
+  // The same for a camera's pixels: `finish` receives each pixel (i, j) and its hit.
+  template <typename Finish>
+  void finish_unfinished_rays(const CameraBasis& basis, uint32_t width, uint32_t height, uint32_t first_row,
+                              Finish&& finish) {
+    finish_unfinished([&](uint32_t index) {
+      const uint32_t i = index % width;
+      const uint32_t j = first_row + index / width;
+      finish(i, j, reference->trace(basis.origin, basis.direction(pixel_uv(i, j, width, height))));
+    });
   }
 
   // Rows per dispatch: every output buffer within the device's storage-buffer range (and the
   // caller's cap), and the workgroup count within the device's limit.
   // `buffer_aovs`: the outputs written to buffers (none with the storage-image target).
-  uint32_t rows_per_tile(uint32_t width, uint32_t height, AovSet buffer_aovs) const {
-    vk::DeviceSize largest = 0;
+  uint32_t rows_per_tile(uint32_t width, uint32_t height, AovSet buffer_aovs, RaycastMode mode = RaycastMode::image_buffers) const {
+    vk::DeviceSize largest = mode == RaycastMode::given_rays ? sizeof(uint32_t) : 0;  // the hits
     if (buffer_aovs.has(Aov::depth)) largest = std::max(largest, depth_bytes(precision()));
     if (buffer_aovs.has(Aov::normal)) largest = std::max(largest, normal_bytes(precision()));
     if (buffer_aovs.has(Aov::uv)) largest = std::max(largest, uv_bytes);
@@ -206,6 +232,11 @@ struct Renderer::Impl {
     vk::DeviceSize by_bytes = largest > 0 ? std::max<vk::DeviceSize>(1, limit / (vk::DeviceSize{width} * largest)) : height;
     if (stats.loop_budget > 0) {  // the overflow list: a count, then 4 bytes a pixel
       by_bytes = std::min(by_bytes, std::max<vk::DeviceSize>(1, (limit - sizeof(uint32_t)) / (vk::DeviceSize{width} * 4)));
+    }
+    if (mode == RaycastMode::given_rays) {  // the rays: one texel buffer
+      const vk::DeviceSize ray_limit = std::min<vk::DeviceSize>(
+          vk::DeviceSize{context.limits.maxTexelBufferElements} * texel_bytes, context.info.max_allocation_bytes);
+      by_bytes = std::min(by_bytes, std::max<vk::DeviceSize>(1, ray_limit / (vk::DeviceSize{width} * sizeof(gpu::GpuRay))));
     }
     const vk::DeviceSize by_groups =
         vk::DeviceSize{context.limits.maxComputeWorkGroupCount[1]} * options.shader.workgroup_height;
@@ -221,7 +252,8 @@ struct Renderer::Impl {
   const vk::raii::Pipeline& begin_render(const Camera& camera, uint32_t width, uint32_t height, AovSet aovs,
                                          const ImageTarget* target, uint32_t& tile_rows) {
     const bool lo_parts = needs_lo_parts(anchor, scene_radius, camera.from);
-    const vk::raii::Pipeline& chosen = pipeline->pipeline(aovs, lo_parts, target != nullptr, timings.pipeline_ms);
+    const vk::raii::Pipeline& chosen = pipeline->pipeline(
+        aovs, lo_parts, target ? RaycastMode::image_target : RaycastMode::image_buffers, timings.pipeline_ms);
     if (planes) {  // no submission is in flight: every render waits for its own
       set_plane_heights(gpu_planes, scene_planes, camera.from, precision());
       std::memcpy(planes->buffer.mapped, gpu_planes.data(), gpu_planes.size() * sizeof(gpu::GpuPlane));
@@ -263,7 +295,8 @@ struct Renderer::Impl {
                                vk::PipelineStageFlagBits::eTransfer | vk::PipelineStageFlagBits::eHost, {}, barrier, {},
                                {});
       bool copied = false;
-      for (const auto* output : {&tile.depth, &tile.normal, &tile.uv, &tile.overflow, to_image ? &depth_range : nullptr}) {
+      for (const auto* output :
+           {&tile.depth, &tile.normal, &tile.uv, &tile.overflow, &tile.hits, to_image ? &depth_range : nullptr}) {
         if (output && *output && (*output)->readback) {
           commands.copyBuffer(*(*output)->written.buffer, *(*output)->readback->buffer,
                               vk::BufferCopy(0, 0, (*output)->written.size));
@@ -312,6 +345,21 @@ struct Renderer::Impl {
   }
 };
 
+void RayHits::allocate(size_t ray_count) {
+  count = ray_count;
+  t.assign(count, INFINITY);
+  normal.assign(3 * count, 0.0f);
+  object.assign(count, no_object);
+  primitive.assign(count, no_object);
+}
+
+void RayHits::store(size_t ray, float distance, const glm::vec3& unit_normal, ObjectPrimitive source) {
+  t[ray] = distance;
+  for (int c = 0; c < 3; ++c) normal[c * count + ray] = unit_normal[c];
+  object[ray] = source.object;
+  primitive[ray] = source.primitive;
+}
+
 Renderer::Renderer(GpuDevice& device, const Scene& scene, RendererOptions options)
     : impl_(std::make_unique<Impl>(device.vulkan(), options)) {
   with_vulkan_errors("uploading the scene", [&] {
@@ -344,6 +392,7 @@ Renderer::Renderer(GpuDevice& device, const Scene& scene, RendererOptions option
     r.vertices = upload(gpu_scene.vertices, "vertices");
     r.normals = upload(gpu_scene.normal_texels, "triangle normals");
     r.bvh_nodes = upload(gpu_scene.bvh_nodes, "BVH nodes");
+    r.hit_sources = gpu_scene.hit_sources;
     r.stats = SceneStats{gpu_scene.triangle_count, static_cast<uint32_t>(scene.spheres.size()),
                          gpu_scene.geometry_bytes(), static_cast<uint32_t>(gpu_scene.bvh_nodes.size()),
                          gpu_scene.bvh_depth, gpu_scene.search, 0};
@@ -457,6 +506,77 @@ Frame Renderer::render(const Camera& camera, uint32_t width, uint32_t height, Ao
   });
   frame.round_doubles();
   return frame;
+}
+
+RayHits Renderer::cast_rays(std::span<const GivenRay> rays) {
+  check_given_rays(rays);
+  Impl& r = *impl_;
+  RayHits hits;
+  hits.allocate(rays.size());
+  r.reset_timings();
+  if (rays.empty()) return hits;
+
+  with_vulkan_errors("casting rays", [&] {
+    // Rows of one workgroup's width: a workgroup then holds consecutive rays, which callers
+    // usually order as they lie in space (a scan line, an image's rows).
+    const uint32_t width = r.options.shader.workgroup_width;
+    const AovSet aovs{Aov::depth, Aov::normal};
+    const auto all_rows = static_cast<uint32_t>(std::min<size_t>((rays.size() + width - 1) / width, UINT32_MAX));
+    const uint32_t tile_rows = r.rows_per_tile(width, all_rows, aovs, RaycastMode::given_rays);
+    // The lo parts of positions as for a camera (needs_lo_parts), wherever any of the rays starts.
+    const bool lo_parts = std::any_of(rays.begin(), rays.end(), [&](const GivenRay& ray) {
+      return needs_lo_parts(r.anchor, r.scene_radius, {ray[0], ray[1], ray[2]});
+    });
+    const vk::raii::Pipeline& pipeline = r.pipeline->pipeline(aovs, lo_parts, RaycastMode::given_rays, r.timings.pipeline_ms);
+    if (r.planes) {  // the heights above a camera are not read: each ray subtracts its own origin
+      std::memcpy(r.planes->buffer.mapped, r.gpu_planes.data(), r.gpu_planes.size() * sizeof(gpu::GpuPlane));
+    }
+    r.prepare_tile(width, tile_rows, aovs, nullptr, RaycastMode::given_rays);
+    const size_t tile_capacity = size_t{width} * tile_rows;
+    for (size_t first = 0; first < rays.size(); first += tile_capacity) {
+      const size_t count = std::min(tile_capacity, rays.size() - first);
+      auto* encoded = static_cast<gpu::GpuRay*>(r.tile.rays->buffer.mapped);
+      parallel_for_chunks(count, [&](size_t begin, size_t end) {
+        for (size_t k = begin; k < end; ++k) {
+          const GivenRay& ray = rays[first + k];
+          encoded[k] = encode_ray({ray[0], ray[1], ray[2]}, {ray[3], ray[4], ray[5]}, r.anchor, r.precision());
+        }
+      });
+      gpu::RayGenParams params{};
+      params.image = glm::uvec4(width, static_cast<uint32_t>(count), 0, static_cast<uint32_t>((count + width - 1) / width));
+      params.counts = r.counts;
+      r.dispatch_tile(pipeline, params);
+
+      const auto copy_start = Clock::now();
+      const auto* slots = static_cast<const uint32_t*>(r.tile.hits->host());
+      const size_t plane_size = size_t{width} * params.image.w;  // the shader's planes span whole rows
+      auto copy = [&]<typename T>(const T* depths, const T* normals) {
+        parallel_for_chunks(count, [&](size_t begin, size_t end) {
+          for (size_t k = begin; k < end; ++k) {
+            hits.t[first + k] = static_cast<float>(depths[k]);
+            for (size_t c = 0; c < 3; ++c) hits.normal[c * hits.count + first + k] = static_cast<float>(normals[c * plane_size + k]);
+            const ObjectPrimitive source = r.hit_sources(slots[k]);
+            hits.object[first + k] = source.object;
+            hits.primitive[first + k] = source.primitive;
+          }
+        });
+      };
+      if (r.precision() == Precision::float64) {
+        copy(static_cast<const double*>(r.tile.depth->host()), static_cast<const double*>(r.tile.normal->host()));
+      } else {
+        copy(static_cast<const float*>(r.tile.depth->host()), static_cast<const float*>(r.tile.normal->host()));
+      }
+      r.timings.readback_ms += elapsed_ms(copy_start);
+      if (r.tile.overflow) {
+        r.finish_unfinished([&](uint32_t index) {
+          const GivenRay& ray = rays[first + index];
+          const ReferenceHit hit = r.reference->trace(glm::dvec3(ray[0], ray[1], ray[2]), unit_vector(glm::dvec3(ray[3], ray[4], ray[5])));
+          hits.store(first + index, static_cast<float>(hit.t), glm::vec3(hit.normal), r.reference->source(hit));
+        });
+      }
+    }
+  });
+  return hits;
 }
 
 DepthRange Renderer::render(const Camera& camera, Aov aov, ImageTarget& target) {

@@ -9,7 +9,10 @@
 #include "engine/scene.hpp"
 #include "engine/shader_variant.hpp"
 
+#include <array>
 #include <memory>
+#include <span>
+#include <vector>
 
 namespace vkray {
 
@@ -34,6 +37,17 @@ struct SceneStats {
   uint32_t bvh_depth = 0;
   PrimitiveSearch search = PrimitiveSearch::brute_force;
   uint32_t loop_budget = 0;        // iterations a tree walk may take on this device; 0: no limit
+};
+
+// What each of a batch of given rays hit, in the rays' order.
+struct RayHits {
+  size_t count = 0;
+  std::vector<float> t;           // distance along the unit direction to the nearest hit; +inf on a miss
+  std::vector<float> normal;      // 3 planes (all x, then y, then z): unit normal facing the ray, 0 on a miss
+  std::vector<uint32_t> object;   // ObjectPrimitive::object, no_object on a miss
+  std::vector<uint32_t> primitive;  // ObjectPrimitive::primitive, no_object on a miss
+  void allocate(size_t ray_count);
+  void store(size_t ray, float distance, const glm::vec3& unit_normal, ObjectPrimitive source);
 };
 
 struct RendererOptions {
@@ -64,6 +78,11 @@ class Renderer {
   // Returns the range of finite depths when `aov` is depth. Takes a float32 shader specialized on
   // its outputs (not the generic or float64 variants).
   DepthRange render(const Camera& camera, Aov aov, ImageTarget& target);
+
+  // Traces each ray (checked first: check_given_rays) to its nearest hit, with the precision
+  // contract of images: the origin relative to the scene's anchor, the direction normalized in
+  // double, then rounded as a camera's are.
+  RayHits cast_rays(std::span<const GivenRay> rays);
 
   // Timings of the last render (upload_ms and bvh_build_ms are the constructor's).
   const RenderTimings& timings() const;

@@ -1,7 +1,11 @@
 #include "engine/scene.hpp"
 
+#include "engine/unit_vector.hpp"
+
 #include <glm/geometric.hpp>
 
+#include <algorithm>
+#include <cmath>
 #include <string>
 
 namespace vkray {
@@ -29,6 +33,79 @@ void check_image_size(uint32_t width, uint32_t height) {
     throw InputError("image size " + std::to_string(width) + "x" + std::to_string(height) +
                      " is outside 1x1 .. " + std::to_string(max_image_side) + " per side and " +
                      std::to_string(max_image_pixels) + " pixels");
+  }
+}
+
+namespace {
+
+std::string item(const char* list, size_t index) { return std::string(list) + "[" + std::to_string(index) + "]"; }
+
+bool within_limits(const glm::dvec3& p) {  // false for NaN too
+  return std::max({std::abs(p.x), std::abs(p.y), std::abs(p.z)}) <= max_coordinate;
+}
+
+void check_point(const glm::dvec3& p, const std::string& path) {
+  if (!within_limits(p)) {
+    throw InputError(path + ": every coordinate must be finite and within 1e15, got (" + std::to_string(p.x) + ", " +
+                     std::to_string(p.y) + ", " + std::to_string(p.z) + ")");
+  }
+}
+
+}  // namespace
+
+void check_scene(Scene& scene) {
+  check_point(scene.camera.from, "camera.from");
+  check_point(scene.camera.to, "camera.to");
+  if (scene.camera.from == scene.camera.to) throw InputError("camera.to: must differ from camera.from");
+  if (!within_limits(scene.camera.up) || scene.camera.up == glm::dvec3(0.0)) {
+    throw InputError("camera.up: must be finite and non-zero");
+  }
+  if (!(scene.camera.fovy_degrees > 0.0 && scene.camera.fovy_degrees < 180.0)) {
+    throw InputError("camera.fovy: field of view must be in (0, 180) degrees, got " + std::to_string(scene.camera.fovy_degrees));
+  }
+  check_image_size(scene.width, scene.height);
+  for (size_t k = 0; k < scene.spheres.size(); ++k) {
+    check_point(scene.spheres[k].center, item("spheres", k) + ".center");
+    const double radius = scene.spheres[k].radius;
+    if (!(radius > 0.0 && radius <= max_coordinate)) {
+      throw InputError(item("spheres", k) + ".radius: must be > 0 and within 1e15, got " + std::to_string(radius));
+    }
+  }
+  for (size_t k = 0; k < scene.planes.size(); ++k) {
+    Plane& plane = scene.planes[k];
+    check_point(plane.point, item("planes", k) + ".point");
+    if (!within_limits(plane.normal) || plane.normal == glm::dvec3(0.0)) {
+      throw InputError(item("planes", k) + ".normal: must be finite and non-zero");
+    }
+    plane.normal = unit_vector(plane.normal);
+  }
+  for (size_t m = 0; m < scene.meshes.size(); ++m) {
+    const Mesh& mesh = scene.meshes[m];
+    const std::string path = item("meshes", m);
+    if (mesh.triangles.empty()) throw InputError(path + ".triangles: a mesh needs at least one triangle");
+    for (size_t v = 0; v < mesh.positions.size(); ++v) check_point(mesh.positions[v], path + "." + item("positions", v));
+    for (size_t t = 0; t < mesh.triangles.size(); ++t) {
+      for (size_t c = 0; c < 3; ++c) {
+        if (mesh.triangles[t][c] >= mesh.positions.size()) {
+          throw InputError(path + "." + item("triangles", t) + "[" + std::to_string(c) + "]: vertex index " +
+                           std::to_string(mesh.triangles[t][c]) + " is out of range (the mesh has " +
+                           std::to_string(mesh.positions.size()) + " positions)");
+        }
+      }
+    }
+  }
+}
+
+void check_given_rays(std::span<const GivenRay> rays) {
+  for (size_t k = 0; k < rays.size(); ++k) {
+    const GivenRay& ray = rays[k];
+    auto fail = [&](const std::string& what) { throw InputError("ray " + std::to_string(k) + ": " + what); };
+    if (!std::all_of(ray.begin(), ray.begin() + 3, [](double v) { return std::isfinite(v); })) fail("the origin is not finite");
+    if (!std::all_of(ray.begin() + 3, ray.end(), [](double v) { return std::isfinite(v); })) fail("the direction is not finite");
+    if (std::any_of(ray.begin(), ray.begin() + 3, [](double v) { return std::abs(v) > max_coordinate; })) {
+      fail("the origin is farther than 1e15 from the world origin on some axis");
+    }
+    if (ray[3] == 0.0 && ray[4] == 0.0 && ray[5] == 0.0) fail("the direction is 0");
   }
 }
 

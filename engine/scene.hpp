@@ -8,6 +8,7 @@
 
 #include <array>
 #include <cstdint>
+#include <span>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -62,6 +63,32 @@ struct Scene {
   // the command line says how many.
   size_t zero_area_triangle_count() const;
 };
+
+// What a ray hit, as the outputs number it. `object` counts the meshes, then the spheres, then the
+// planes, each in scene order; `primitive` is a triangle's index within its mesh (the order of the
+// file after triangulation, zero-area triangles counted though never hit), or a sphere's or a
+// plane's index among the spheres or planes. Both are no_object on a miss.
+inline constexpr uint32_t no_object = 0xffffffffu;
+struct ObjectPrimitive {
+  uint32_t object = no_object;
+  uint32_t primitive = no_object;
+  bool operator==(const ObjectPrimitive&) const = default;
+};
+
+// Checks a scene built in memory (Python's vkray.Scene) as a scene file is checked, naming the item
+// by its path ("meshes[2].triangles[7]: ..."): every coordinate finite and within max_coordinate,
+// radii > 0, plane normals non-zero (made unit length here), vertex indices within their mesh, at
+// least one triangle a mesh, the camera's from and to apart, its up non-zero and its fovy in
+// (0, 180) degrees, the image size within limits. Throws InputError.
+void check_scene(Scene& scene);
+
+// A ray the caller gives (Python's cast_rays): its origin, then its direction (any length but 0), in
+// world coordinates.
+using GivenRay = std::array<double, 6>;
+
+// Throws InputError naming the first ray (by its index) whose origin or direction is not finite,
+// whose origin is beyond max_coordinate, or whose direction is 0.
+void check_given_rays(std::span<const GivenRay> rays);
 
 // Throws InputError unless 1 <= side <= max_image_side and the pixel count is within the limit.
 void check_image_size(uint32_t width, uint32_t height);

@@ -41,7 +41,11 @@ using uvec4 = glm::uvec4;
 #define VKRAY_BINDING_DEPTH_RANGE 10 // storage buffer
 #define VKRAY_BINDING_VERTICES 11    // texels, RGBA32F: a GpuPoint per vertex (and per sphere in the tree)
 #define VKRAY_BINDING_NORMALS 12     // texels, RGBA32F: a triangle's unit normal per primitive slot
-#define VKRAY_BINDING_COUNT 13
+// Rays given by the caller instead of a camera (VKRAY_SPEC_RAY_INPUT): two GpuPoints a ray (GpuRay),
+// and what each ray hit (VKRAY_HIT_*).
+#define VKRAY_BINDING_RAYS 13        // texels, RGBA32F
+#define VKRAY_BINDING_HITS 14        // storage buffer
+#define VKRAY_BINDING_COUNT 15
 
 // How the shader finds the nearest triangle or sphere (VKRAY_SPEC_SEARCH_MODE). Planes are
 // infinite: they stay outside the tree, in their own loop.
@@ -89,7 +93,10 @@ using uvec4 = glm::uvec4;
 // registers, shifted on every push and pop, the bunny's walk at 1920x1080 took 146 instead of
 // 235 ms (16 registers; each 4 more cost about 4 ms).
 #define VKRAY_SPEC_STACK_REGISTERS 19
-#define VKRAY_SPEC_COUNT 20
+// Trace the rays of VKRAY_BINDING_RAYS, one an invocation, rather than a camera's, and write what
+// each hit to VKRAY_BINDING_HITS (Python's cast_rays): depth and normal as for pixels.
+#define VKRAY_SPEC_RAY_INPUT 20
+#define VKRAY_SPEC_COUNT 21
 #define VKRAY_STACK_REGISTERS_MAX 32
 
 #define VKRAY_SPHERE_STABLE 0               // Ray Tracing Gems ch. 7 (intersect.glsl)
@@ -117,6 +124,22 @@ struct GpuPoint {
   vec4 second;
 };
 VKRAY_CHECK_SIZE(GpuPoint, 32);
+
+// A ray given by the caller: its origin relative to the anchor, then its unit direction (w = 0),
+// each split as positions are, so float32 shaders keep the origin's ~48 bits and float64 shaders
+// read both exactly.
+struct GpuRay {
+  GpuPoint origin;
+  GpuPoint direction;
+};
+VKRAY_CHECK_SIZE(GpuRay, 64);
+
+// What a ray hit, as VKRAY_BINDING_HITS holds it: a primitive slot (the host knows each slot's
+// mesh and triangle, or sphere), or one of these tagged indices.
+#define VKRAY_HIT_NONE 0xffffffffu
+#define VKRAY_HIT_SPHERE_APART 0x40000000u  // | index of a sphere tested one by one (VKRAY_BINDING_SPHERES)
+#define VKRAY_HIT_PLANE 0x80000000u         // | index of the plane
+#define VKRAY_HIT_INDEX_MASK 0x3fffffffu
 
 // A sphere tested one by one: centre, radius in w.
 struct GpuSphere {
@@ -212,7 +235,9 @@ VKRAY_CHECK_SIZE(GpuBvhNode, 64);
 #define VKRAY_CAMERA_WORDS 6
 struct RayGenParams {
   uvec4 camera[VKRAY_CAMERA_WORDS];
-  uvec4 image;   // width, height, first row of this tile, rows in this tile
+  // Width, height, first row of this tile, rows in this tile. With RAY_INPUT the rays are laid out
+  // as rows of `width` and `height` is the number of rays.
+  uvec4 image;
   uvec4 counts;  // read by the generic variant only: spheres, planes, triangle slots, search mode
 };
 VKRAY_CHECK_SIZE(RayGenParams, 128);

@@ -84,12 +84,13 @@ real intersect_sphere_point(Point sphere, Origin origin, real3 dir, real t_max, 
 #endif
 }
 
-const uint no_primitive = 0xffffffffu;
+const uint no_primitive = VKRAY_HIT_NONE;
 
 struct PrimitiveHit {
   real t;           // t_max when nothing nearer was found
   real3 normal;     // geometric normal facing the ray, not yet unit length
   bool unfinished;  // the walk ran out of LOOP_BUDGET: the host must finish this ray
+  uint id;          // what was hit (VKRAY_BINDING_HITS): its slot, a tagged sphere, or VKRAY_HIT_NONE
 };
 
 // The nearest hit among primitive slots so far; the normal is computed once, for the winner.
@@ -169,20 +170,21 @@ real3 primitive_normal(uint slot, Origin origin, real3 dir) {
 // Every sphere, then every triangle in batches of VKRAY_TRIANGLE_BATCH (one loop iteration each).
 PrimitiveHit nearest_primitive_brute_force(RayFrame frame, Origin origin, real3 dir, real t_max, uint sphere_count,
                                            uint triangle_slots) {
-  PrimitiveHit result = PrimitiveHit(t_max, real3(0.0), false);
+  PrimitiveHit result = PrimitiveHit(t_max, real3(0.0), false, VKRAY_HIT_NONE);
   for (uint i = 0; i < sphere_count; ++i) {
     real3 normal;
     real t = intersect_sphere_point(fetch_point(spheres, int(i)), origin, dir, result.t, normal);
     if (t < result.t) {
       result.t = t;
       result.normal = normal;
+      result.id = VKRAY_HIT_SPHERE_APART | i;
     }
   }
   SlotHit hit = SlotHit(result.t, no_primitive);
   for (uint batch = 0; batch < triangle_slots; batch += VKRAY_TRIANGLE_BATCH) {
     [[unroll]] for (uint k = 0; k < VKRAY_TRIANGLE_BATCH; ++k) test_triangle(frame, origin, dir, batch + k, hit);
   }
-  if (hit.slot != no_primitive) result = PrimitiveHit(hit.t, primitive_normal(hit.slot, origin, dir), false);
+  if (hit.slot != no_primitive) result = PrimitiveHit(hit.t, primitive_normal(hit.slot, origin, dir), false, hit.slot);
   return result;
 }
 
@@ -302,7 +304,7 @@ PrimitiveHit nearest_primitive_in_tree(RayFrame frame, Origin origin, real3 dir,
       }
     }
   }
-  PrimitiveHit result = PrimitiveHit(hit.t, real3(0.0), unfinished);
+  PrimitiveHit result = PrimitiveHit(hit.t, real3(0.0), unfinished, hit.slot);
   if (hit.slot != no_primitive) result.normal = primitive_normal(hit.slot, origin, dir);
   return result;
 }

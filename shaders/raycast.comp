@@ -1,7 +1,8 @@
 #version 460
 // One primary ray per pixel through the pixel centre; the nearest hit over every primitive wins.
 // Writes the requested outputs (depth, normal, uv) for one tile of rows of the image into buffers,
-// or one output into a storage image (IMAGE_TARGET, the viewer's frame). Compiled
+// or one output into a storage image (IMAGE_TARGET, the viewer's frame); or traces rays the caller
+// gave (RAY_INPUT), writing depth, normal and what each hit. Compiled
 // three times: float32; float32 with VKRAY_DOUBLE_EDGES defined (triangle edge functions from
 // exact double products, for CPU devices: see intersect.glsl); and float64 with VKRAY_FLOAT64
 // defined (`--precision double`), which writes depth and normals as doubles.
@@ -21,6 +22,7 @@ layout(constant_id = VKRAY_SPEC_WRITE_NORMAL) const bool WRITE_NORMAL = true;
 layout(constant_id = VKRAY_SPEC_WRITE_UV) const bool WRITE_UV = false;
 layout(constant_id = VKRAY_SPEC_MORTON_ORDER) const bool MORTON_ORDER = true;
 layout(constant_id = VKRAY_SPEC_IMAGE_TARGET) const bool IMAGE_TARGET = false;
+layout(constant_id = VKRAY_SPEC_RAY_INPUT) const bool RAY_INPUT = false;
 
 layout(push_constant) uniform PushConstants { RayGenParams params; };
 
@@ -34,6 +36,8 @@ layout(std430, binding = VKRAY_BINDING_OVERFLOW) buffer Overflow { uint overflow
 // range of finite depths.
 layout(binding = VKRAY_BINDING_IMAGE, rgba32f) uniform writeonly image2D image_out;
 layout(std430, binding = VKRAY_BINDING_DEPTH_RANGE) buffer DepthRange { DepthRangeBits depth_range; };
+layout(binding = VKRAY_BINDING_RAYS) uniform GeometryTexels rays_in;  // GpuRay
+layout(std430, binding = VKRAY_BINDING_HITS) writeonly buffer HitsOut { uint hit_out[]; };
 
 // Folds the depths of the counted pixels into depth_range: reduced across the subgroup first, then
 // one atomic pair per subgroup (per-invocation atomics cost llvmpipe ~20 ms a 1280x720 frame; a
@@ -60,13 +64,18 @@ void main() {
   // Invocations cover their square workgroup in Morton order, so any 8 consecutive ones (a lavapipe
   // subgroup) form a 4x2 block and any 32 (an NVIDIA warp) an 8x4 block: rays that run together are
   // as close together as they can be, which is what tree walks in lockstep want.
+  // Given rays come in rows one workgroup wide (see Renderer::cast_rays): in row-major order the
+  // invocations take consecutive rays, which callers usually order as they lie in space.
   uint local = gl_LocalInvocationIndex;
-  uvec2 in_group = MORTON_ORDER ? uvec2(compact_even_bits(local), compact_even_bits(local >> 1)) : gl_LocalInvocationID.xy;
+  uvec2 in_group = RAY_INPUT      ? uvec2(local % gl_WorkGroupSize.x, local / gl_WorkGroupSize.x)
+                   : MORTON_ORDER ? uvec2(compact_even_bits(local), compact_even_bits(local >> 1))
+                                  : gl_LocalInvocationID.xy;
   uvec2 tile_pixel = gl_WorkGroupID.xy * gl_WorkGroupSize.xy + in_group;
   // Invocations past the image's edge stay alive with a ray that can hit nothing (t_max = 0): the
   // packet walk's subgroup operations then always see whole subgroups.
-  bool inside = tile_pixel.x < width && tile_pixel.y < params.image.w;
   uint row = params.image.z + tile_pixel.y;
+  uint ray_index = row * width + tile_pixel.x;  // RAY_INPUT: rows of `width` rays, `height` in all
+  bool inside = tile_pixel.x < width && tile_pixel.y < params.image.w && (!RAY_INPUT || ray_index < height);
   // Outputs are planar (all x, then all y, ...) with one plane per buffer tile, so neighbouring
   // invocations store to neighbouring addresses.
   uint out_index = tile_pixel.y * width + tile_pixel.x;
@@ -78,7 +87,7 @@ void main() {
   float shorter = float(min(width, height));
   vec2 uv_numerator = vec2(float(2 * tile_pixel.x + 1) - float(width), float(height) - float(2 * row + 1));
   vec2 uv = uv_numerator / shorter;
-  if (WRITE_UV && inside) {
+  if (WRITE_UV && !RAY_INPUT && inside) {
     if (IMAGE_TARGET) {
       imageStore(image_out, ivec2(tile_pixel.x, row), vec4(uv, 0.0, 0.0));
     } else {
@@ -88,6 +97,14 @@ void main() {
   }
   if (!WRITE_DEPTH && !WRITE_NORMAL) return;
 
+  // A GpuRay is two points; lanes past the last ray read the first (their t_max is 0). float32
+  // shaders take the direction rounded to float, as a camera's.
+  Point ray_origin = fetch_point(rays_in, RAY_INPUT && inside ? 2 * int(ray_index) : 0);
+#ifdef VKRAY_FLOAT64
+  Point ray_direction = fetch_point(rays_in, RAY_INPUT && inside ? 2 * int(ray_index) + 1 : 1);
+#else
+  Point ray_direction = fetch_point_hi(rays_in, RAY_INPUT && inside ? 2 * int(ray_index) + 1 : 1);
+#endif
 #ifdef VKRAY_FLOAT64
   dvec3 camera[4];  // origin, right, up, forward_scaled
   for (int k = 0; k < 4; ++k) {
@@ -98,46 +115,57 @@ void main() {
     uvec2 z = k % 2 == 0 ? second.xy : second.zw;
     camera[k] = dvec3(packDouble2x32(x), packDouble2x32(y), packDouble2x32(z));
   }
-  Origin origin = Origin(camera[0]);
-  dvec3 dir = normalize(double(uv_numerator.x) / shorter * camera[1] + double(uv_numerator.y) / shorter * camera[2] +
-                        camera[3]);
+  Origin origin = Origin(RAY_INPUT ? ray_origin.value.xyz : camera[0]);
+  dvec3 dir = RAY_INPUT ? ray_direction.value.xyz
+                        : normalize(double(uv_numerator.x) / shorter * camera[1] +
+                                    double(uv_numerator.y) / shorter * camera[2] + camera[3]);
 #else
-  Origin origin = Origin(uintBitsToFloat(params.camera[0].xyz), use_lo_parts ? uintBitsToFloat(params.camera[1].xyz) : vec3(0.0));
-  vec3 dir = normalize(uv.x * uintBitsToFloat(params.camera[2].xyz) + uv.y * uintBitsToFloat(params.camera[3].xyz) +
-                       uintBitsToFloat(params.camera[4].xyz));
+  Origin origin = RAY_INPUT ? Origin(ray_origin.hi.xyz, ray_origin.lo.xyz)
+                            : Origin(uintBitsToFloat(params.camera[0].xyz),
+                                     use_lo_parts ? uintBitsToFloat(params.camera[1].xyz) : vec3(0.0));
+  vec3 dir = RAY_INPUT ? ray_direction.hi.xyz
+                       : normalize(uv.x * uintBitsToFloat(params.camera[2].xyz) + uv.y * uintBitsToFloat(params.camera[3].xyz) +
+                                   uintBitsToFloat(params.camera[4].xyz));
 #endif
 
   const real no_hit = uintBitsToFloat(0x7f800000u);  // +infinity
   real t_best = inside ? no_hit : 0.0;
   real3 normal = real3(0.0);
+  uint hit_id = VKRAY_HIT_NONE;
 
   // Planes first; spheres and triangles then search up to VKRAY_PRIMITIVE_T_MAX (coincident
   // surfaces: the plane wins; see gpu_layout.h).
   real primitive_t_max = t_best;
   uint plane_count = GENERIC ? params.counts.y : PLANE_COUNT;
   for (uint i = 0; i < plane_count; ++i) {
-    // The height above the camera, set by the host per render (see GpuPlane); plain float
-    // coordinates subtract the camera from the anchored offset instead.
+    // The height above the camera, set by the host per render (see GpuPlane). Plain float
+    // coordinates subtract the camera from the anchored offset instead, and so does each given ray
+    // (its own origin), hi and lo parts apart: the height is then within a few float32 roundings of
+    // the larger of the offset and the origin's distance from the anchor.
 #ifdef VKRAY_FLOAT64
-    Point plane = fetch_point(planes, 2 * int(i));
+    Point plane = fetch_point(planes, RAY_INPUT ? 2 * int(i) + 1 : 2 * int(i));
     real3 plane_normal = plane.value.xyz;
-    real height = plane.value.w;
+    real height = RAY_INPUT ? plane.value.w - dot(plane_normal, origin.position) : plane.value.w;
 #else
-    Point plane = fetch_point_hi(planes, COORDINATES == VKRAY_COORDINATES_CAMERA_RELATIVE ? 2 * int(i) : 2 * int(i) + 1);
+    bool anchored = RAY_INPUT || COORDINATES != VKRAY_COORDINATES_CAMERA_RELATIVE;
+    Point plane = RAY_INPUT ? fetch_point(planes, 2 * int(i) + 1) : fetch_point_hi(planes, anchored ? 2 * int(i) + 1 : 2 * int(i));
     vec3 plane_normal = plane.hi.xyz;
-    float height = COORDINATES == VKRAY_COORDINATES_CAMERA_RELATIVE ? plane.hi.w : plane.hi.w - dot(plane_normal, origin.hi);
+    float height = anchored ? plane.hi.w - dot(plane_normal, origin.hi) : plane.hi.w;
+    if (RAY_INPUT) height += plane.lo.w - dot(plane_normal, origin.lo);
 #endif
     real t = intersect_plane(plane_normal, height, dir, t_best);
     if (t < t_best) {
       t_best = t;
       normal = dot(plane_normal, dir) > 0.0 ? -plane_normal : plane_normal;
       primitive_t_max = VKRAY_PRIMITIVE_T_MAX(t, abs(dot(plane_normal, dir)));
+      hit_id = VKRAY_HIT_PLANE | i;
     }
   }
   PrimitiveHit hit = nearest_primitive(origin, dir, primitive_t_max, params.counts);
   if (hit.t < primitive_t_max) {
     t_best = hit.t;
     normal = hit.normal;
+    hit_id = hit.id;
   }
   if (hit.unfinished && inside) overflow_pixels[atomicAdd(overflow_count, 1u)] = out_index;
   // Unfinished rays stay out: the host finishes them and folds their depth in.
@@ -150,6 +178,7 @@ void main() {
     imageStore(image_out, ivec2(tile_pixel.x, row), WRITE_DEPTH ? vec4(t_best, 0.0, 0.0, 0.0) : vec4(normal, 0.0));
     return;
   }
+  if (RAY_INPUT) hit_out[out_index] = hit_id;
   if (WRITE_DEPTH) depth_out[out_index] = t_best;
   if (WRITE_NORMAL) {
     normal_out[out_index] = normal.x;

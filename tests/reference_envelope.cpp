@@ -121,7 +121,8 @@ std::string EnvelopeReport::describe() const {
   return text;
 }
 
-EnvelopeReport check_against_reference(const Scene& scene, const Frame& frame, uint32_t row_step) {
+EnvelopeReport check_against_reference(const Scene& scene, const Frame& frame, uint32_t row_step,
+                                       const std::vector<ObjectPrimitive>* hit_ids) {
   const uint32_t width = frame.width, height = frame.height;
   const ReferenceScene reference(scene);
   const CameraBasis camera = make_camera_basis(scene.camera, width, height);
@@ -240,6 +241,16 @@ EnvelopeReport check_against_reference(const Scene& scene, const Frame& frame, u
         std::snprintf(text, sizeof text, "normal (%.7f, %.7f, %.7f) is %.3g rad from the reference (allowed %.3g)",
                       gpu_normal.x, gpu_normal.y, gpu_normal.z, best, spread + normal_slack);
         failure = text;
+      }
+    }
+    if (failure.empty() && hit_ids) {
+      const ObjectPrimitive id = (*hit_ids)[p];
+      const bool among_samples = std::any_of(std::begin(s.hits), std::end(s.hits),
+                                             [&](const ReferenceHit& h) { return reference.source(h) == id; });
+      if (stable ? !(id == reference.source(s.hits[0])) : !among_samples) {
+        const ObjectPrimitive expected = reference.source(s.hits[0]);
+        failure = "hit object " + std::to_string(id.object) + " primitive " + std::to_string(id.primitive) +
+                  ", the reference's " + std::to_string(expected.object) + " " + std::to_string(expected.primitive);
       }
     }
     if (!failure.empty()) {

@@ -22,6 +22,9 @@ struct EnvelopeReport {
 
 // Renders the reference for `scene` at the frame's size and checks every pixel of `frame`, or
 // those of every row_step-th row (for images too large to trace five times on the CPU).
-EnvelopeReport check_against_reference(const Scene& scene, const Frame& frame, uint32_t row_step = 1);
+// `hit_ids`, when given, holds what each pixel's ray hit (ObjectPrimitive): it must be the
+// reference's where all five samples hit the same primitive, one of theirs elsewhere.
+EnvelopeReport check_against_reference(const Scene& scene, const Frame& frame, uint32_t row_step = 1,
+                                       const std::vector<ObjectPrimitive>* hit_ids = nullptr);
 
 }  // namespace vkray::test

@@ -31,6 +31,18 @@ inline Scene sized(Scene scene, uint32_t width, uint32_t height) {
   return scene;
 }
 
+// The scene moved by `offset`, camera included.
+inline Scene translated(Scene scene, const glm::dvec3& offset) {
+  scene.camera.from += offset;
+  scene.camera.to += offset;
+  for (auto& sphere : scene.spheres) sphere.center += offset;
+  for (auto& plane : scene.planes) plane.point += offset;
+  for (auto& mesh : scene.meshes) {
+    for (auto& p : mesh.positions) p += offset;
+  }
+  return scene;
+}
+
 inline Mesh quad_grid(glm::dvec3 corner, glm::dvec3 edge_u, glm::dvec3 edge_v, int cells) {
   Mesh mesh;
   for (int j = 0; j <= cells; ++j) {

@@ -50,9 +50,9 @@ RaycastPipeline::RaycastPipeline(VulkanContext& context, PipelineSpecialization 
   set_ = std::move(vk::raii::DescriptorSets(context.device, vk::DescriptorSetAllocateInfo(*pool_, set_layout))[0]);
 }
 
-const vk::raii::Pipeline& RaycastPipeline::pipeline(AovSet aovs, bool lo_parts, bool image_target, double& created_ms) {
+const vk::raii::Pipeline& RaycastPipeline::pipeline(AovSet aovs, bool lo_parts, RaycastMode mode, double& created_ms) {
   created_ms = 0.0;
-  const uint32_t key = aovs.bits() | (lo_parts ? 256u : 0u) | (image_target ? 512u : 0u);
+  const uint32_t key = aovs.bits() | (lo_parts ? 256u : 0u) | static_cast<uint32_t>(mode) * 512u;
   if (auto found = pipelines_.find(key); found != pipelines_.end()) return found->second;
 
   const auto start = std::chrono::steady_clock::now();
@@ -77,7 +77,8 @@ const vk::raii::Pipeline& RaycastPipeline::pipeline(AovSet aovs, bool lo_parts, 
   values[VKRAY_SPEC_GENERIC] = variant.generic ? 1u : 0u;
   values[VKRAY_SPEC_COORDINATES] = variant.coordinates;
   values[VKRAY_SPEC_LO_PARTS] = lo_parts ? 1u : 0u;
-  values[VKRAY_SPEC_IMAGE_TARGET] = image_target ? 1u : 0u;
+  values[VKRAY_SPEC_IMAGE_TARGET] = mode == RaycastMode::image_target ? 1u : 0u;
+  values[VKRAY_SPEC_RAY_INPUT] = mode == RaycastMode::given_rays ? 1u : 0u;
   values[VKRAY_SPEC_STACK_REGISTERS] = specialization_.stack_registers;
   std::array<vk::SpecializationMapEntry, values.size()> entries;
   for (uint32_t id = 0; id < entries.size(); ++id) entries[id] = vk::SpecializationMapEntry(id, id * 4u, 4u);
@@ -96,6 +97,7 @@ vk::DescriptorType RaycastPipeline::binding_type(uint32_t binding) {
     case VKRAY_BINDING_UV:
     case VKRAY_BINDING_OVERFLOW:
     case VKRAY_BINDING_DEPTH_RANGE:
+    case VKRAY_BINDING_HITS:
       return vk::DescriptorType::eStorageBuffer;
     case VKRAY_BINDING_IMAGE:
       return vk::DescriptorType::eStorageImage;

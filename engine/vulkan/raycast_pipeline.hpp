@@ -25,14 +25,21 @@ struct PipelineSpecialization {
   ShaderVariant variant;
 };
 
+// Where a pipeline's rays come from and where its outputs go.
+enum class RaycastMode : uint32_t {
+  image_buffers,  // a camera's pixels into output buffers
+  image_target,   // a camera's pixels into the storage image (VKRAY_SPEC_IMAGE_TARGET)
+  given_rays,     // the caller's rays (VKRAY_SPEC_RAY_INPUT) into output buffers
+};
+
 class RaycastPipeline {
  public:
   RaycastPipeline(VulkanContext& context, PipelineSpecialization specialization);
 
   // The pipeline for this set of outputs, with or without the lo parts of positions
-  // (VKRAY_SPEC_LO_PARTS), writing buffers or the storage image (VKRAY_SPEC_IMAGE_TARGET), created on
-  // first request. `created_ms` receives the creation time, 0 when it was already there.
-  const vk::raii::Pipeline& pipeline(AovSet aovs, bool lo_parts, bool image_target, double& created_ms);
+  // (VKRAY_SPEC_LO_PARTS), in `mode`, created on first request. `created_ms` receives the creation
+  // time, 0 when it was already there.
+  const vk::raii::Pipeline& pipeline(AovSet aovs, bool lo_parts, RaycastMode mode, double& created_ms);
 
   // What each binding (VKRAY_BINDING_*) reads or writes: a storage buffer, a texel view or a
   // storage image (in the GENERAL layout).
@@ -57,7 +64,7 @@ class RaycastPipeline {
   vk::raii::ShaderModule shader_{nullptr};
   vk::raii::DescriptorPool pool_{nullptr};
   vk::raii::DescriptorSet set_{nullptr};
-  std::map<uint32_t, vk::raii::Pipeline> pipelines_;  // by AovSet bits, 256 with the lo parts, 512 to the image
+  std::map<uint32_t, vk::raii::Pipeline> pipelines_;  // by AovSet bits, 256 with the lo parts, the mode times 512
 };
 
 }  // namespace vkray

@@ -1,0 +1,143 @@
+// Rays the caller gives (Renderer::cast_rays) against the double-precision reference. A camera's
+// pixel rays, given one by one, must land in the same error envelope as the camera's image (their
+// float32 directions are rounded once, inside the camera path's bound) and hit the same object and
+// primitive as the reference wherever that is stable under the envelope's perturbations.
+#include "engine/camera.hpp"
+#include "engine/renderer.hpp"
+#include "engine/scene_loader.hpp"
+#include "tests/gpu_test_support.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+
+namespace vkray {
+namespace {
+
+using namespace test;
+
+// Casts the pixel rays of `scene`'s camera as given rays; returns them as a Frame and their ids.
+Frame cast_camera_rays(Renderer& renderer, const Scene& scene, std::vector<ObjectPrimitive>& ids) {
+  const CameraBasis basis = make_camera_basis(scene.camera, scene.width, scene.height);
+  std::vector<GivenRay> rays;
+  for (uint32_t j = 0; j < scene.height; ++j) {
+    for (uint32_t i = 0; i < scene.width; ++i) {
+      const glm::dvec3 dir = basis.direction(pixel_uv(i, j, scene.width, scene.height));
+      rays.push_back({basis.origin.x, basis.origin.y, basis.origin.z, dir.x, dir.y, dir.z});
+    }
+  }
+  const RayHits hits = renderer.cast_rays(rays);
+  Frame frame(scene.width, scene.height, {Aov::depth, Aov::normal});
+  frame.depth = hits.t;
+  frame.normal = hits.normal;
+  ids.clear();
+  for (size_t k = 0; k < hits.count; ++k) ids.push_back({hits.object[k], hits.primitive[k]});
+  return frame;
+}
+
+void expect_given_rays_match_reference(const Scene& scene, RendererOptions options = {},
+                                       Percentiles percentiles = Percentiles::checked) {
+  Renderer renderer(device(), scene, options);
+  std::vector<ObjectPrimitive> ids;
+  const Frame frame = cast_camera_rays(renderer, scene, ids);
+  const EnvelopeReport report = check_against_reference(scene, frame, 1, &ids);
+  EXPECT_EQ(report.failures, 0u) << report.describe();
+  if (percentiles == Percentiles::checked) {
+    EXPECT_LT(report.stats.depth_p99, 1e-5) << report.describe();
+    EXPECT_LT(report.stats.normal_deg_p99, 0.01) << report.describe();
+  }
+}
+
+// Spheres, planes and a mesh, in every search mode and both precisions.
+TEST(GivenRays, DefaultSceneInEverySearchAndPrecision) {
+  const Scene scene = sized(default_scene(), 64, 48);
+  for (const PrimitiveSearch search : {PrimitiveSearch::brute_force, PrimitiveSearch::bvh_per_ray, PrimitiveSearch::bvh_packet}) {
+    for (const Precision precision : {Precision::float32, Precision::float64}) {
+      SCOPED_TRACE(testing::Message() << "search " << int(search) << ", precision " << int(precision));
+      RendererOptions options;
+      options.scene.search = search;
+      options.shader.precision = precision;
+      expect_given_rays_match_reference(scene, options);
+    }
+  }
+}
+
+// Rays that start inside a sphere and inside a closed mesh, and rays parallel to a plane (the
+// camera at the plane's height: its middle row is parallel to it).
+TEST(GivenRays, FromInsideAndParallelToPlanes) {
+  Scene inside_sphere;
+  inside_sphere.camera = {{0.2, 0.1, 0}, {1, 0, -1}, {0, 1, 0}, 90};
+  inside_sphere.spheres.push_back({{0, 0, 0}, 3});
+  expect_given_rays_match_reference(sized(inside_sphere, 33, 33));
+
+  Scene inside_cube = cube_scene();
+  const Box box = mesh_bounds(inside_cube.meshes[0]);
+  inside_cube.camera = {0.5 * (box.lower + box.upper), box.upper, {0, 1, 0}, 100};
+  expect_given_rays_match_reference(sized(inside_cube, 33, 33));
+
+  Scene parallel;
+  parallel.camera = {{0, 1, 0}, {0, 1, -1}, {0, 1, 0}, 60};
+  parallel.planes.push_back({{0, 1, -5}, {0, 1, 0}});
+  parallel.planes.push_back({{0, 0, 0}, {0, 1, 0}});
+  parallel.spheres.push_back({{0, 1, -8}, 1});
+  expect_given_rays_match_reference(sized(parallel, 33, 33), {}, Percentiles::ill_conditioned);
+}
+
+// Far from the world origin, where the origin's lo part carries the precision.
+TEST(GivenRays, LargeWorldCoordinates) {
+  expect_given_rays_match_reference(translated(sized(default_scene(), 48, 36), {1e6, 0, -2e6}));
+}
+
+// A budget of a few iterations: nearly every ray is finished on the CPU, ids included.
+TEST(GivenRays, RaysBeyondTheLoopBudgetAreFinished) {
+  Scene scene = sized(default_scene(), 24, 18);
+  scene.meshes.push_back(quad_grid({-3, 0.01, -3}, {6, 0, 0}, {0, 0, 6}, 20));
+  RendererOptions options;
+  options.loop_budget = 3;
+  options.scene.search = PrimitiveSearch::bvh_per_ray;
+  Renderer renderer(device(), scene, options);
+  std::vector<ObjectPrimitive> ids;
+  const Frame frame = cast_camera_rays(renderer, scene, ids);
+  EXPECT_GT(renderer.timings().unfinished_rays, frame.pixel_count() / 4);
+  const EnvelopeReport report = check_against_reference(scene, frame, 1, &ids);
+  EXPECT_EQ(report.failures, 0u) << report.describe();
+}
+
+// More rays than one dispatch holds: tiles of rays give the same values as one dispatch.
+TEST(GivenRays, TilesOfRaysGiveTheSameValues) {
+  const Scene scene = sized(default_scene(), 40, 30);
+  Renderer whole(device(), scene);
+  RendererOptions small;
+  small.max_tile_bytes = 8 * 16 * sizeof(float) * 3;  // 16 rows of 8 rays for the normals
+  Renderer tiled(device(), scene, small);
+  std::vector<ObjectPrimitive> whole_ids, tiled_ids;
+  const Frame a = cast_camera_rays(whole, scene, whole_ids);
+  const Frame b = cast_camera_rays(tiled, scene, tiled_ids);
+  EXPECT_GT(tiled.timings().tiles, 1u);
+  EXPECT_EQ(whole.timings().tiles, 1u);
+  EXPECT_EQ(std::memcmp(a.depth.data(), b.depth.data(), a.depth.size() * sizeof(float)), 0);
+  EXPECT_EQ(std::memcmp(a.normal.data(), b.normal.data(), a.normal.size() * sizeof(float)), 0);
+  EXPECT_EQ(whole_ids, tiled_ids);
+}
+
+TEST(GivenRays, BadRaysAreRefusedByIndex) {
+  Renderer renderer(device(), sized(default_scene(), 4, 4));
+  auto message = [&](std::vector<GivenRay> rays) {
+    try {
+      renderer.cast_rays(rays);
+    } catch (const InputError& error) {
+      return std::string(error.what());
+    }
+    return std::string("no error");
+  };
+  const GivenRay good{0, 1, 5, 0, 0, -1};
+  EXPECT_EQ(message({good, {0, 1, 5, 0, 0, 0}}), "ray 1: the direction is 0");
+  EXPECT_EQ(message({good, good, {NAN, 1, 5, 0, 0, -1}}), "ray 2: the origin is not finite");
+  EXPECT_EQ(message({{0, 1, 5, 0, INFINITY, -1}}), "ray 0: the direction is not finite");
+  EXPECT_EQ(message({{0, 2e15, 5, 0, 0, -1}}), "ray 0: the origin is farther than 1e15 from the world origin on some axis");
+  EXPECT_EQ(renderer.cast_rays({}).count, 0u);
+}
+
+}  // namespace
+}  // namespace vkray
