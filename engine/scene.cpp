@@ -44,18 +44,18 @@ bool within_limits(const glm::dvec3& p) {  // false for NaN too
   return std::max({std::abs(p.x), std::abs(p.y), std::abs(p.z)}) <= max_coordinate;
 }
 
-void check_point(const glm::dvec3& p, const std::string& path) {
+}  // namespace
+
+void check_coordinates(const glm::dvec3& p, const std::string& path) {
   if (!within_limits(p)) {
     throw InputError(path + ": every coordinate must be finite and within 1e15, got (" + std::to_string(p.x) + ", " +
                      std::to_string(p.y) + ", " + std::to_string(p.z) + ")");
   }
 }
 
-}  // namespace
-
 void check_scene(Scene& scene) {
-  check_point(scene.camera.from, "camera.from");
-  check_point(scene.camera.to, "camera.to");
+  check_coordinates(scene.camera.from, "camera.from");
+  check_coordinates(scene.camera.to, "camera.to");
   if (scene.camera.from == scene.camera.to) throw InputError("camera.to: must differ from camera.from");
   if (!within_limits(scene.camera.up) || scene.camera.up == glm::dvec3(0.0)) {
     throw InputError("camera.up: must be finite and non-zero");
@@ -65,7 +65,7 @@ void check_scene(Scene& scene) {
   }
   check_image_size(scene.width, scene.height);
   for (size_t k = 0; k < scene.spheres.size(); ++k) {
-    check_point(scene.spheres[k].center, item("spheres", k) + ".center");
+    check_coordinates(scene.spheres[k].center, item("spheres", k) + ".center");
     const double radius = scene.spheres[k].radius;
     if (!(radius > 0.0 && radius <= max_coordinate)) {
       throw InputError(item("spheres", k) + ".radius: must be > 0 and within 1e15, got " + std::to_string(radius));
@@ -73,7 +73,7 @@ void check_scene(Scene& scene) {
   }
   for (size_t k = 0; k < scene.planes.size(); ++k) {
     Plane& plane = scene.planes[k];
-    check_point(plane.point, item("planes", k) + ".point");
+    check_coordinates(plane.point, item("planes", k) + ".point");
     if (!within_limits(plane.normal) || plane.normal == glm::dvec3(0.0)) {
       throw InputError(item("planes", k) + ".normal: must be finite and non-zero");
     }
@@ -83,7 +83,7 @@ void check_scene(Scene& scene) {
     const Mesh& mesh = scene.meshes[m];
     const std::string path = item("meshes", m);
     if (mesh.triangles.empty()) throw InputError(path + ".triangles: a mesh needs at least one triangle");
-    for (size_t v = 0; v < mesh.positions.size(); ++v) check_point(mesh.positions[v], path + "." + item("positions", v));
+    for (size_t v = 0; v < mesh.positions.size(); ++v) check_coordinates(mesh.positions[v], path + "." + item("positions", v));
     for (size_t t = 0; t < mesh.triangles.size(); ++t) {
       for (size_t c = 0; c < 3; ++c) {
         if (mesh.triangles[t][c] >= mesh.positions.size()) {

@@ -75,6 +75,10 @@ struct ObjectPrimitive {
   bool operator==(const ObjectPrimitive&) const = default;
 };
 
+// Throws InputError naming `path` unless every coordinate of `point` is finite and within
+// max_coordinate.
+void check_coordinates(const glm::dvec3& point, const std::string& path);
+
 // Checks a scene built in memory (Python's vkray.Scene) as a scene file is checked, naming the item
 // by its path ("meshes[2].triangles[7]: ..."): every coordinate finite and within max_coordinate,
 // radii > 0, plane normals non-zero (made unit length here), vertex indices within their mesh, at

@@ -1,0 +1,317 @@
+"""The Python module against the command line and the double-precision reference (ctest runs this
+with pytest: tests/CMakeLists.txt sets VKRAY_CLI, VKRAY_MODELS_DIR and PYTHONPATH)."""
+import math
+import os
+import subprocess
+import threading
+
+import numpy as np
+import OpenImageIO as oiio
+import pytest
+
+import vkray
+
+EPS = 2.0**-24  # float32 unit roundoff
+MODELS = os.environ.get("VKRAY_MODELS_DIR", "")
+BUNNY = os.path.join(MODELS, "stanford-bunny.obj")
+TEAPOT = os.path.join(MODELS, "teapot-vn.obj")
+
+
+def need_model(path):
+    if not os.path.exists(path):
+        pytest.skip(f"{path} is absent: the shared models folder (../shared/models) is not beside the project")
+    return path
+
+
+@pytest.fixture(scope="module")
+def default_scene():
+    return vkray.load("", 96, 72)
+
+
+@pytest.fixture(scope="module")
+def default_renderer(default_scene):
+    return vkray.Renderer(default_scene)
+
+
+def read_exr(path):
+    image = oiio.ImageInput.open(str(path))
+    assert image, oiio.geterror()
+    names = image.spec().channelnames
+    pixels = image.read_image(oiio.FLOAT)
+    image.close()
+    return {name: pixels[:, :, k] for k, name in enumerate(names)}
+
+
+def cli_render(tmp_path, scene_path, width, height, *extra):
+    output = tmp_path / "cli.exr"
+    command = [os.environ["VKRAY_CLI"], "render", *([scene_path] if scene_path else []), "--width", str(width),
+               "--height", str(height), "-o", str(output), "--no-preview", *extra]
+    subprocess.run(command, check=True, capture_output=True)
+    return read_exr(output)
+
+
+def expect_same_as_cli(arrays, channels):
+    """Every pixel bit for bit: the same engine, device and shader made both."""
+    assert np.array_equal(arrays["depth"], channels["Z"])  # inf on a miss in both
+    normal = np.stack([channels["N.X"], channels["N.Y"], channels["N.Z"]], axis=-1)
+    assert np.array_equal(arrays["normal"], normal)
+
+
+def test_render_matches_the_command_lines_exr(tmp_path, default_scene, default_renderer):
+    arrays = default_renderer.render()
+    assert arrays["depth"].shape == (72, 96) and arrays["depth"].dtype == np.float32
+    assert arrays["normal"].shape == (72, 96, 3) and arrays["normal"].dtype == np.float32
+    expect_same_as_cli(arrays, cli_render(tmp_path, "", 96, 72))
+
+
+def test_render_of_a_model_with_a_moved_camera_matches_the_command_line(tmp_path):
+    scene = vkray.load(need_model(BUNNY), 160, 120)
+    camera = dict(scene.camera, **{"from": [0.1, 0.2, 0.25], "fovy": 35})
+    arrays = vkray.Renderer(scene).render(camera)
+    cli = cli_render(tmp_path, BUNNY, 160, 120, "--camera", "from=0.1,0.2,0.25 fovy=35")
+    expect_same_as_cli(arrays, cli)
+
+
+def test_outputs_subset_and_size_per_call(default_renderer):
+    uv_only = default_renderer.render(width=31, height=17, aovs=["uv"])
+    assert list(uv_only) == ["uv"] and uv_only["uv"].shape == (17, 31, 2)
+    # The image-plane coordinates of pixel centres: the shorter side spans [-1, 1].
+    assert uv_only["uv"][8, 15, 0] == 0.0 and uv_only["uv"][8, 15, 1] == 0.0
+    assert np.isclose(uv_only["uv"][0, 0, 1], (17 - 1) / 17)
+
+
+def test_scene_from_arrays_renders_as_the_same_scene_file(tmp_path):
+    vertices = np.array([[-1, 0, -1], [1, 0, -1], [1, 0, 1], [-1, 0, 1], [0, 1.5, 0]], dtype=np.float64)
+    triangles = np.array([[0, 1, 4], [1, 2, 4], [2, 3, 4], [3, 0, 4], [0, 2, 1], [0, 3, 2]], dtype=np.int32)
+    transform = np.array([[2, 0, 0, 0.5], [0, 1, 0, 0], [0, 0, 1, -1], [0, 0, 0, 1]])
+    camera = {"from": [3, 2, 4], "to": [0.5, 0.5, -1], "fovy": 45}
+    scene = vkray.Scene(meshes=[{"vertices": vertices, "triangles": triangles, "transform": transform}],
+                        spheres=np.array([[0.5, 0.5, -4, 1]]), planes=np.array([[0, -0.25, 0, 0, 3, 0]]),
+                        camera=camera, width=64, height=48)
+    moved = [list(transform[:3, :3] @ v + transform[:3, 3]) for v in vertices]
+    scene_file = tmp_path / "scene.json"
+    scene_file.write_text(vkray_scene_json(camera, moved, triangles))
+    expect_same_as_cli(vkray.Renderer(scene).render(), cli_render(tmp_path, str(scene_file), 64, 48))
+
+
+def vkray_scene_json(camera, positions, triangles):
+    import json
+    return json.dumps({"camera": camera, "image": {"width": 64, "height": 48},
+                       "spheres": [{"center": [0.5, 0.5, -4], "radius": 1}],
+                       "planes": [{"point": [0, -0.25, 0], "normal": [0, 1, 0]}],
+                       "meshes": [{"positions": positions, "triangles": triangles.tolist()}]})
+
+
+def test_scene_without_a_camera_is_framed_like_a_model():
+    scene = vkray.Scene(np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0]]), np.array([[0, 1, 2]]))
+    assert scene.camera["to"] != scene.camera["from"]
+    depth = vkray.Renderer(scene).render(width=32, height=32)["depth"]
+    assert np.isfinite(depth).any()
+
+
+def camera_rays(camera, width, height):
+    """The pixel rays of a look-at camera in double, as README's output contract defines them."""
+    eye, target, up = (np.array(camera[k], dtype=np.float64) for k in ("from", "to", "up"))
+    forward = (eye - target) / np.linalg.norm(eye - target)
+    right = np.cross(up, forward)
+    right /= np.linalg.norm(right)
+    true_up = np.cross(forward, right)
+    distance = 1.0 / math.tan(math.radians(camera["fovy"]) / 2)
+    shorter = min(width, height)
+    u = (2 * np.arange(width) + 1 - width) / shorter
+    v = (height - 2 * np.arange(height) - 1) / shorter
+    uu, vv = np.meshgrid(u, v)
+    directions = uu[..., None] * right + vv[..., None] * true_up - distance * forward
+    origins = np.broadcast_to(eye, directions.shape)
+    return np.concatenate([origins, directions], axis=-1).reshape(-1, 6)
+
+
+def test_cast_rays_of_a_cameras_pixels_agree_with_its_image(default_scene, default_renderer):
+    rays = camera_rays(default_scene.camera, 96, 72)
+    hits = default_renderer.cast_rays(rays)
+    image = default_renderer.render()
+    assert hits["t"].shape == (96 * 72,) and hits["normal"].shape == (96 * 72, 3)
+    assert hits["primitive_id"].dtype == np.uint32 and hits["mesh_id"].dtype == np.uint32
+    depth = image["depth"].reshape(-1)
+    hit = np.isfinite(depth)
+    # Both rays are rounded to float32 (each direction within a few eps), so the same surfaces
+    # are hit except within a few eps of a silhouette: at most a pixel row's worth here.
+    assert np.count_nonzero(hit != np.isfinite(hits["t"])) <= 2
+    both = hit & np.isfinite(hits["t"])
+    assert np.median(np.abs(hits["t"][both] - depth[both]) / depth[both]) < 64 * EPS
+    missed = ~np.isfinite(hits["t"])
+    assert np.all(hits["mesh_id"][missed] == vkray.NO_HIT) and np.all(hits["primitive_id"][missed] == vkray.NO_HIT)
+    assert np.all(hits["normal"][missed] == 0)
+
+
+def centroid_rays(vertices, triangles, origins, rng):
+    """Rays from `origins` aimed at random triangles' centroids: far from the triangle's edges in
+    angle, so rounding cannot move the hit off it when it is the nearest."""
+    chosen = rng.integers(0, len(triangles), len(origins))
+    centroids = vertices[triangles[chosen]].mean(axis=1)
+    return np.concatenate([origins, centroids - origins], axis=1), chosen
+
+
+def angle_between(a, b):
+    """Row by row, accurate near 0 (arccos of a dot product is not: 1 - 3e-8 gives 2e-4 rad)."""
+    return np.arctan2(np.linalg.norm(np.cross(a, b), axis=1), np.einsum("ij,ij->i", a, b))
+
+
+def expect_rays_agree_with_reference(renderer, reference, rays, reach, radius, curvature=None):
+    """Ray by ray against the reference, with the error bounds of tests/reference_envelope.cpp for
+    rays whose nearest hit is stable (the callers choose such rays): the same object and primitive;
+    the distance within 16 eps (t + reach) + 2^-44 radius over cos(theta) (positions) plus
+    2 eps t tan(theta) (the direction rounded to float); the normal within 16 eps, plus, on a surface
+    of curvature radius rho, the hit's displacement over rho."""
+    gpu, exact = renderer.cast_rays(rays), reference.cast_rays(rays)
+    hit = np.isfinite(exact["t"])
+    np.testing.assert_array_equal(np.isfinite(gpu["t"]), hit)
+    np.testing.assert_array_equal(gpu["mesh_id"], exact["mesh_id"])
+    np.testing.assert_array_equal(gpu["primitive_id"], exact["primitive_id"])
+    directions = rays[:, 3:] / np.linalg.norm(rays[:, 3:], axis=1, keepdims=True)
+    cos_theta = np.clip(np.abs(np.einsum("ij,ij->i", exact["normal"], directions)), 1e-12, 1.0)[hit]
+    t = exact["t"][hit]
+    displacement = (16 * EPS * (t + reach[hit]) + 2.0**-44 * radius) / cos_theta
+    turn = 2 * EPS * t * np.sqrt(1 - cos_theta**2) / cos_theta
+    error = np.abs(gpu["t"][hit] - t)
+    assert np.all(error <= displacement + turn), f"ray {np.argmax(error - displacement - turn)}: {error.max()} beyond the bound"
+    rho = np.full(len(t), np.inf) if curvature is None else curvature[hit]
+    normal_bound = 16 * EPS + (displacement + 2 * EPS * t / cos_theta) / rho
+    normal_error = angle_between(gpu["normal"][hit].astype(np.float64), exact["normal"][hit])
+    assert np.all(normal_error <= normal_bound), f"ray {np.argmax(normal_error - normal_bound)}: normal {normal_error.max()} rad off"
+
+
+def test_cast_rays_against_the_reference_from_outside_and_inside_a_model():
+    scene = vkray.load(need_model(BUNNY))
+    vertices, triangles = read_obj(BUNNY)
+    centre = vertices.mean(axis=0)
+    radius = np.linalg.norm(vertices - centre, axis=1).max()
+    rng = np.random.default_rng(7)
+    outside = centre + radius * 3 * unit_rows(rng.normal(size=(3000, 3)))
+    inside = centre + 0.05 * radius * rng.normal(size=(3000, 3))  # the bunny's body holds its centre
+    rays, aimed = centroid_rays(vertices, triangles, np.concatenate([outside, inside]), rng)
+    reference = vkray.Reference(scene)
+    exact = reference.cast_rays(rays)
+    # Keep the rays whose nearest hit is the triangle they aim at: elsewhere the nearest hit may lie
+    # anywhere, next to an edge included.
+    keep = exact["primitive_id"] == aimed
+    assert keep.sum() > 1000
+    rays = rays[keep]
+    reach = np.linalg.norm(vertices[triangles[aimed[keep]]] - rays[:, None, :3], axis=2).max(axis=1)
+    expect_rays_agree_with_reference(vkray.Renderer(scene), reference, rays, reach, radius + np.abs(rays[:, :3] - centre).max())
+
+
+def test_cast_rays_at_spheres_and_planes_including_parallel_rays():
+    spheres = np.array([[0, 0, -5, 1], [3, 0, -5, 0.5], [0, 0, 0, 10]])
+    planes = np.array([[0, -2, 0, 0, 1, 0]])
+    scene = vkray.Scene(spheres=spheres, planes=planes, camera={"from": [0, 0, 5], "to": [0, 0, 0]})
+    rng = np.random.default_rng(3)
+    origins = rng.uniform(-4, 4, size=(2000, 3))
+    origins[:, 1] = np.maximum(origins[:, 1], -1.5)
+    targets = spheres[rng.integers(0, 2, len(origins)), :3]  # aimed at a small sphere's centre
+    rays = np.concatenate([origins, targets - origins], axis=1)
+    parallel = np.concatenate([origins[:500], rng.normal(size=(500, 3)) * [1, 0, 1]], axis=1)  # parallel to the plane
+    rays = np.concatenate([rays, parallel])
+    reference = vkray.Reference(scene)
+    exact = reference.cast_rays(rays)
+    assert not np.any(exact["mesh_id"][2000:] == 3), "no ray parallel to the plane hits it"
+    reach = np.full(len(rays), 20.0)  # every sphere's far side and the plane's foot point lie within 20 of any origin
+    curvature = np.where(exact["mesh_id"] < 3, spheres[np.minimum(exact["mesh_id"], 2), 3], np.inf)
+    expect_rays_agree_with_reference(vkray.Renderer(scene), reference, rays, reach, 20.0, curvature)
+    # Inside the big sphere every ray hits something; sphere k is mesh_id k (there are no meshes).
+    assert set(np.unique(exact["mesh_id"])) <= {0, 1, 2, 3}
+
+
+def unit_rows(v):
+    return v / np.linalg.norm(v, axis=1, keepdims=True)
+
+
+def read_obj(path):
+    vertices, faces = [], []
+    with open(path) as obj:
+        for line in obj:
+            parts = line.split()
+            if parts and parts[0] == "v":
+                vertices.append([float(x) for x in parts[1:4]])
+            elif parts and parts[0] == "f":
+                corners = [int(p.split("/")[0]) - 1 for p in parts[1:]]
+                faces.extend([corners[0], corners[k], corners[k + 1]] for k in range(1, len(corners) - 1))
+    return np.array(vertices), np.array(faces)
+
+
+@pytest.mark.parametrize("call, message", [
+    (lambda r: r.cast_rays(np.zeros((4, 5))), "rays: expected an N x 6 array, got shape (4, 5)"),
+    (lambda r: r.cast_rays(np.zeros(6)), "rays: expected an N x 6 array, got shape (6)"),
+    (lambda r: r.cast_rays(np.array([["a"] * 6])), "rays: expected an array of numbers, N x 6"),
+    (lambda r: r.cast_rays(np.array([[0, 0, 0, 0, 0, 1], [np.nan, 0, 0, 0, 0, 1]])), "ray 1: the origin is not finite"),
+    (lambda r: r.cast_rays(np.array([[0, 0, 0, 0, 0, 0.0]])), "ray 0: the direction is 0"),
+    (lambda r: r.render({"from": [0, 0]}), "camera: from: expected 3 numbers [x, y, z], got [0,0]"),
+    (lambda r: r.render({"fov": 30}), "camera: fov: unknown key 'fov' (did you mean 'fovy'?)"),
+    (lambda r: r.render({"fovy": 200}), "camera: fovy: field of view must be in (0, 180) degrees"),
+    (lambda r: r.render("front"), "camera: expected a dict"),
+    (lambda r: r.render(width=0), "width: must be in 1 .. 65536, got 0"),
+    (lambda r: r.render(aovs=["depht"]), "aovs: unknown output 'depht'"),
+    (lambda r: r.render(aovs=[]), "aovs: name at least one output"),
+])
+def test_bad_calls_raise_value_error_with_the_place(default_renderer, call, message):
+    with pytest.raises(ValueError) as raised:
+        call(default_renderer)
+    assert message in str(raised.value)
+
+
+@pytest.mark.parametrize("arguments, message", [
+    ({"vertices": np.zeros((3, 2)), "triangles": [[0, 1, 2]]}, "meshes[0].vertices: expected an N x 3 array, got shape (3, 2)"),
+    ({"vertices": np.eye(3), "triangles": np.array([[0, 1, 3]])}, "meshes[0].triangles[0][2]: vertex index 3 is out of range"),
+    ({"vertices": np.eye(3), "triangles": np.array([[0, -1, 2]])}, "meshes[0].triangles[0][1]: vertex index -1 is out of range"),
+    ({"vertices": np.eye(3), "triangles": np.array([[0.0, 1, 2]])}, "meshes[0].triangles: expected an M x 3 array of integer"),
+    ({"vertices": np.array([[0, 0, np.inf], [1, 0, 0], [0, 1, 0]]), "triangles": [[0, 1, 2]]},
+     "meshes[0].vertices[0]: every coordinate must be finite"),
+    ({"vertices": np.eye(3)}, "give both vertices and triangles, or meshes"),
+    ({"spheres": np.array([[0, 0, 0, -1]]), "camera": {"from": [0, 0, 5], "to": [0, 0, 0]}}, "spheres[0].radius: must be > 0"),
+    ({"planes": np.array([[0, 0, 0, 0, 0, 0]]), "camera": {"from": [0, 0, 5], "to": [0, 0, 0]}}, "planes[0].normal: must be finite and non-zero"),
+    ({"meshes": [{"vertices": np.eye(3), "triangles": [[0, 1, 2]], "scale": 2}]}, "meshes[0]: unknown key 'scale'"),
+    ({"meshes": [{"vertices": np.eye(3), "triangles": [[0, 1, 2]], "transform": np.eye(3)}]}, "meshes[0].transform: expected a 4 x 4 affine matrix"),
+    ({"planes": np.array([[0, 0, 0, 0, 1, 0]])}, "nothing to frame: the scene has no mesh or sphere"),
+])
+def test_bad_scenes_raise_value_error_with_the_place(arguments, message):
+    with pytest.raises(ValueError) as raised:
+        vkray.Scene(**arguments)
+    assert message in str(raised.value)
+
+
+def test_bad_files_raise_value_error_naming_the_file(tmp_path):
+    broken = tmp_path / "broken.obj"
+    broken.write_text("v 0 0 0\nv 1 0 0\nf 1 2 3\n")
+    with pytest.raises(ValueError, match=r"broken\.obj:3: vertex index 3 is out of range"):
+        vkray.load(str(broken))
+    with pytest.raises(ValueError, match=r"unknown kind of file '\.txt'"):
+        vkray.load(str(tmp_path / "scene.txt"))
+
+
+def test_a_device_that_does_not_exist_raises_vkray_error(default_scene):
+    with pytest.raises(vkray.Error, match="no-such-device"):
+        vkray.Renderer(default_scene, device="no-such-device")
+
+
+def test_the_gil_is_released_while_the_device_works(default_renderer):
+    ticks = []
+    stop = threading.Event()
+
+    def count():
+        while not stop.is_set():
+            ticks.append(1)
+
+    counter = threading.Thread(target=count)
+    counter.start()
+    try:
+        default_renderer.render(width=640, height=480)
+    finally:
+        stop.set()
+        counter.join()
+    assert len(ticks) > 100  # the counter ran while render held no GIL
+
+
+def test_arrays_outlive_the_renderer():
+    scene = vkray.load("", 16, 12)
+    depth = vkray.Renderer(scene).render()["depth"]
+    assert np.isfinite(depth).any()  # the renderer is gone; the array owns its memory
