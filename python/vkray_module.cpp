@@ -273,6 +273,8 @@ class PyRenderer {
     return result;
   }
 
+  std::string device_name() const { return device_->info().name; }
+
   py::dict timings() const {
     const RenderTimings& t = renderer_->timings();
     py::dict dict;
@@ -417,7 +419,8 @@ PYBIND11_MODULE(vkray, m) {
       .def("cast_rays", &PyRenderer::cast_rays, py::arg("rays"),
            "rays: N x 6 (origin, direction). A dict of arrays: t (distance along the normalized direction, inf on "
            "a miss), normal N x 3, primitive_id and mesh_id (uint32, NO_HIT on a miss).")
-      .def_property_readonly("timings", &PyRenderer::timings);
+      .def_property_readonly("device_name", &PyRenderer::device_name)
+      .def_property_readonly("timings", &PyRenderer::timings, "Where the last call's time went, in milliseconds.");
 
   py::class_<PyReference>(m, "Reference", "The double-precision CPU reference, with the Renderer's methods (float64).")
       .def(py::init<const Scene&>(), py::arg("scene"))

@@ -1,0 +1,90 @@
+"""What the Python module saves, timed (README, "Python"):
+
+1. Views: VIEWS renders of a model at 640x480 on one vkray.Renderer, the camera turning about the
+   model, against as many `vkray render` processes of the same views (each writes its EXR, no PNG).
+2. Rays: cast_rays of a 1000x1000 camera's pixel rays (one million rays, given as an array) against
+   render() of the same camera's 1000x1000 pixels, best of FRAMES each on the same Renderer.
+
+Run from the repository root after building:
+    PYTHONPATH=build/python python3 docs/python_speed.py [MODEL.obj] [VIEWS]
+"""
+import math
+import os
+import subprocess
+import sys
+import tempfile
+import time
+
+import numpy as np
+
+import vkray
+
+MODEL = sys.argv[1] if len(sys.argv) > 1 else "../shared/models/stanford-bunny.obj"
+VIEWS = int(sys.argv[2]) if len(sys.argv) > 2 else 100
+FRAMES = 5
+CLI = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "build", "vkray")
+
+
+def orbit(camera, count):
+    """`count` eyes turned about the vertical axis through the target, at the framed distance."""
+    target, eye = np.array(camera["to"]), np.array(camera["from"])
+    offset = eye - target
+    radius, height = math.hypot(offset[0], offset[2]), offset[1]
+    for k in range(count):
+        angle = 2 * math.pi * k / count
+        yield [target[0] + radius * math.sin(angle), target[1] + height, target[2] + radius * math.cos(angle)]
+
+
+def pixel_rays(camera, width, height):
+    """The camera's pixel rays in double, as README's output contract defines them."""
+    eye, target, up = (np.array(camera[k], dtype=np.float64) for k in ("from", "to", "up"))
+    forward = (eye - target) / np.linalg.norm(eye - target)
+    right = np.cross(up, forward)
+    right /= np.linalg.norm(right)
+    distance = 1.0 / math.tan(math.radians(camera["fovy"]) / 2)
+    shorter = min(width, height)
+    uu, vv = np.meshgrid((2 * np.arange(width) + 1 - width) / shorter, (height - 2 * np.arange(height) - 1) / shorter)
+    directions = uu[..., None] * right + vv[..., None] * np.cross(forward, right) - distance * forward
+    return np.concatenate([np.broadcast_to(eye, directions.shape), directions], axis=-1).reshape(-1, 6)
+
+
+def views():
+    scene = vkray.load(MODEL, 640, 480)
+    eyes = list(orbit(scene.camera, VIEWS))
+    start = time.perf_counter()
+    renderer = vkray.Renderer(scene)
+    for eye in eyes:
+        renderer.render({"from": eye})
+    in_process = time.perf_counter() - start
+    with tempfile.TemporaryDirectory() as folder:
+        start = time.perf_counter()
+        for k, eye in enumerate(eyes):
+            subprocess.run([CLI, "render", MODEL, "--width", "640", "--height", "480", "--no-preview",
+                            "--camera", "from=%r,%r,%r" % tuple(eye), "-o", os.path.join(folder, f"view-{k}.exr")],
+                           check=True, capture_output=True)
+        processes = time.perf_counter() - start
+    print(f"{VIEWS} views at 640x480 of {os.path.basename(MODEL)}: one Renderer {in_process:.2f} s "
+          f"({1e3 * in_process / VIEWS:.1f} ms a view, device and upload included); {VIEWS} processes "
+          f"{processes:.2f} s ({1e3 * processes / VIEWS:.0f} ms a view); ratio {in_process / processes:.3f}")
+
+
+def rays():
+    scene = vkray.load(MODEL, 1000, 1000)
+    renderer = vkray.Renderer(scene)
+    given = np.ascontiguousarray(pixel_rays(scene.camera, 1000, 1000))
+    render_s, cast_s = [], []
+    for _ in range(FRAMES):
+        start = time.perf_counter()
+        renderer.render()
+        render_s.append(time.perf_counter() - start)
+        start = time.perf_counter()
+        renderer.cast_rays(given)
+        cast_s.append(time.perf_counter() - start)
+    print(f"1,000,000 rays: render() of 1000x1000 pixels {1e3 * min(render_s):.1f} ms, cast_rays() of their rays "
+          f"{1e3 * min(cast_s):.1f} ms (best of {FRAMES}); ratio {min(cast_s) / min(render_s):.2f}")
+
+
+if __name__ == "__main__":
+    print(f"device: {vkray.Renderer(vkray.load('', 8, 8)).device_name}")
+    views()
+    rays()
