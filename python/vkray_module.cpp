@@ -16,6 +16,7 @@
 
 #include <cmath>
 #include <memory>
+#include <mutex>
 #include <optional>
 #include <string>
 #include <vector>
@@ -241,6 +242,7 @@ class PyRenderer {
     Frame frame;
     {
       py::gil_scoped_release released;
+      const std::lock_guard one_call_at_a_time(busy_);
       frame = renderer_->render(view.camera, view.width, view.height, aovs);
     }
     const auto rows = static_cast<py::ssize_t>(frame.height), columns = static_cast<py::ssize_t>(frame.width);
@@ -262,6 +264,7 @@ class PyRenderer {
     RayHits hits;
     {
       py::gil_scoped_release released;
+      const std::lock_guard one_call_at_a_time(busy_);
       hits = renderer_->cast_rays(given_rays(rays));
     }
     const auto count = static_cast<py::ssize_t>(hits.count);
@@ -275,7 +278,8 @@ class PyRenderer {
 
   std::string device_name() const { return device_->info().name; }
 
-  py::dict timings() const {
+  py::dict timings() {
+    const std::lock_guard one_call_at_a_time(busy_);
     const RenderTimings& t = renderer_->timings();
     py::dict dict;
     dict["upload_ms"] = t.upload_ms;
@@ -291,6 +295,9 @@ class PyRenderer {
   Scene scene_;
   std::unique_ptr<GpuDevice> device_;
   std::unique_ptr<Renderer> renderer_;
+  // The engine's Renderer serves one call at a time; Python threads may call it together, since
+  // each call releases the GIL.
+  std::mutex busy_;
 };
 
 // The double-precision CPU reference with the Renderer's signatures; float64 arrays.

@@ -311,6 +311,36 @@ def test_the_gil_is_released_while_the_device_works(default_renderer):
     assert len(ticks) > 100  # the counter ran while render held no GIL
 
 
+def test_threads_may_share_a_renderer(default_scene, default_renderer):
+    expected = default_renderer.render()["depth"]
+    results = [None] * 4
+
+    def render(k):
+        results[k] = default_renderer.render()["depth"]
+
+    threads = [threading.Thread(target=render, args=(k,)) for k in range(4)]
+    for thread in threads:
+        thread.start()
+    for thread in threads:
+        thread.join()
+    assert all(np.array_equal(result, expected) for result in results)
+
+
+def test_double_precision_rounds_to_the_command_lines_exr(tmp_path):
+    scene = vkray.load("", 48, 36)
+    arrays = vkray.Renderer(scene, precision="double").render()
+    assert arrays["depth"].dtype == np.float64 and arrays["normal"].dtype == np.float64
+    cli = cli_render(tmp_path, "", 48, 36, "--precision", "double")
+    expect_same_as_cli({k: v.astype(np.float32) for k, v in arrays.items()}, cli)
+    with pytest.raises(ValueError, match="precision: 'float' or 'double', got 'half'"):
+        vkray.Renderer(scene, precision="half")
+
+
+def test_no_rays_give_empty_arrays(default_renderer):
+    hits = default_renderer.cast_rays(np.zeros((0, 6)))
+    assert hits["t"].shape == (0,) and hits["normal"].shape == (0, 3) and hits["mesh_id"].shape == (0,)
+
+
 def test_arrays_outlive_the_renderer():
     scene = vkray.load("", 16, 12)
     depth = vkray.Renderer(scene).render()["depth"]
