@@ -1,4 +1,5 @@
 #include "cli/commands.hpp"
+#include "cli/device_options.hpp"
 #include "cli/progress.hpp"
 #include "cli/scene_argument.hpp"
 #include "engine/accuracy_report.hpp"
@@ -24,7 +25,7 @@ struct BenchOptions {
   std::string size = "1920x1080";
   uint32_t frames = 5;
   std::string variants;
-  std::string device;
+  DeviceOptions device_options;
   std::string models = "../shared/models";
   bool wide = false;
   std::string json, csv, plot, markdown;
@@ -87,10 +88,12 @@ int run_bench(const BenchOptions& options) {
   }
   if (scenes.empty()) scenes.push_back({"built-in", load_scene_argument("", width, height)});
 
-  GpuDevice device(options.device);
+  GpuDevice device(options.device_options.device, options.device_options.transfer_mode());
+  print_cpu_device_note(device.info());
   BenchReport report = new_bench_report(device.info(), options.suite, options.frames);
-  std::printf("vkray bench on %s\ndriver %s; %ux%u, %u frame%s after a warm-up\n%s%s", device.info().name.c_str(),
-              device.info().driver.c_str(), width, height, options.frames, options.frames == 1 ? "" : "s",
+  std::printf("vkray bench on %s\ndriver %s; transfer %s; %ux%u, %u frame%s after a warm-up\n%s%s",
+              device.info().name.c_str(), device.info().driver.c_str(),
+              device.transfer() == TransferMode::staging ? "staging" : "direct", width, height, options.frames, options.frames == 1 ? "" : "s",
               bench_table_legend(options.wide).c_str(), bench_table_header(options.wide).c_str());
   std::fflush(stdout);
   for (const auto& scene : scenes) {
@@ -137,7 +140,7 @@ Action add_bench_command(CLI::App& app) {
   measuring.push_back(command->add_option("--variants", options->variants,
                                           "Comma-separated variants; default: every one that applies to the scene:" +
                                               variant_names));
-  measuring.push_back(command->add_option("--device", options->device, "Use the Vulkan device whose name contains this text"));
+  measuring.push_back(add_device_options(command, options->device_options));
   measuring.push_back(
       command->add_option("--models", options->models, "Folder of .obj files for --suite models")->capture_default_str());
   measuring.push_back(command->add_flag("--wide", options->wide,

@@ -11,14 +11,16 @@ namespace vkray::cli {
 Action add_info_command(CLI::App& app) {
   CLI::App* command = app.add_subcommand("info", "List the Vulkan devices, the one vkray would use, and its limits.");
   auto device_filter = std::make_shared<std::string>();
-  command->add_option("--device", *device_filter, "Show which device a name (substring, any case) picks");
+  command->add_option("--device", *device_filter,
+                      "Show which device a number, a UUID or a name (substring, any case) picks");
   return [device_filter] {
     const auto devices = list_gpu_devices();
     const size_t chosen = choose_gpu_device(devices, *device_filter);
     for (size_t i = 0; i < devices.size(); ++i) {
       const GpuDeviceInfo& d = devices[i];
       std::cout << (i == chosen ? "* " : "  ") << "[" << i << "] " << d.name << " (" << d.type << ", Vulkan "
-                << d.api_version << ", " << d.driver << ")" << (d.can_compute ? "" : " - unusable: no compute queue or no subgroup vote, ballot and arithmetic") << '\n';
+                << d.api_version << ", " << d.driver << ")" << (d.can_compute ? "" : " - unusable: no compute queue or no subgroup vote, ballot and arithmetic") << '\n'
+                << "      UUID " << d.uuid << '\n';
     }
     const GpuDeviceInfo& d = devices[chosen];
     std::cout << "\nvkray uses [" << chosen << "] " << d.name << '\n'
@@ -31,7 +33,12 @@ Action add_info_command(CLI::App& app) {
               << "  subgroup size              " << d.subgroup_size << '\n'
               << "  timestamps                 "
               << (d.timestamp_period_ns > 0.0 ? std::to_string(d.timestamp_period_ns) + " ns per tick" : "none") << '\n'
-              << "  shaderFloat64              " << (d.shader_float64 ? "yes" : "no") << '\n';
+              << "  shaderFloat64              " << (d.shader_float64 ? "yes" : "no") << '\n'
+              << "  --transfer auto            "
+              << (d.main_memory_host_visible ? "direct (its main memory is host-visible)"
+                                             : "staging (its main memory is not host-visible)")
+              << '\n';
+    if (const std::string note = cpu_device_note(d); !note.empty()) std::cout << '\n' << note << '\n';
     const GeometryLayout layout;
     std::cout << "\ngeometry on the device, bytes (render --timings gives a scene's bytes a triangle)\n"
               << "  a triangle or tree sphere  " << layout.primitive_slot << " + a normal of " << layout.normal_float32

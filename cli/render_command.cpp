@@ -1,4 +1,5 @@
 #include "cli/commands.hpp"
+#include "cli/device_options.hpp"
 #include "cli/progress.hpp"
 #include "cli/scene_argument.hpp"
 #include "engine/compare.hpp"
@@ -29,7 +30,7 @@ struct RenderOptions {
   bool no_preview = false;
   std::optional<uint32_t> width, height;
   std::string aovs = "depth,normal";
-  std::string device;
+  DeviceOptions device_options;
   bool timings = false;
   bool check = false;
   bool reference = false;
@@ -113,7 +114,7 @@ int run_render(const RenderOptions& options) {
   if (!options.reference) {
     opening = std::async(std::launch::async, [&options] {
       Stopwatch open_watch;
-      auto device = std::make_unique<GpuDevice>(options.device);
+      auto device = std::make_unique<GpuDevice>(options.device_options.device, options.device_options.transfer_mode());
       return OpenedDevice{std::move(device), open_watch.lap_ms()};
     });
   }
@@ -127,6 +128,7 @@ int run_render(const RenderOptions& options) {
   double reference_ms = 0.0;
   double device_ms = 0.0, device_wait_ms = 0.0, upload_ms = 0.0, render_ms = 0.0;
   std::string device_name = "CPU reference (double precision)";
+  bool staging = false;
   std::optional<std::vector<ReferenceHit>> reference_hits;
   auto reference = [&]() -> const std::vector<ReferenceHit>& {
     if (!reference_hits) {
@@ -146,6 +148,8 @@ int run_render(const RenderOptions& options) {
     const OpenedDevice opened = opening.get();
     GpuDevice& device = *opened.device;
     device_name = device.info().name;
+    staging = device.transfer() == TransferMode::staging;
+    print_cpu_device_note(device.info());
     device_ms = opened.open_ms;
     device_wait_ms = stopwatch.lap_ms();
     ProgressLine progress("building the BVH");
@@ -187,12 +191,17 @@ int run_render(const RenderOptions& options) {
     if (gpu_timings) {
       print_timing(1, "device open", device_ms, "beside the scene load, on a second thread");
       print_timing(1, "waiting for the device", device_wait_ms, "what the device open took beyond the scene load");
-      print_timing(1, "upload", upload_ms, "the scene to the device");
+      print_timing(1, "upload", upload_ms,
+                   staging ? "the scene to the device, through staging buffers (--transfer)"
+                           : "the scene to the device, into memory the host maps (--transfer)");
       if (scene_stats->bvh_nodes > 0) print_timing(2, "BVH build", gpu_timings->bvh_build_ms);
       print_timing(1, "render", render_ms);
       print_timing(2, "pipeline creation", gpu_timings->pipeline_ms);
-      const std::string dispatches =
-          std::to_string(gpu_timings->tiles) + (gpu_timings->tiles == 1 ? " dispatch" : " dispatches");
+      char longest[64];
+      std::snprintf(longest, sizeof longest, ", the longest %.1f ms (budget %.0f)", gpu_timings->longest_dispatch_ms,
+                    default_dispatch_budget_ms);
+      const std::string dispatches = std::to_string(gpu_timings->tiles) +
+                                     (gpu_timings->tiles == 1 ? " dispatch" : " dispatches" + std::string(longest));
       if (gpu_timings->has_gpu_times) {
         print_timing(2, "dispatch (GPU time)", gpu_timings->dispatch_gpu_ms, dispatches + ", timestamp queries");
       } else {
@@ -243,7 +252,7 @@ Action add_render_command(CLI::App& app) {
                       "OpenEXR compression, all lossless: zip, zips, piz, rle, none (fastest, largest); zip and zips "
                       "also with a deflate level from 1 (fastest) to 9, as zip:9")
       ->capture_default_str();
-  CLI::Option* device = command->add_option("--device", options->device, "Use the Vulkan device whose name contains this text");
+  CLI::Option* device = add_device_options(command, options->device_options);
   CLI::Option* precision = command->add_option("--precision", options->precision,
                       "Shader arithmetic: float (float32, camera-relative) or double (float64: exact, slower; needs "
                       "shaderFloat64)")

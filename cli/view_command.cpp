@@ -1,4 +1,5 @@
 #include "cli/commands.hpp"
+#include "cli/device_options.hpp"
 #include "cli/scene_argument.hpp"
 #include "engine/scene_loader.hpp"
 #include "engine/image_io.hpp"
@@ -16,7 +17,7 @@ struct ViewCommandOptions {
   std::optional<std::string> size;
   std::optional<std::string> camera;
   std::string output = "depth";
-  std::string device;
+  DeviceOptions device_options;
   bool no_vsync = false;
   bool no_overlay = false;
   uint32_t frames = 0;
@@ -42,7 +43,8 @@ int run_view(const ViewCommandOptions& options) {
   };
   viewer.watched = options.scene_path;
   viewer.title = options.scene_path.empty() ? "built-in scene" : options.scene_path;
-  viewer.device = options.device;
+  viewer.device = options.device_options.device;
+  viewer.transfer = options.device_options.transfer_mode();
   viewer.vsync = !options.no_vsync;
   viewer.output = *output;
   viewer.overlay = !options.no_overlay;
@@ -68,7 +70,7 @@ Action add_view_command(CLI::App& app) {
                       "scene file's camera as JSON '{\"from\": [0, 1, 5]}'");
   command->add_option("--output", options->output, std::string("Output shown first: ") + aov_names_help)
       ->capture_default_str();
-  command->add_option("--device", options->device, "Use the Vulkan device whose name contains this text");
+  add_device_options(command, options->device_options);
   command->add_flag("--no-vsync", options->no_vsync, "Present without waiting for the display's refresh");
   command->add_flag("--no-overlay", options->no_overlay, "Show the picture alone, without the text overlay");
   command->add_option("--frames", options->frames, "Quit after presenting N frames, each rendered anew (benchmarks, tests)");

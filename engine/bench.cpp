@@ -186,6 +186,8 @@ BenchSceneResult bench_scene(GpuDevice& device, const BenchScene& bench, const B
     }
     try {
       result.rows.push_back(run_variant(device, scene, *variant, settings.frames, reference));
+    } catch (const DeviceLostError&) {
+      throw;  // nothing more can run on it
     } catch (const GpuError& error) {  // e.g. a workgroup shape or loop count this device lacks
       result.skipped.push_back(variant->name + " (" + error.what() + ")");
     }

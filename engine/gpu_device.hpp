@@ -18,6 +18,13 @@ class GpuError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+// The device stopped responding or its driver reset it (VK_ERROR_DEVICE_LOST): nothing more can be
+// done with it, so a bench stops rather than going on to its next row.
+class DeviceLostError : public GpuError {
+ public:
+  using GpuError::GpuError;
+};
+
 // No window can be shown: no display, or no device presents to it (the viewer). The message
 // names the headless alternative.
 class NoWindowError : public GpuError {
@@ -26,8 +33,17 @@ class NoWindowError : public GpuError {
       : GpuError("cannot open a window: " + reason + "; 'vkray render' renders without one") {}
 };
 
+// How scene data reaches the device and results come back (`--transfer`). direct: the device
+// reads and writes memory the host maps; staging: through host buffers and copies on the device,
+// what discrete GPUs need, since their fast memory is not the host's. automatic: direct when the
+// largest device-local memory heap is also host-visible (integrated GPUs, lavapipe, resizable
+// BAR), staging otherwise; the environment variable VKRAY_TRANSFER (staging or direct) overrides
+// it, which is how the test suite runs every path on lavapipe.
+enum class TransferMode { automatic, staging, direct };
+
 struct GpuDeviceInfo {
   std::string name;
+  std::string uuid;  // VkPhysicalDeviceIDProperties::deviceUUID as 8-4-4-4-12 hex digits
   std::string type;  // "discrete", "integrated", "virtual", "cpu" or "other"
   std::string driver;
   std::string api_version;
@@ -42,6 +58,8 @@ struct GpuDeviceInfo {
   uint32_t subgroup_size = 0;
   double timestamp_period_ns = 0.0;  // 0: the compute queue has no timestamps
   bool shader_float64 = false;
+  // Its largest device-local memory heap is also host-visible: TransferMode::automatic is direct.
+  bool main_memory_host_visible = false;
   // Loop iterations a shader invocation may run before the driver silently stops it: llvmpipe
   // (lavapipe) caps them at 65535 in total; 0 for no known limit.
   uint64_t max_loop_iterations = 0;
@@ -50,10 +68,17 @@ struct GpuDeviceInfo {
 // Every Vulkan device, in enumeration order. Throws GpuError when Vulkan itself is unavailable.
 std::vector<GpuDeviceInfo> list_gpu_devices();
 
-// Index into `devices` of the one vkray uses: when `name_filter` is empty, the first discrete GPU,
-// else integrated, virtual, then CPU (lavapipe); otherwise the first whose name contains
-// `name_filter`, ignoring case. Throws GpuError when none fits.
-size_t choose_gpu_device(const std::vector<GpuDeviceInfo>& devices, std::string_view name_filter);
+// Index into `devices` of the one vkray uses: when `choice` is empty, the first discrete GPU, else
+// integrated, virtual, then CPU (lavapipe); otherwise the device at that index (`vkray info`
+// numbers them from 0), the one with that UUID, or the first whose name contains `choice`, ignoring
+// case. Throws GpuError when none fits.
+size_t choose_gpu_device(const std::vector<GpuDeviceInfo>& devices, std::string_view choice);
+
+// One line for stderr when `device` is a CPU implementation of Vulkan (lavapipe, SwiftShader):
+// rendering there is the CPU's speed, so the user should know, and why no GPU was used when one
+// seems present (a GPU device node without a Vulkan driver for it, or an NVIDIA container without
+// the graphics capability). Empty for any other device.
+std::string cpu_device_note(const GpuDeviceInfo& device);
 
 struct VulkanContext;        // engine/vulkan/context.hpp
 struct PresentationSupport;  // engine/vulkan/context.hpp
@@ -61,15 +86,19 @@ struct PresentationSupport;  // engine/vulkan/context.hpp
 // An opened Vulkan device with a compute queue.
 class GpuDevice {
  public:
-  explicit GpuDevice(std::string_view name_filter = {});
+  // `choice` as choose_gpu_device takes it.
+  explicit GpuDevice(std::string_view choice = {}, TransferMode transfer = TransferMode::automatic);
   // A device whose compute queue can also present to a window (the viewer's): only devices with
   // such a queue are candidates. Throws NoWindowError when none is.
-  GpuDevice(std::string_view name_filter, const PresentationSupport& presentation);
+  GpuDevice(std::string_view choice, const PresentationSupport& presentation,
+            TransferMode transfer = TransferMode::automatic);
   ~GpuDevice();
   GpuDevice(const GpuDevice&) = delete;
   GpuDevice& operator=(const GpuDevice&) = delete;
 
   const GpuDeviceInfo& info() const;
+  // staging or direct, as chosen when the device opened.
+  TransferMode transfer() const;
   VulkanContext& vulkan() { return *context_; }
 
  private:

@@ -97,6 +97,36 @@ uint32_t stack_registers_for_depth(uint32_t depth) {
   return std::max<uint32_t>(4, (depth + 3) / 4 * 4);
 }
 
+// Rows of the next dispatch, from the time the earlier ones took (RendererOptions::dispatch_budget_ms).
+class DispatchSizer {
+ public:
+  // `max_rows`: what the output buffers hold; rows are counted in `width`-wide rows.
+  DispatchSizer(uint32_t width, uint32_t max_rows, double budget_ms)
+      : width_(width), max_rows_(max_rows), budget_ms_(budget_ms) {}
+
+  uint32_t next_rows() const {
+    if (budget_ms_ <= 0.0) return max_rows_;
+    if (last_rows_ == 0) return std::clamp<uint32_t>(first_dispatch_pixels / width_, 1, max_rows_);
+    uint64_t rows = uint64_t{4} * last_rows_;  // growth bounded: a jump in cost shows before it costs much
+    if (slowest_ms_per_row_ > 0.0) rows = std::min<uint64_t>(rows, static_cast<uint64_t>(0.5 * budget_ms_ / slowest_ms_per_row_));
+    return static_cast<uint32_t>(std::clamp<uint64_t>(rows, 1, max_rows_));
+  }
+
+  void measured(uint32_t rows, double ms) {
+    last_rows_ = rows;
+    slowest_ms_per_row_ = std::max(slowest_ms_per_row_, ms / rows);
+  }
+
+ private:
+  // The first dispatch: 65536 pixels, a few ms on lavapipe's two cores even where every ray walks a
+  // tree, and far less on a GPU.
+  static constexpr uint32_t first_dispatch_pixels = 65536;
+  uint32_t width_, max_rows_;
+  double budget_ms_;
+  uint32_t last_rows_ = 0;
+  double slowest_ms_per_row_ = 0.0;
+};
+
 }  // namespace
 
 struct Renderer::Impl {
@@ -244,7 +274,8 @@ struct Renderer::Impl {
   }
 
   void reset_timings() {
-    timings = RenderTimings{timings.upload_ms, timings.bvh_build_ms, 0.0, *timestamps != vk::QueryPool(), 0.0, 0.0, 0, 0, 0.0};
+    timings = RenderTimings{timings.upload_ms, timings.bvh_build_ms, 0.0, *timestamps != vk::QueryPool(), 0.0, 0.0, 0, 0.0, 0,
+                            0.0};
   }
 
   // What a render needs before its tiles: the pipeline (returned), the planes' heights above this
@@ -265,7 +296,10 @@ struct Renderer::Impl {
 
   // Casts the rays of one tile: resets the overflow list (and the depth range, for an image),
   // dispatches, and copies what the host reads into host-visible memory; waits for it.
-  void dispatch_tile(const vk::raii::Pipeline& chosen, const gpu::RayGenParams& params) {
+  // Returns the dispatch's GPU time (its wall time, submission included, where there are no
+  // timestamps).
+  double dispatch_tile(const vk::raii::Pipeline& chosen, const gpu::RayGenParams& params) {
+    const auto submitted = Clock::now();
     const bool to_image = tile.image_id != 0;
     context.submit_and_wait([&](const vk::raii::CommandBuffer& commands) {
       if (*timestamps) {
@@ -311,14 +345,18 @@ struct Renderer::Impl {
       if (*timestamps) commands.writeTimestamp(vk::PipelineStageFlagBits::eBottomOfPipe, *timestamps, 2);
     });
 
+    double dispatch_ms = elapsed_ms(submitted);
     if (*timestamps) {
       const auto [result, ticks] = timestamps.getResults<uint64_t>(
           0, 3, 3 * sizeof(uint64_t), sizeof(uint64_t), vk::QueryResultFlagBits::e64 | vk::QueryResultFlagBits::eWait);
       const double period_ms = context.info.timestamp_period_ns * 1e-6;
-      timings.dispatch_gpu_ms += static_cast<double>(ticks[1] - ticks[0]) * period_ms;
+      dispatch_ms = static_cast<double>(ticks[1] - ticks[0]) * period_ms;
+      timings.dispatch_gpu_ms += dispatch_ms;
       timings.readback_ms += static_cast<double>(ticks[2] - ticks[1]) * period_ms;
     }
     ++timings.tiles;
+    timings.longest_dispatch_ms = std::max(timings.longest_dispatch_ms, dispatch_ms);
+    return dispatch_ms;
   }
 
   // Writes the pixels the CPU finished into `target`, after the shader's writes.
@@ -472,9 +510,11 @@ Frame Renderer::render(const Camera& camera, uint32_t width, uint32_t height, Ao
     const CameraBasis basis = make_camera_basis(camera, width, height);
     uint32_t tile_rows = 0;
     const vk::raii::Pipeline& pipeline = r.begin_render(camera, width, height, aovs, nullptr, tile_rows);
-    for (uint32_t first_row = 0; first_row < height; first_row += tile_rows) {
-      const uint32_t rows = std::min(tile_rows, height - first_row);
-      r.dispatch_tile(pipeline, make_ray_gen_params(basis, r.anchor, r.precision(), width, height, first_row, rows, r.counts));
+    DispatchSizer sizer(width, tile_rows, r.options.dispatch_budget_ms);
+    for (uint32_t first_row = 0, rows = 0; first_row < height; first_row += rows) {
+      rows = std::min(sizer.next_rows(), height - first_row);
+      sizer.measured(rows, r.dispatch_tile(pipeline, make_ray_gen_params(basis, r.anchor, r.precision(), width, height,
+                                                                         first_row, rows, r.counts)));
       const auto copy_start = Clock::now();
       // The shader packs each plane of this tile to width * rows floats (see raycast.comp); each
       // lands in the same plane of the frame.
@@ -532,9 +572,9 @@ RayHits Renderer::cast_rays(std::span<const GivenRay> rays) {
       std::memcpy(r.planes->buffer.mapped, r.gpu_planes.data(), r.gpu_planes.size() * sizeof(gpu::GpuPlane));
     }
     r.prepare_tile(width, tile_rows, aovs, nullptr, RaycastMode::given_rays);
-    const size_t tile_capacity = size_t{width} * tile_rows;
-    for (size_t first = 0; first < rays.size(); first += tile_capacity) {
-      const size_t count = std::min(tile_capacity, rays.size() - first);
+    DispatchSizer sizer(width, tile_rows, r.options.dispatch_budget_ms);
+    for (size_t first = 0, count = 0; first < rays.size(); first += count) {
+      count = std::min(size_t{width} * sizer.next_rows(), rays.size() - first);
       auto* encoded = static_cast<gpu::GpuRay*>(r.tile.rays->buffer.mapped);
       parallel_for_chunks(count, [&](size_t begin, size_t end) {
         for (size_t k = begin; k < end; ++k) {
@@ -545,7 +585,7 @@ RayHits Renderer::cast_rays(std::span<const GivenRay> rays) {
       gpu::RayGenParams params{};
       params.image = glm::uvec4(width, static_cast<uint32_t>(count), 0, static_cast<uint32_t>((count + width - 1) / width));
       params.counts = r.counts;
-      r.dispatch_tile(pipeline, params);
+      sizer.measured(params.image.w, r.dispatch_tile(pipeline, params));
 
       const auto copy_start = Clock::now();
       const auto* slots = static_cast<const uint32_t*>(r.tile.hits->host());
@@ -594,9 +634,11 @@ DepthRange Renderer::render(const Camera& camera, Aov aov, ImageTarget& target) 
     uint32_t tile_rows = 0;
     const vk::raii::Pipeline& pipeline = r.begin_render(camera, width, height, AovSet{aov}, &target, tile_rows);
     std::vector<PixelPatch> patches;
-    for (uint32_t first_row = 0; first_row < height; first_row += tile_rows) {
-      const uint32_t rows = std::min(tile_rows, height - first_row);
-      r.dispatch_tile(pipeline, make_ray_gen_params(basis, r.anchor, r.precision(), width, height, first_row, rows, r.counts));
+    DispatchSizer sizer(width, tile_rows, r.options.dispatch_budget_ms);
+    for (uint32_t first_row = 0, rows = 0; first_row < height; first_row += rows) {
+      rows = std::min(sizer.next_rows(), height - first_row);
+      sizer.measured(rows, r.dispatch_tile(pipeline, make_ray_gen_params(basis, r.anchor, r.precision(), width, height,
+                                                                         first_row, rows, r.counts)));
       if (aov == Aov::depth) {
         const auto& bits = static_cast<const gpu::DepthRangeBits*>(r.depth_range->host())->near_far;
         if (bits.y != 0) depths.add(std::bit_cast<float>(bits.x)), depths.add(std::bit_cast<float>(bits.y));

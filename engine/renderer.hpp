@@ -24,6 +24,7 @@ struct RenderTimings {
   double dispatch_gpu_ms = 0.0;    // GPU time of the ray-casting dispatches (timestamp queries)
   double readback_ms = 0.0;        // copying results back into the Frame (or the few the host reads)
   uint32_t tiles = 0;              // dispatches the image was split into
+  double longest_dispatch_ms = 0.0;  // GPU time of the longest (wall time where no timestamps)
   uint64_t unfinished_rays = 0;    // rays that ran out of the device's loop budget, finished on the CPU
   double cpu_finish_ms = 0.0;      // time spent finishing them
 };
@@ -50,11 +51,20 @@ struct RayHits {
   void store(size_t ray, float distance, const glm::vec3& unit_normal, ObjectPrimitive source);
 };
 
+// The longest a dispatch may run, by default. A display-attached GPU is reset when one runs for
+// about 2 s (Windows' TDR; Linux desktops have similar watchdogs): a tenth of that leaves room for
+// the estimate's error and slower devices, and costs a submission or two a frame.
+inline constexpr double default_dispatch_budget_ms = 200.0;
+
 struct RendererOptions {
   // Upper bound on the bytes of one output buffer; the image is split into tiles of rows to stay
   // under it and under the device's maxStorageBufferRange (a tile has at least one row, whatever
   // the bound). 0: the device limit alone.
   uint64_t max_tile_bytes = 0;
+  // Dispatches are sized so that none runs longer than this, measured as they run: the first
+  // covers a small part of the image, each later one as many rows as the slowest rows so far let
+  // fit in half the budget (at most four times its predecessor's). 0: tiles by size alone.
+  double dispatch_budget_ms = default_dispatch_budget_ms;
   GpuSceneOptions scene;
   // Iterations one ray's tree walk may take before the CPU finishes it; 0: as many as the device
   // allows. Tests lower it to force that path.

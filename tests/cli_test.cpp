@@ -197,7 +197,7 @@ class CliTest : public vkray::test::TempDirTest {
  protected:
   // Runs vkray with `args` in the test's folder; a hung run is killed after 120 s (exit 124).
   // `environment`: extra NAME=value settings for the run, e.g. to hide every Vulkan driver.
-  RunResult vkray(std::initializer_list<std::string> args, const std::string& environment = "") const {
+  RunResult vkray(const std::vector<std::string>& args, const std::string& environment = "") const {
     std::string command = "cd " + shell_quote(dir_.string()) + " && exec env " + environment + " timeout 120 " +
                           shell_quote(VKRAY_BINARY);
     for (const auto& arg : args) command += " " + shell_quote(arg);
@@ -984,6 +984,69 @@ TEST_F(CliTest, EveryCompressionWritesTheSameFloats) {
       ASSERT_EQ(exr.channels.count(channel), 1u) << channel;
       EXPECT_EQ(std::memcmp(values.data(), exr.channels.at(channel).data(), values.size() * sizeof(float)), 0) << channel;
     }
+  }
+}
+
+// Every upload and readback path runs on any device: staging copies (what discrete GPUs take) and
+// direct mapping give the same bits, under the validation layer's synchronization checks (the suite
+// sets VKRAY_VALIDATION=1; an error aborts the run).
+TEST_F(CliTest, StagingAndDirectTransfersWriteIdenticalImages) {
+  std::vector<std::vector<std::string>> scenes = {{}};
+  const fs::path bunny = fs::path(VKRAY_MODELS_DIR) / "stanford-bunny.obj";
+  if (fs::exists(bunny)) {
+    scenes.push_back({bunny.string()});
+  } else {
+    std::printf("    %s is absent: the built-in scene alone\n", bunny.c_str());
+  }
+  for (const auto& scene : scenes) {
+    std::map<std::string, Image> images;
+    for (const char* transfer : {"staging", "direct"}) {
+      std::vector<std::string> args = {"render", "--width", "160", "--height", "120", "--aov", "depth,normal,uv",
+                                       "--transfer", transfer, "--no-preview", "-o", std::string(transfer) + ".exr"};
+      args.insert(args.begin() + 1, scene.begin(), scene.end());
+      const RunResult run = vkray(args);
+      ASSERT_EQ(run.exit_code, 0) << run.err;
+      ASSERT_NO_FATAL_FAILURE(read_image(path(std::string(transfer) + ".exr"), images[transfer], true));
+    }
+    const Image& staging = images["staging"];
+    const Image& direct = images["direct"];
+    EXPECT_EQ(staging.channel_names, direct.channel_names);
+    for (const auto& [channel, values] : staging.channels) {
+      EXPECT_EQ(std::memcmp(values.data(), direct.channels.at(channel).data(), values.size() * sizeof(float)), 0)
+          << channel << (scene.empty() ? " (built-in scene)" : " of " + scene[0]);
+    }
+  }
+}
+
+TEST_F(CliTest, DevicesAreChosenByNumberAndUuid) {
+  const RunResult info = vkray({"info"});
+  ASSERT_EQ(info.exit_code, 0) << info.err;
+  std::smatch uuid;
+  ASSERT_TRUE(std::regex_search(info.out, uuid, std::regex(R"(UUID ([0-9a-f]{8}-[0-9a-f]{4}-[0-9a-f]{4}-[0-9a-f]{4}-[0-9a-f]{12}))")))
+      << info.out;
+  for (const std::string& choice : {std::string("0"), uuid[1].str()}) {
+    const RunResult run = vkray({"render", "--device", choice, "--width", "8", "--height", "8", "--no-preview"});
+    EXPECT_EQ(run.exit_code, 0) << choice << ": " << run.err;
+  }
+  const RunResult missing = vkray({"render", "--device", "99", "--width", "8", "--height", "8", "--no-preview"});
+  EXPECT_EQ(missing.exit_code, 1);
+  EXPECT_NE(missing.err.find("no Vulkan device number 99"), std::string::npos) << missing.err;
+}
+
+// A CPU implementation of Vulkan is named in one line on stderr, and the render still succeeds;
+// a GPU gets no such line.
+TEST_F(CliTest, ACpuDeviceIsSaidInOneLine) {
+  const RunResult info = vkray({"info"});
+  ASSERT_EQ(info.exit_code, 0) << info.err;
+  const bool cpu = std::regex_search(info.out, std::regex(R"((^|\n)\* \[[0-9]+\] [^\n]*\(cpu, )"));
+  const RunResult run = vkray({"render", "--width", "8", "--height", "8", "--no-preview"});
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  if (cpu) {
+    EXPECT_EQ(count_lines(run.err), 1u) << run.err;
+    EXPECT_TRUE(starts_with(run.err, "vkray: note: rendering on ")) << run.err;
+    EXPECT_NE(run.err.find("a CPU implementation of Vulkan"), std::string::npos) << run.err;
+  } else {
+    EXPECT_EQ(run.err, "");
   }
 }
 

@@ -177,6 +177,33 @@ TEST(GpuRenderer, TilingGivesIdenticalImages) {
   EXPECT_EQ(0, std::memcmp(frame.uv.data(), reference.uv.data(), frame.uv.size() * sizeof(float)));
 }
 
+// Dispatches sized by their measured time: a budget far below what a row takes leaves one row a
+// dispatch after the first, and the pixels are those of one dispatch; none is longer than the
+// longest measured, and a generous budget gives one dispatch after the first.
+TEST(GpuRenderer, DispatchesSizedByTimeGiveIdenticalImages) {
+  const Scene scene = sized(default_scene(), 1024, 80);  // the first dispatch: 65536 pixels, 64 rows
+  const AovSet all{Aov::depth, Aov::normal, Aov::uv};
+  RendererOptions unbudgeted;
+  unbudgeted.dispatch_budget_ms = 0.0;
+  Renderer whole(device(), scene, unbudgeted);
+  const Frame reference = whole.render(scene.camera, 1024, 80, all);
+  EXPECT_EQ(whole.timings().tiles, 1u);
+
+  RendererOptions tight;
+  tight.dispatch_budget_ms = 1e-6;
+  Renderer budgeted(device(), scene, tight);
+  const Frame frame = budgeted.render(scene.camera, 1024, 80, all);
+  EXPECT_EQ(budgeted.timings().tiles, 1u + 16u);
+  EXPECT_GT(budgeted.timings().longest_dispatch_ms, 0.0);
+  EXPECT_EQ(0, std::memcmp(frame.depth.data(), reference.depth.data(), frame.depth.size() * sizeof(float)));
+  EXPECT_EQ(0, std::memcmp(frame.normal.data(), reference.normal.data(), frame.normal.size() * sizeof(float)));
+  EXPECT_EQ(0, std::memcmp(frame.uv.data(), reference.uv.data(), frame.uv.size() * sizeof(float)));
+
+  Renderer generous(device(), scene);  // the default budget, 200 ms
+  generous.render(scene.camera, 1024, 80, all);
+  EXPECT_EQ(generous.timings().tiles, 2u);  // 64 rows, then the other 16 (at most four times as many)
+}
+
 // One Renderer, many renders: a new camera and size must give what a fresh Renderer gives, and
 // each output alone must equal the same output rendered together with the others.
 TEST(GpuRenderer, RerenderAndOutputSubsets) {

@@ -111,7 +111,7 @@ Viewer::Viewer(const ViewerOptions& options)
       window_(options.width ? options.width : scene_.width, options.height ? options.height : scene_.height,
               "vkray: " + options.title),
       presentation_(window_.presentation()),
-      device_(options.device, presentation_),
+      device_(options.device, presentation_, options.transfer),
       display_(device_.vulkan(), window_.create_surface(device_.vulkan().instance), options.vsync),
       renderer_(std::make_unique<Renderer>(device_, scene_)),
       preview_(device_.vulkan()) {

@@ -4,6 +4,7 @@
 
 #include "engine/camera.hpp"
 #include "engine/frame.hpp"
+#include "engine/gpu_device.hpp"
 #include "engine/scene.hpp"
 
 #include <cstdint>
@@ -22,6 +23,7 @@ struct ViewerOptions {
   std::string title;               // the window's, after "vkray: "
   uint32_t width = 0, height = 0;  // the window's first size; 0: the scene's image size
   std::string device;              // as --device
+  TransferMode transfer = TransferMode::automatic;
   bool vsync = true;
   Aov output = Aov::depth;  // shown first; keys 1, 2, 3 switch
   bool overlay = true;

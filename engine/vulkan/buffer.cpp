@@ -22,8 +22,12 @@ uint32_t find_memory_type(const VulkanContext& context, uint32_t type_bits, vk::
 
 namespace {
 
+// What a buffer is for: the shaders' (mapped only with TransferMode::direct) or the host's (always
+// mapped: uploads, readbacks).
+enum class Side { device, host };
+
 GpuBuffer create_buffer(VulkanContext& context, vk::DeviceSize size, vk::BufferUsageFlags usage,
-                        vk::MemoryPropertyFlags required, vk::MemoryPropertyFlags preferred) {
+                        vk::MemoryPropertyFlags required, vk::MemoryPropertyFlags preferred, Side side) {
   GpuBuffer result;
   result.size = size;
   result.buffer = vk::raii::Buffer(context.device, vk::BufferCreateInfo({}, size, usage));
@@ -31,7 +35,8 @@ GpuBuffer create_buffer(VulkanContext& context, vk::DeviceSize size, vk::BufferU
   const uint32_t type = find_memory_type(context, requirements.memoryTypeBits, required, preferred);
   result.memory = vk::raii::DeviceMemory(context.device, vk::MemoryAllocateInfo(requirements.size, type));
   result.buffer.bindMemory(*result.memory, 0);
-  if ((context.memory_properties.memoryTypes[type].propertyFlags & host_access) == host_access) {
+  const bool host_visible = (context.memory_properties.memoryTypes[type].propertyFlags & host_access) == host_access;
+  if (host_visible && (side == Side::host || !context.staging)) {
     result.mapped = result.memory.mapMemory(0, VK_WHOLE_SIZE);
   }
   return result;
@@ -41,29 +46,34 @@ GpuBuffer create_buffer(VulkanContext& context, vk::DeviceSize size, vk::BufferU
 
 GpuBuffer create_storage_buffer(VulkanContext& context, vk::DeviceSize size, vk::BufferUsageFlags extra_usage) {
   return create_buffer(context, size, vk::BufferUsageFlagBits::eStorageBuffer | extra_usage, {},
-                       vk::MemoryPropertyFlagBits::eDeviceLocal);
+                       vk::MemoryPropertyFlagBits::eDeviceLocal, Side::device);
 }
 
 GpuBuffer create_readback_buffer(VulkanContext& context, vk::DeviceSize size) {
   return create_buffer(context, size, vk::BufferUsageFlagBits::eTransferDst, host_access,
-                       vk::MemoryPropertyFlagBits::eHostCached);
+                       vk::MemoryPropertyFlagBits::eHostCached, Side::host);
 }
 
 GpuBuffer create_upload_buffer(VulkanContext& context, vk::DeviceSize size, vk::BufferUsageFlags usage) {
-  return create_buffer(context, size, usage, host_access, {});
+  return create_buffer(context, size, usage, host_access, {}, Side::host);
 }
 
 GpuBuffer upload_buffer(VulkanContext& context, const void* data, size_t bytes, vk::BufferUsageFlags usage) {
   GpuBuffer target = create_buffer(context, bytes, usage | vk::BufferUsageFlagBits::eTransferDst, {},
-                                   vk::MemoryPropertyFlagBits::eDeviceLocal);
+                                   vk::MemoryPropertyFlagBits::eDeviceLocal, Side::device);
   if (target.mapped) {
     std::memcpy(target.mapped, data, bytes);
     return target;
   }
-  GpuBuffer staging = create_buffer(context, bytes, vk::BufferUsageFlagBits::eTransferSrc, host_access, {});
+  GpuBuffer staging = create_buffer(context, bytes, vk::BufferUsageFlagBits::eTransferSrc, host_access, {}, Side::host);
   std::memcpy(staging.mapped, data, bytes);
   context.submit_and_wait([&](const vk::raii::CommandBuffer& commands) {
     commands.copyBuffer(*staging.buffer, *target.buffer, vk::BufferCopy(0, 0, bytes));
+    // The copy's writes made available to every later shader read on this queue: a fence wait
+    // orders the submissions but makes no device write visible to another stage.
+    const vk::MemoryBarrier copied(vk::AccessFlagBits::eTransferWrite, vk::AccessFlagBits::eShaderRead);
+    commands.pipelineBarrier(vk::PipelineStageFlagBits::eTransfer, vk::PipelineStageFlagBits::eComputeShader, {}, copied,
+                             {}, {});
   });
   return target;
 }

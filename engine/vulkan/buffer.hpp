@@ -18,9 +18,9 @@ struct GpuBuffer {
 uint32_t find_memory_type(const VulkanContext& context, uint32_t type_bits, vk::MemoryPropertyFlags required,
                           vk::MemoryPropertyFlags preferred);
 
-// A storage buffer in device-local memory where the device has it. On devices whose device-local
-// memory is also host-visible (integrated GPUs, lavapipe, resizable BAR) the buffer is mapped, so
-// uploads and readbacks skip the staging copy.
+// A storage buffer in device-local memory where the device has it. With TransferMode::direct
+// (devices whose main memory is also host-visible: integrated GPUs, lavapipe, resizable BAR) the
+// buffer is mapped, so uploads and readbacks skip the staging copy; with staging it never is.
 GpuBuffer create_storage_buffer(VulkanContext& context, vk::DeviceSize size, vk::BufferUsageFlags extra_usage = {});
 
 // A host-visible, coherent buffer (cached where possible) to copy results into for reading.

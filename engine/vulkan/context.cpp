@@ -61,9 +61,19 @@ vk::raii::Instance create_instance(const vk::raii::Context& context, std::vector
   // works (describe() checks each device's own version).
   const vk::ApplicationInfo application("vkray", 1, "vkray", 1, VK_API_VERSION_1_2);
   try {
+    // Where the loader offers it, devices that implement Vulkan only in part (MoltenVK on macOS)
+    // are listed too; without it such a loader lists none.
+    vk::InstanceCreateFlags flags;
+    const auto available = context.enumerateInstanceExtensionProperties();
+    if (std::any_of(available.begin(), available.end(), [](const vk::ExtensionProperties& extension) {
+          return std::string_view(extension.extensionName.data()) == VK_KHR_PORTABILITY_ENUMERATION_EXTENSION_NAME;
+        })) {
+      extension_names.push_back(VK_KHR_PORTABILITY_ENUMERATION_EXTENSION_NAME);
+      flags |= vk::InstanceCreateFlagBits::eEnumeratePortabilityKHR;
+    }
     const Validation mode = validation_mode();
     if (mode == Validation::off) {
-      return vk::raii::Instance(context, vk::InstanceCreateInfo({}, &application, {}, extension_names));
+      return vk::raii::Instance(context, vk::InstanceCreateInfo(flags, &application, {}, extension_names));
     }
     const auto layers = context.enumerateInstanceLayerProperties();
     const bool has_layer = std::any_of(layers.begin(), layers.end(), [](const vk::LayerProperties& layer) {
@@ -79,7 +89,7 @@ vk::raii::Instance create_instance(const vk::raii::Context& context, std::vector
     extension_names.push_back(VK_EXT_DEBUG_UTILS_EXTENSION_NAME);
     // The messenger in the chain also reports what happens while the instance is created.
     vk::StructureChain<vk::InstanceCreateInfo, vk::ValidationFeaturesEXT, vk::DebugUtilsMessengerCreateInfoEXT> chain(
-        vk::InstanceCreateInfo({}, &application, layer_names, extension_names),
+        vk::InstanceCreateInfo(flags, &application, layer_names, extension_names),
         vk::ValidationFeaturesEXT(enabled_features), messenger_info(mode));
     return vk::raii::Instance(context, chain.get<vk::InstanceCreateInfo>());
   } catch (const vk::SystemError& error) {
@@ -128,6 +138,25 @@ uint32_t compute_queue_family(const vk::raii::PhysicalDevice& physical_device,
   return UINT32_MAX;
 }
 
+// Whether the device's main memory (its largest device-local heap) is also host-visible and
+// coherent: then the host writes and reads it directly, and staging copies would only add work.
+bool main_memory_is_host_visible(const vk::PhysicalDeviceMemoryProperties& memory) {
+  uint32_t main_heap = UINT32_MAX;
+  for (uint32_t h = 0; h < memory.memoryHeapCount; ++h) {
+    if ((memory.memoryHeaps[h].flags & vk::MemoryHeapFlagBits::eDeviceLocal) &&
+        (main_heap == UINT32_MAX || memory.memoryHeaps[h].size > memory.memoryHeaps[main_heap].size)) {
+      main_heap = h;
+    }
+  }
+  const auto host_access = vk::MemoryPropertyFlagBits::eHostVisible | vk::MemoryPropertyFlagBits::eHostCoherent;
+  for (uint32_t t = 0; t < memory.memoryTypeCount; ++t) {
+    if (memory.memoryTypes[t].heapIndex == main_heap && (memory.memoryTypes[t].propertyFlags & host_access) == host_access) {
+      return true;
+    }
+  }
+  return false;
+}
+
 GpuDeviceInfo describe(const vk::raii::PhysicalDevice& physical_device) {
   const auto chain = physical_device.getProperties2<vk::PhysicalDeviceProperties2, vk::PhysicalDeviceSubgroupProperties,
                                                     vk::PhysicalDeviceMaintenance3Properties>();
@@ -135,6 +164,14 @@ GpuDeviceInfo describe(const vk::raii::PhysicalDevice& physical_device) {
   const auto& limits = properties.limits;
   GpuDeviceInfo info;
   info.name = properties.deviceName.data();
+  const auto uuid = physical_device.getProperties2<vk::PhysicalDeviceProperties2, vk::PhysicalDeviceIDProperties>()
+                        .get<vk::PhysicalDeviceIDProperties>()
+                        .deviceUUID;
+  for (size_t k = 0; k < uuid.size(); ++k) {
+    char hex[3];
+    std::snprintf(hex, sizeof hex, "%02x", uuid[k]);
+    info.uuid += (k == 4 || k == 6 || k == 8 || k == 10 ? "-" : "") + std::string(hex);
+  }
   info.type = type_name(properties.deviceType);
   info.max_allocation_bytes = chain.get<vk::PhysicalDeviceMaintenance3Properties>().maxMemoryAllocationSize;
   // VkPhysicalDeviceDriverProperties is core in Vulkan 1.2 only.
@@ -158,6 +195,7 @@ GpuDeviceInfo describe(const vk::raii::PhysicalDevice& physical_device) {
   info.max_storage_buffer_range = limits.maxStorageBufferRange;
   info.subgroup_size = chain.get<vk::PhysicalDeviceSubgroupProperties>().subgroupSize;
   info.shader_float64 = physical_device.getFeatures().shaderFloat64 == VK_TRUE;
+  info.main_memory_host_visible = main_memory_is_host_visible(physical_device.getMemoryProperties());
   const uint32_t family = compute_queue_family(physical_device);
   const auto& subgroups = chain.get<vk::PhysicalDeviceSubgroupProperties>();
   const bool subgroup_operations =
@@ -202,6 +240,22 @@ std::vector<GpuDeviceInfo> list_gpu_devices() {
 
 size_t choose_gpu_device(const std::vector<GpuDeviceInfo>& devices, std::string_view name_filter) {
   if (devices.empty()) throw GpuError(std::string("no Vulkan device found: ") + no_vulkan_fix);
+  // By index or UUID, as `vkray info` prints them: that device or none.
+  const bool is_index = !name_filter.empty() && name_filter.size() < 6 &&
+                        std::all_of(name_filter.begin(), name_filter.end(), [](unsigned char c) { return std::isdigit(c); });
+  for (size_t i = 0; i < devices.size(); ++i) {
+    const bool named = is_index ? std::to_string(i) == name_filter : lower(devices[i].uuid) == lower(name_filter);
+    if (!named) continue;
+    if (!devices[i].can_compute) {
+      throw GpuError("Vulkan device " + std::string(name_filter) + " ('" + devices[i].name +
+                     "') has no compute queue with subgroup vote, ballot and arithmetic");
+    }
+    return i;
+  }
+  if (is_index) {
+    throw GpuError("no Vulkan device number " + std::string(name_filter) + ": this machine has " +
+                   std::to_string(devices.size()) + ", numbered from 0 as `vkray info` lists them");
+  }
   size_t best = devices.size();
   for (size_t i = 0; i < devices.size(); ++i) {
     if (!devices[i].can_compute) continue;
@@ -240,7 +294,24 @@ void VulkanContext::submit_and_wait(const std::function<void(const vk::raii::Com
 
 namespace {
 
-void open_device(VulkanContext& vk_context, std::string_view name_filter, const PresentationSupport* presentation) {
+TransferMode resolve_transfer(TransferMode requested, const vk::PhysicalDeviceMemoryProperties& memory) {
+  if (requested != TransferMode::automatic) return requested;
+  if (const char* forced = std::getenv("VKRAY_TRANSFER"); forced && *forced) {
+    if (std::string_view(forced) == "staging") return TransferMode::staging;
+    if (std::string_view(forced) == "direct") return TransferMode::direct;
+    throw GpuError("VKRAY_TRANSFER is '" + std::string(forced) + "': it takes staging or direct");
+  }
+  return main_memory_is_host_visible(memory) ? TransferMode::direct : TransferMode::staging;
+}
+
+bool has_device_extension(const vk::raii::PhysicalDevice& physical_device, std::string_view name) {
+  const auto extensions = physical_device.enumerateDeviceExtensionProperties();
+  return std::any_of(extensions.begin(), extensions.end(),
+                     [&](const vk::ExtensionProperties& extension) { return extension.extensionName.data() == name; });
+}
+
+void open_device(VulkanContext& vk_context, std::string_view name_filter, const PresentationSupport* presentation,
+                 TransferMode transfer) {
   with_vulkan_errors("opening the Vulkan device", [&] {
     vk_context.instance =
         create_instance(vk_context.context, presentation ? presentation->instance_extensions : std::vector<const char*>{});
@@ -265,12 +336,17 @@ void open_device(VulkanContext& vk_context, std::string_view name_filter, const 
     vk_context.info = infos[chosen];
     vk_context.limits = vk_context.physical_device.getProperties().limits;
     vk_context.memory_properties = vk_context.physical_device.getMemoryProperties();
+    vk_context.staging = resolve_transfer(transfer, vk_context.memory_properties) == TransferMode::staging;
     vk_context.queue_family = compute_queue_family(vk_context.physical_device, presentation, *vk_context.instance);
 
     const float priority = 1.0f;
     const vk::DeviceQueueCreateInfo queue_info({}, vk_context.queue_family, 1, &priority);
     std::vector<const char*> device_extensions;
     if (presentation) device_extensions.push_back(VK_KHR_SWAPCHAIN_EXTENSION_NAME);
+    // A device that implements Vulkan in part must be opened with this extension (its spec's rule).
+    if (has_device_extension(vk_context.physical_device, "VK_KHR_portability_subset")) {
+      device_extensions.push_back("VK_KHR_portability_subset");
+    }
     // float64 arithmetic, where the device has it, for the `--precision double` shader.
     vk::PhysicalDeviceFeatures features;
     features.shaderFloat64 = vk_context.physical_device.getFeatures().shaderFloat64;
@@ -288,14 +364,16 @@ void open_device(VulkanContext& vk_context, std::string_view name_filter, const 
 
 }  // namespace
 
-GpuDevice::GpuDevice(std::string_view name_filter) : context_(std::make_unique<VulkanContext>()) {
-  open_device(*context_, name_filter, nullptr);
+GpuDevice::GpuDevice(std::string_view choice, TransferMode transfer) : context_(std::make_unique<VulkanContext>()) {
+  open_device(*context_, choice, nullptr, transfer);
 }
 
-GpuDevice::GpuDevice(std::string_view name_filter, const PresentationSupport& presentation)
+GpuDevice::GpuDevice(std::string_view choice, const PresentationSupport& presentation, TransferMode transfer)
     : context_(std::make_unique<VulkanContext>()) {
-  open_device(*context_, name_filter, &presentation);
+  open_device(*context_, choice, &presentation, transfer);
 }
+
+TransferMode GpuDevice::transfer() const { return context_->staging ? TransferMode::staging : TransferMode::direct; }
 
 GpuDevice::~GpuDevice() = default;
 

@@ -28,6 +28,9 @@ struct VulkanContext {
   GpuDeviceInfo info;
   vk::PhysicalDeviceLimits limits;
   vk::PhysicalDeviceMemoryProperties memory_properties;
+  // TransferMode::staging: buffers the shaders use are never mapped, even where their memory is
+  // host-visible; data goes through host buffers and device copies (engine/vulkan/buffer.cpp).
+  bool staging = false;
   uint32_t queue_family = 0;
   vk::raii::Device device{nullptr};
   vk::raii::Queue queue{nullptr};
@@ -49,7 +52,9 @@ auto with_vulkan_errors(const char* what, Body&& body) {
   try {
     return body();
   } catch (const vk::SystemError& error) {
-    throw GpuError(std::string(what) + ": " + describe_vulkan_failure(error));
+    const std::string message = std::string(what) + ": " + describe_vulkan_failure(error);
+    if (static_cast<vk::Result>(error.code().value()) == vk::Result::eErrorDeviceLost) throw DeviceLostError(message);
+    throw GpuError(message);
   }
 }
 

@@ -1,0 +1,30 @@
+#include "cli/device_options.hpp"
+
+#include <cstdio>
+
+namespace vkray::cli {
+
+TransferMode DeviceOptions::transfer_mode() const {
+  if (transfer == "staging") return TransferMode::staging;
+  if (transfer == "direct") return TransferMode::direct;
+  return TransferMode::automatic;
+}
+
+CLI::Option* add_device_options(CLI::App* command, DeviceOptions& options) {
+  CLI::Option* device = command->add_option(
+      "--device", options.device,
+      "The Vulkan device: its number or UUID as 'vkray info' prints them, or text its name contains");
+  command
+      ->add_option("--transfer", options.transfer,
+                   "How data reaches the device: staging (host buffers and device copies, what discrete GPUs "
+                   "need), direct (the device reads host-mapped memory), or auto (what its memory types suggest)")
+      ->check(CLI::IsMember({"auto", "staging", "direct"}))
+      ->capture_default_str();
+  return device;
+}
+
+void print_cpu_device_note(const GpuDeviceInfo& device) {
+  if (const std::string note = cpu_device_note(device); !note.empty()) std::fprintf(stderr, "%s\n", note.c_str());
+}
+
+}  // namespace vkray::cli

@@ -1,0 +1,24 @@
+// The options every command that opens a device shares: which device, and how data reaches it.
+#pragma once
+
+#include "engine/gpu_device.hpp"
+
+#include <CLI/CLI.hpp>
+
+#include <string>
+
+namespace vkray::cli {
+
+struct DeviceOptions {
+  std::string device;           // as choose_gpu_device takes it
+  std::string transfer = "auto";
+  TransferMode transfer_mode() const;
+};
+
+// Adds --device and --transfer to `command`; returns --device (for options that exclude it).
+CLI::Option* add_device_options(CLI::App* command, DeviceOptions& options);
+
+// Prints cpu_device_note for `device` on stderr, when it has one.
+void print_cpu_device_note(const GpuDeviceInfo& device);
+
+}  // namespace vkray::cli
