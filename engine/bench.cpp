@@ -75,8 +75,9 @@ const std::vector<BenchVariant>& bench_variants() {
   auto has_triangles = [](const Scene& scene) { return scene.triangle_count() > 0; };
   ShaderVariant naive_sphere, moller_trumbore, generic, stack_in_memory, scene_anchor, absolute, float64, naive;
   stack_in_memory.stack_in_registers = false;
-  ShaderVariant float_edges;
+  ShaderVariant float_edges, storage_geometry;
   float_edges.edges = EdgeArithmetic::float_error_free;
+  storage_geometry.storage_geometry = true;
   naive_sphere.sphere_formula = VKRAY_SPHERE_NAIVE;
   moller_trumbore.triangle_test = VKRAY_TRIANGLE_MOLLER_TRUMBORE;
   generic.generic = true;
@@ -99,6 +100,8 @@ const std::vector<BenchVariant>& bench_variants() {
                      }),
       shader_variant("float-edges", "triangle edge functions in float with an error-free fallback (what GPUs run)",
                      float_edges, has_triangles),
+      shader_variant("storage-geometry", "geometry read from storage buffers, not texel buffers (GPUs' usual fast path)",
+                     storage_geometry),
       shader_variant("rows-8x8", "8x8 workgroups row by row instead of Morton order", with_workgroup(8, 8, false)),
       shader_variant("wg-16x16", "16x16 workgroups in Morton order", with_workgroup(16, 16, true)),
       shader_variant("wg-64x1", "64x1 workgroups", with_workgroup(64, 1, false)),

@@ -34,8 +34,11 @@ struct TexelBuffer {
 
 constexpr vk::DeviceSize texel_bytes = 16;
 
+// Geometry buffers serve as uniform texel buffers or, for the storage-geometry variant, storage buffers.
+constexpr vk::BufferUsageFlags geometry_usage = vk::BufferUsageFlagBits::eUniformTexelBuffer | vk::BufferUsageFlagBits::eStorageBuffer;
+
 TexelBuffer make_texel_buffer(VulkanContext& context, const void* data, vk::DeviceSize bytes) {
-  TexelBuffer texels{upload_buffer(context, data, bytes, vk::BufferUsageFlagBits::eUniformTexelBuffer)};
+  TexelBuffer texels{upload_buffer(context, data, bytes, geometry_usage)};
   texels.floats = create_texel_view(context, texels.buffer, vk::Format::eR32G32B32A32Sfloat);
   texels.uints = create_texel_view(context, texels.buffer, vk::Format::eR32G32B32A32Uint);
   return texels;
@@ -158,6 +161,15 @@ struct Renderer::Impl {
 
   Precision precision() const { return options.shader.precision; }
 
+  // The most bytes one geometry (or given-ray) buffer may hold: what one texel buffer or, for the
+  // storage-geometry variant, one storage buffer binds, and one allocation holds.
+  vk::DeviceSize binding_limit() const {
+    const vk::DeviceSize binding = options.shader.storage_geometry
+                                       ? vk::DeviceSize{context.limits.maxStorageBufferRange}
+                                       : vk::DeviceSize{context.limits.maxTexelBufferElements} * texel_bytes;
+    return std::min<vk::DeviceSize>(binding, context.info.max_allocation_bytes);
+  }
+
   OutputBuffer make_output(vk::DeviceSize bytes) {
     OutputBuffer output{create_storage_buffer(context, bytes,
                                               vk::BufferUsageFlagBits::eTransferSrc | vk::BufferUsageFlagBits::eTransferDst),
@@ -184,7 +196,7 @@ struct Renderer::Impl {
     }
     if (mode == RaycastMode::given_rays) {
       const vk::DeviceSize bytes = pixels * sizeof(gpu::GpuRay);
-      tile.rays.emplace(TexelBuffer{create_upload_buffer(context, bytes, vk::BufferUsageFlagBits::eUniformTexelBuffer)});
+      tile.rays.emplace(TexelBuffer{create_upload_buffer(context, bytes, geometry_usage)});
       tile.rays->floats = create_texel_view(context, tile.rays->buffer, vk::Format::eR32G32B32A32Sfloat);
       tile.rays->uints = create_texel_view(context, tile.rays->buffer, vk::Format::eR32G32B32A32Uint);
       tile.hits = make_output(pixels * sizeof(uint32_t));
@@ -213,6 +225,17 @@ struct Renderer::Impl {
     resources.buffers[VKRAY_BINDING_HITS] = output(tile.hits);
     resources.texel_views[VKRAY_BINDING_BVH_BOUNDS] = floats(bvh_nodes);
     resources.texel_views[VKRAY_BINDING_BVH_LINKS] = uints(bvh_nodes);
+    // The same buffers whole, for the storage-geometry variant (pipeline->binding_type picks which
+    // one a binding takes).
+    auto whole = [&](const std::optional<TexelBuffer>& texels) {
+      return *(texels ? texels->buffer.buffer : placeholder_texels.buffer.buffer);
+    };
+    for (const auto& [binding, texels] : {std::pair{VKRAY_BINDING_SPHERES, &spheres}, {VKRAY_BINDING_PLANES, &planes},
+                                          {VKRAY_BINDING_PRIMITIVES, &primitives}, {VKRAY_BINDING_VERTICES, &vertices},
+                                          {VKRAY_BINDING_NORMALS, &normals}, {VKRAY_BINDING_BVH_BOUNDS, &bvh_nodes},
+                                          {VKRAY_BINDING_BVH_LINKS, &bvh_nodes}, {VKRAY_BINDING_RAYS, &tile.rays}}) {
+      resources.buffers[binding] = whole(*texels);
+    }
     resources.buffers[VKRAY_BINDING_DEPTH] = output(tile.depth);
     resources.buffers[VKRAY_BINDING_NORMAL] = output(tile.normal);
     resources.buffers[VKRAY_BINDING_UV] = output(tile.uv);
@@ -264,8 +287,7 @@ struct Renderer::Impl {
       by_bytes = std::min(by_bytes, std::max<vk::DeviceSize>(1, (limit - sizeof(uint32_t)) / (vk::DeviceSize{width} * 4)));
     }
     if (mode == RaycastMode::given_rays) {  // the rays: one texel buffer
-      const vk::DeviceSize ray_limit = std::min<vk::DeviceSize>(
-          vk::DeviceSize{context.limits.maxTexelBufferElements} * texel_bytes, context.info.max_allocation_bytes);
+      const vk::DeviceSize ray_limit = binding_limit();
       by_bytes = std::min(by_bytes, std::max<vk::DeviceSize>(1, ray_limit / (vk::DeviceSize{width} * sizeof(gpu::GpuRay))));
     }
     const vk::DeviceSize by_groups =
@@ -404,15 +426,14 @@ Renderer::Renderer(GpuDevice& device, const Scene& scene, RendererOptions option
     const auto start = Clock::now();
     Impl& r = *impl_;
     const GpuScene gpu_scene = make_gpu_scene(scene, options.scene, options.shader);
-    const vk::DeviceSize buffer_limit = std::min<vk::DeviceSize>(
-        vk::DeviceSize{r.context.limits.maxTexelBufferElements} * texel_bytes, r.context.info.max_allocation_bytes);
+    const vk::DeviceSize buffer_limit = r.binding_limit();
     auto upload = [&]<typename T>(const std::vector<T>& items, const char* what) -> std::optional<TexelBuffer> {
       static_assert(sizeof(T) % texel_bytes == 0);
       if (items.empty()) return std::nullopt;
       const vk::DeviceSize bytes = items.size() * sizeof(T);
       if (bytes > buffer_limit) {
         throw GpuError("the scene's " + std::string(what) + " take " + std::to_string(bytes >> 20) + " MiB, more than " +
-                       r.context.info.name + " can bind as one texel buffer (" + std::to_string(buffer_limit >> 20) +
+                       r.context.info.name + " can bind as one buffer (" + std::to_string(buffer_limit >> 20) +
                        " MiB)");
       }
       return make_texel_buffer(r.context, items.data(), bytes);
@@ -420,7 +441,7 @@ Renderer::Renderer(GpuDevice& device, const Scene& scene, RendererOptions option
     r.spheres = upload(gpu_scene.spheres, "spheres");
     if (!gpu_scene.planes.empty()) {  // host-visible: their heights above the camera change every render
       const vk::DeviceSize bytes = gpu_scene.planes.size() * sizeof(gpu::GpuPlane);
-      r.planes.emplace(TexelBuffer{create_upload_buffer(r.context, bytes, vk::BufferUsageFlagBits::eUniformTexelBuffer)});
+      r.planes.emplace(TexelBuffer{create_upload_buffer(r.context, bytes, geometry_usage)});
       r.planes->floats = create_texel_view(r.context, r.planes->buffer, vk::Format::eR32G32B32A32Sfloat);
       r.planes->uints = create_texel_view(r.context, r.planes->buffer, vk::Format::eR32G32B32A32Uint);
       r.gpu_planes = gpu_scene.planes;

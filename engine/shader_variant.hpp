@@ -40,6 +40,9 @@ struct ShaderVariant {
   // else in a private array, as the generic variant always has it.
   bool stack_in_registers = true;
   EdgeArithmetic edges = EdgeArithmetic::automatic;
+  // Geometry (and given rays) read from storage buffers rather than uniform texel buffers (float32
+  // shaders): what NVIDIA and AMD drivers are usually tuned for; llvmpipe gathers texels faster.
+  bool storage_geometry = false;
 };
 
 // The default variant with another workgroup shape and order.

@@ -24,8 +24,10 @@ using uvec4 = glm::uvec4;
 // Descriptor bindings, all in set 0. Geometry is read through uniform texel buffers (RGBA32 texels):
 // llvmpipe (lavapipe) turns a storage-buffer load into a loop over the 8 lanes with a branch and a
 // bounds check per lane and component, but a texel fetch into one vectorized gather, several times
-// faster; real GPUs read either at the same speed. Outputs are storage buffers. Bindings the scene
-// or the chosen outputs do not need get a 16-byte placeholder and are never read.
+// faster. NVIDIA and AMD drivers are usually tuned for storage-buffer loads: the storage-geometry
+// variant (VKRAY_STORAGE_GEOMETRY, its own SPIR-V module) binds the same buffers as storage buffers
+// of 16-byte texels. Outputs are storage buffers. Bindings the scene or the chosen outputs do not
+// need get a 16-byte placeholder and are never read.
 #define VKRAY_BINDING_SPHERES 0      // texels, RGBA32F: one per sphere tested without the tree
 #define VKRAY_BINDING_PLANES 1       // texels, RGBA32F: one per plane
 #define VKRAY_BINDING_PRIMITIVES 2   // texels, RGBA32UI: one per primitive slot (GpuPrimitive)

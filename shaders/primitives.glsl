@@ -23,17 +23,31 @@ layout(constant_id = VKRAY_SPEC_STACK_REGISTERS) const uint STACK_REGISTERS = 0;
 const bool TREE_TRIANGLES = GENERIC || TREE_HAS_TRIANGLES;
 const bool TREE_SPHERES = GENERIC || TREE_HAS_SPHERES;
 
-#ifdef VKRAY_FLOAT64
-#define GeometryTexels usamplerBuffer
+// Geometry is read in 16-byte texels: through uniform texel buffers (texelFetch), or with
+// VKRAY_STORAGE_GEOMETRY defined through storage buffers of vec4 or uvec4 (see gpu_layout.h for
+// which each device reads faster). GEOMETRY_BUFFER declares one, FETCH reads texel `index` of it.
+#ifdef VKRAY_STORAGE_GEOMETRY
+#define GEOMETRY_BUFFER(binding_index, texel, sampler, name) \
+  layout(std430, binding = binding_index) readonly buffer name##_texels { texel name[]; }
+#define FETCH(name, index) name[index]
 #else
-#define GeometryTexels samplerBuffer
+#define GEOMETRY_BUFFER(binding_index, texel, sampler, name) layout(binding = binding_index) uniform sampler name
+#define FETCH(name, index) texelFetch(name, index)
 #endif
-layout(binding = VKRAY_BINDING_SPHERES) uniform GeometryTexels spheres;        // GpuSphere
-layout(binding = VKRAY_BINDING_PRIMITIVES) uniform usamplerBuffer primitives;   // GpuPrimitive
-layout(binding = VKRAY_BINDING_VERTICES) uniform GeometryTexels vertices;      // GpuPoint
-layout(binding = VKRAY_BINDING_NORMALS) uniform GeometryTexels normals;        // by primitive slot
-layout(binding = VKRAY_BINDING_BVH_BOUNDS) uniform samplerBuffer bvh_bounds;   // GpuBvhNode: 4 texels
-layout(binding = VKRAY_BINDING_BVH_LINKS) uniform usamplerBuffer bvh_links;    // the same, as uints
+// Positions: floats in float32 shaders, pairs of 32-bit words of doubles in float64 shaders.
+#ifdef VKRAY_FLOAT64
+#define GeometryTexel uvec4
+#define GeometrySampler usamplerBuffer
+#else
+#define GeometryTexel vec4
+#define GeometrySampler samplerBuffer
+#endif
+GEOMETRY_BUFFER(VKRAY_BINDING_SPHERES, GeometryTexel, GeometrySampler, spheres);    // GpuSphere
+GEOMETRY_BUFFER(VKRAY_BINDING_PRIMITIVES, uvec4, usamplerBuffer, primitives);      // GpuPrimitive
+GEOMETRY_BUFFER(VKRAY_BINDING_VERTICES, GeometryTexel, GeometrySampler, vertices);  // GpuPoint
+GEOMETRY_BUFFER(VKRAY_BINDING_NORMALS, GeometryTexel, GeometrySampler, normals);    // by primitive slot
+GEOMETRY_BUFFER(VKRAY_BINDING_BVH_BOUNDS, vec4, samplerBuffer, bvh_bounds);        // GpuBvhNode: 4 texels
+GEOMETRY_BUFFER(VKRAY_BINDING_BVH_LINKS, uvec4, usamplerBuffer, bvh_links);        // the same, as uints
 
 // A GpuPoint as stored: hi and lo parts in float32 shaders, the position and w in float64 shaders.
 struct Point {
@@ -45,23 +59,21 @@ struct Point {
 #endif
 };
 
-Point fetch_point(GeometryTexels texels, int point) {
-  int texel = VKRAY_TEXELS_PER_POINT * point;
+// Point `point` of a buffer of GpuPoints (its two texels); float32 shaders read the lo texel only
+// where they use it.
 #ifdef VKRAY_FLOAT64
-  uvec4 first = texelFetch(texels, texel);
-  uvec4 second = texelFetch(texels, texel + 1);
+Point point_from_texels(uvec4 first, uvec4 second) {
   return Point(dvec4(packDouble2x32(first.xy), packDouble2x32(first.zw), packDouble2x32(second.xy),
                      packDouble2x32(second.zw)));
+}
+#define fetch_point(name, point) \
+  point_from_texels(FETCH(name, VKRAY_TEXELS_PER_POINT * (point)), FETCH(name, VKRAY_TEXELS_PER_POINT * (point) + 1))
 #else
-  return Point(texelFetch(texels, texel), use_lo_parts ? texelFetch(texels, texel + 1) : vec4(0.0));
-#endif
-}
-
-#ifndef VKRAY_FLOAT64
+#define fetch_point(name, point)                                  \
+  Point(FETCH(name, VKRAY_TEXELS_PER_POINT * (point)),             \
+        use_lo_parts ? FETCH(name, VKRAY_TEXELS_PER_POINT * (point) + 1) : vec4(0.0))
 // The hi part alone, for what needs no more (a plane's normal and height above the camera).
-Point fetch_point_hi(GeometryTexels texels, int point) {
-  return Point(texelFetch(texels, VKRAY_TEXELS_PER_POINT * point), vec4(0.0));
-}
+#define fetch_point_hi(name, point) Point(FETCH(name, VKRAY_TEXELS_PER_POINT * (point)), vec4(0.0))
 #endif
 
 // The point's position relative to the ray origin, and its w.
@@ -101,7 +113,7 @@ struct SlotHit {
 
 // The vertices of a triangle relative to the ray origin.
 void fetch_triangle(int slot, Origin origin, out real3 v0, out real3 v1, out real3 v2) {
-  uvec4 record = texelFetch(primitives, slot);
+  uvec4 record = FETCH(primitives, slot);
   v0 = point_from_origin(fetch_point(vertices, int(record.x)), origin);
   v1 = point_from_origin(fetch_point(vertices, int(record.y)), origin);
   v2 = point_from_origin(fetch_point(vertices, int(record.z)), origin);
@@ -110,17 +122,17 @@ void fetch_triangle(int slot, Origin origin, out real3 v0, out real3 v1, out rea
 // A triangle's unit normal (see VKRAY_TEXELS_PER_NORMAL_*).
 real3 fetch_normal(int slot) {
 #ifdef VKRAY_FLOAT64
-  uvec4 first = texelFetch(normals, VKRAY_TEXELS_PER_NORMAL_FLOAT64 * slot);
-  uvec4 second = texelFetch(normals, VKRAY_TEXELS_PER_NORMAL_FLOAT64 * slot + 1);
+  uvec4 first = FETCH(normals, VKRAY_TEXELS_PER_NORMAL_FLOAT64 * slot);
+  uvec4 second = FETCH(normals, VKRAY_TEXELS_PER_NORMAL_FLOAT64 * slot + 1);
   return dvec3(packDouble2x32(first.xy), packDouble2x32(first.zw), packDouble2x32(second.xy));
 #else
-  return texelFetch(normals, VKRAY_TEXELS_PER_NORMAL_FLOAT32 * slot).xyz;
+  return FETCH(normals, VKRAY_TEXELS_PER_NORMAL_FLOAT32 * slot).xyz;
 #endif
 }
 
 // The point holding a tree sphere's centre and radius.
 Point fetch_sphere(int slot) {
-  return fetch_point(vertices, int(texelFetch(primitives, slot).x));
+  return fetch_point(vertices, int(FETCH(primitives, slot).x));
 }
 
 void test_triangle(RayFrame frame, Origin origin, real3 dir, uint slot, inout SlotHit hit) {
@@ -137,7 +149,7 @@ void test_triangle(RayFrame frame, Origin origin, real3 dir, uint slot, inout Sl
 bool is_sphere(int slot) {
   if (!TREE_TRIANGLES) return true;
   if (!TREE_SPHERES) return false;
-  return texelFetch(primitives, slot).w == VKRAY_PRIMITIVE_SPHERE;
+  return FETCH(primitives, slot).w == VKRAY_PRIMITIVE_SPHERE;
 }
 
 // One primitive slot. Specialized on what the tree holds: a tree of triangles alone has no sphere
@@ -268,10 +280,10 @@ PrimitiveHit nearest_primitive_in_tree(RayFrame frame, Origin origin, real3 dir,
       }
     } else if (current != no_node) {
       real2 enter;
-      bvec2 hits = ray_hits_boxes(texelFetch(bvh_bounds, 4 * int(current)), texelFetch(bvh_bounds, 4 * int(current) + 1),
-                                  texelFetch(bvh_bounds, 4 * int(current) + 2), box_origin, box_margin, inv_dir,
+      bvec2 hits = ray_hits_boxes(FETCH(bvh_bounds, 4 * int(current)), FETCH(bvh_bounds, 4 * int(current) + 1),
+                                  FETCH(bvh_bounds, 4 * int(current) + 2), box_origin, box_margin, inv_dir,
                                   hit.t, enter);
-      uvec2 children = texelFetch(bvh_links, 4 * int(current) + 3).xy;
+      uvec2 children = FETCH(bvh_links, 4 * int(current) + 3).xy;
       bool prefers_second = hits.y && (!hits.x || enter.y < enter.x);
       bool second_first = prefers_second;
       if (packet) {

@@ -2,10 +2,11 @@
 // One primary ray per pixel through the pixel centre; the nearest hit over every primitive wins.
 // Writes the requested outputs (depth, normal, uv) for one tile of rows of the image into buffers,
 // or one output into a storage image (IMAGE_TARGET, the viewer's frame); or traces rays the caller
-// gave (RAY_INPUT), writing depth, normal and what each hit. Compiled
-// three times: float32; float32 with VKRAY_DOUBLE_EDGES defined (triangle edge functions from
-// exact double products, for CPU devices: see intersect.glsl); and float64 with VKRAY_FLOAT64
-// defined (`--precision double`), which writes depth and normals as doubles.
+// gave (RAY_INPUT), writing depth, normal and what each hit. Compiled five times: float32;
+// float32 with VKRAY_DOUBLE_EDGES defined (triangle edge functions from exact double products, for
+// CPU devices: see intersect.glsl); each of those two with VKRAY_STORAGE_GEOMETRY (geometry in
+// storage buffers, not texel buffers: see primitives.glsl); and float64 with VKRAY_FLOAT64 defined
+// (`--precision double`), which writes depth and normals as doubles.
 #extension GL_GOOGLE_include_directive : require
 #extension GL_KHR_shader_subgroup_arithmetic : require
 
@@ -26,7 +27,7 @@ layout(constant_id = VKRAY_SPEC_RAY_INPUT) const bool RAY_INPUT = false;
 
 layout(push_constant) uniform PushConstants { RayGenParams params; };
 
-layout(binding = VKRAY_BINDING_PLANES) uniform GeometryTexels planes;    // GpuPlane
+GEOMETRY_BUFFER(VKRAY_BINDING_PLANES, GeometryTexel, GeometrySampler, planes);  // GpuPlane
 layout(std430, binding = VKRAY_BINDING_DEPTH) writeonly buffer DepthOut { real depth_out[]; };
 layout(std430, binding = VKRAY_BINDING_NORMAL) writeonly buffer NormalOut { real normal_out[]; };
 layout(std430, binding = VKRAY_BINDING_UV) writeonly buffer UvOut { float uv_out[]; };
@@ -36,7 +37,7 @@ layout(std430, binding = VKRAY_BINDING_OVERFLOW) buffer Overflow { uint overflow
 // range of finite depths.
 layout(binding = VKRAY_BINDING_IMAGE, rgba32f) uniform writeonly image2D image_out;
 layout(std430, binding = VKRAY_BINDING_DEPTH_RANGE) buffer DepthRange { DepthRangeBits depth_range; };
-layout(binding = VKRAY_BINDING_RAYS) uniform GeometryTexels rays_in;  // GpuRay
+GEOMETRY_BUFFER(VKRAY_BINDING_RAYS, GeometryTexel, GeometrySampler, rays_in);  // GpuRay
 layout(std430, binding = VKRAY_BINDING_HITS) writeonly buffer HitsOut { uint hit_out[]; };
 
 // Folds the depths of the counted pixels into depth_range: reduced across the subgroup first, then

@@ -63,6 +63,13 @@ TEST(GivenRays, DefaultSceneInEverySearchAndPrecision) {
   }
 }
 
+// Given rays read as storage buffers too, with the geometry (the storage-geometry variant).
+TEST(GivenRays, StorageGeometryVariant) {
+  RendererOptions options;
+  options.shader.storage_geometry = true;
+  expect_given_rays_match_reference(sized(default_scene(), 48, 36), options);
+}
+
 // Rays that start inside a sphere and inside a closed mesh, and rays parallel to a plane (the
 // camera at the plane's height: its middle row is parallel to it).
 TEST(GivenRays, FromInsideAndParallelToPlanes) {

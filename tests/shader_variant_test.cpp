@@ -32,14 +32,18 @@ void expect_same_bits(const Frame& expected, const Frame& actual) {
 }
 
 // Each pixel's ray and tests are the same whatever workgroup computes it, the generic pipeline
-// runs the same code with counts read at run time, and the tree walk's stack holds the same
-// entries in registers as in memory: every bit must match. 37x29 leaves partial
+// runs the same code with counts read at run time, the tree walk's stack holds the same
+// entries in registers as in memory, and storage buffers hold the texels' bits: every bit must
+// match (with either edge arithmetic). 37x29 leaves partial
 // workgroups on two borders; the basic suite covers brute force (the built-in scene's six
 // triangles and one sphere), spheres alone, spheres in a tree with a plane, and a mesh in a tree.
 TEST(ShaderVariants, LayoutAndGenericVariantsChangeNoBit) {
-  ShaderVariant generic, stack_in_memory;
+  ShaderVariant generic, stack_in_memory, storage_geometry, storage_float_edges, float_edges;
   generic.generic = true;
   stack_in_memory.stack_in_registers = false;
+  storage_geometry.storage_geometry = true;
+  storage_float_edges.storage_geometry = true;
+  storage_float_edges.edges = float_edges.edges = EdgeArithmetic::float_error_free;
   const std::vector<std::pair<const char*, ShaderVariant>> variants = {
       {"rows-8x8", with_workgroup(8, 8, false)},
       {"wg-16x16", with_workgroup(16, 16, true)},
@@ -47,6 +51,7 @@ TEST(ShaderVariants, LayoutAndGenericVariantsChangeNoBit) {
       {"wg-4x16", with_workgroup(4, 16, false)},
       {"generic", generic},
       {"stack-in-memory", stack_in_memory},
+      {"storage-geometry", storage_geometry},
   };
   for (const auto& scene : bench_suite("basic", 37, 29, "")) {
     SCOPED_TRACE(scene.name);
@@ -55,6 +60,8 @@ TEST(ShaderVariants, LayoutAndGenericVariantsChangeNoBit) {
       SCOPED_TRACE(name);
       expect_same_bits(expected, render_with(scene.scene, shader));
     }
+    SCOPED_TRACE("storage-geometry with float edges");
+    expect_same_bits(render_with(scene.scene, float_edges), render_with(scene.scene, storage_float_edges));
   }
 }
 

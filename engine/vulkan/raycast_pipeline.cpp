@@ -2,6 +2,8 @@
 
 #include "raycast.comp.VKRAY_DOUBLE_EDGES.spv.h"
 #include "raycast.comp.VKRAY_FLOAT64.spv.h"
+#include "raycast.comp.VKRAY_STORAGE_GEOMETRY.VKRAY_DOUBLE_EDGES.spv.h"
+#include "raycast.comp.VKRAY_STORAGE_GEOMETRY.spv.h"
 #include "raycast.comp.spv.h"
 
 #include <chrono>
@@ -32,15 +34,19 @@ RaycastPipeline::RaycastPipeline(VulkanContext& context, PipelineSpecialization 
   if (!float64 && edges == EdgeArithmetic::double_products && !context.info.shader_float64) {
     throw GpuError(context.info.name + " has no float64 arithmetic in shaders (shaderFloat64) for double edge functions");
   }
+  if (float64 && specialization.variant.storage_geometry) {
+    throw std::invalid_argument("storage-buffer geometry exists for float32 shaders only");
+  }
   auto module = [&](const auto& spirv) {
     return vk::raii::ShaderModule(context.device, vk::ShaderModuleCreateInfo({}, sizeof(spirv), spirv));
   };
+  const bool storage = specialization.variant.storage_geometry;
   if (float64) {
     shader_ = module(raycast_comp_VKRAY_FLOAT64);
   } else if (edges == EdgeArithmetic::double_products) {
-    shader_ = module(raycast_comp_VKRAY_DOUBLE_EDGES);
+    shader_ = storage ? module(raycast_comp_VKRAY_STORAGE_GEOMETRY_VKRAY_DOUBLE_EDGES) : module(raycast_comp_VKRAY_DOUBLE_EDGES);
   } else {
-    shader_ = module(raycast_comp);
+    shader_ = storage ? module(raycast_comp_VKRAY_STORAGE_GEOMETRY) : module(raycast_comp);
   }
 
   std::vector<vk::DescriptorPoolSize> pool_sizes;
@@ -90,7 +96,7 @@ const vk::raii::Pipeline& RaycastPipeline::pipeline(AovSet aovs, bool lo_parts, 
   return entry->second;
 }
 
-vk::DescriptorType RaycastPipeline::binding_type(uint32_t binding) {
+vk::DescriptorType RaycastPipeline::binding_type(uint32_t binding) const {
   switch (binding) {
     case VKRAY_BINDING_DEPTH:
     case VKRAY_BINDING_NORMAL:
@@ -101,8 +107,9 @@ vk::DescriptorType RaycastPipeline::binding_type(uint32_t binding) {
       return vk::DescriptorType::eStorageBuffer;
     case VKRAY_BINDING_IMAGE:
       return vk::DescriptorType::eStorageImage;
-    default:
-      return vk::DescriptorType::eUniformTexelBuffer;
+    default:  // geometry and given rays
+      return specialization_.variant.storage_geometry ? vk::DescriptorType::eStorageBuffer
+                                                      : vk::DescriptorType::eUniformTexelBuffer;
   }
 }
 

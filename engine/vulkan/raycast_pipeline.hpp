@@ -48,8 +48,9 @@ class RaycastPipeline {
     std::array<vk::BufferView, VKRAY_BINDING_COUNT> texel_views;
     std::array<vk::ImageView, VKRAY_BINDING_COUNT> images;
   };
-  // The descriptor type of each binding (see gpu_layout.h).
-  static vk::DescriptorType binding_type(uint32_t binding);
+  // The descriptor type of each binding (see gpu_layout.h): geometry as texel or storage buffers,
+  // as the variant reads it.
+  vk::DescriptorType binding_type(uint32_t binding) const;
   // Points every binding of the descriptor set at its resource.
   void bind_resources(const Resources& resources);
 
