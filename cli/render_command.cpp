@@ -8,6 +8,7 @@
 #include "engine/reference.hpp"
 #include "engine/renderer.hpp"
 #include "engine/scene_loader.hpp"
+#include "engine/scene_or_model.hpp"
 
 #include <algorithm>
 #include <cctype>

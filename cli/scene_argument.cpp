@@ -2,6 +2,7 @@
 
 #include "engine/nearest_name.hpp"
 #include "engine/scene_loader.hpp"
+#include "engine/scene_or_model.hpp"
 
 #include <glm/geometric.hpp>
 

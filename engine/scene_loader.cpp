@@ -1,6 +1,5 @@
 #include "engine/scene_loader.hpp"
 
-#include "engine/framing.hpp"
 #include "engine/nearest_name.hpp"
 #include "engine/obj_loader.hpp"
 #include "engine/unit_vector.hpp"
@@ -383,30 +382,6 @@ Scene load_scene_file(const std::filesystem::path& path) {
   contents << file.rdbuf();
   if (!file) throw InputError(path.string() + ": cannot read scene file");
   return parse_scene(contents.str(), path.string(), path.parent_path(), load_obj_file);
-}
-
-std::string lower_extension(const std::filesystem::path& path) {
-  std::string extension = path.extension().string();
-  std::transform(extension.begin(), extension.end(), extension.begin(),
-                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  return extension;
-}
-
-Scene load_scene_or_model(const std::filesystem::path& path, std::optional<uint32_t> width, std::optional<uint32_t> height) {
-  const std::string extension = lower_extension(path);
-  const std::string name = path.string();
-  if (!path.empty() && std::filesystem::is_directory(path)) {
-    throw InputError(name + ": is a folder, not a scene file (.json) or a model (.obj)");
-  }
-  if (!path.empty() && extension != ".json" && extension != ".obj") {
-    throw InputError(name + ": unknown kind of file '" + extension + "' (a scene is .json, a model .obj)");
-  }
-  Scene scene = path.empty() ? default_scene() : extension == ".obj" ? load_model_file(path) : load_scene_file(path);
-  if (width) scene.width = *width;
-  if (height) scene.height = *height;
-  check_image_size(scene.width, scene.height);
-  if (extension == ".obj") scene.camera = frame_scene(scene, scene.width, scene.height);
-  return scene;
 }
 
 }  // namespace vkray

@@ -7,7 +7,6 @@
 
 #include <filesystem>
 #include <functional>
-#include <optional>
 #include <string>
 #include <string_view>
 
@@ -27,15 +26,6 @@ Scene parse_scene(std::string_view json_text, const std::string& name, const std
 // replaces that part of `base`, checked as the scene file checks it. `name` stands for the source in
 // messages ("--camera"). Throws InputError.
 Camera parse_camera_override(std::string_view json_text, const std::string& name, const Camera& base);
-
-// A path's extension in lower case, with its dot (".exr"); empty when it has none.
-std::string lower_extension(const std::filesystem::path& path);
-
-// A scene file (.json), or a model (.obj) alone in a scene with a camera that frames it
-// (engine/framing.hpp); the built-in scene for an empty path. `width`/`height` override the image
-// size, and the framing is done at the final size. Throws InputError naming the file.
-Scene load_scene_or_model(const std::filesystem::path& path, std::optional<uint32_t> width = {},
-                          std::optional<uint32_t> height = {});
 
 // The built-in scene: a camera, a sphere, a ground plane, a handcrafted triangle mesh and
 // a mesh that goes through the OBJ loader (from an OBJ text compiled into the binary).

@@ -7,6 +7,7 @@
 #include "engine/reference.hpp"
 #include "engine/renderer.hpp"
 #include "engine/scene_loader.hpp"
+#include "engine/scene_or_model.hpp"
 
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
