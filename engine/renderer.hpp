@@ -63,7 +63,7 @@ struct RendererOptions {
   uint64_t max_tile_bytes = 0;
   // Dispatches are sized so that none runs longer than this, measured as they run: the first
   // covers a small part of the image, each later one as many rows as the slowest rows so far let
-  // fit in half the budget (at most four times its predecessor's). 0: tiles by size alone.
+  // fit in half the budget (at most sixteen times its predecessor's). 0: tiles by size alone.
   double dispatch_budget_ms = default_dispatch_budget_ms;
   GpuSceneOptions scene;
   // Iterations one ray's tree walk may take before the CPU finishes it; 0: as many as the device

@@ -201,7 +201,7 @@ TEST(GpuRenderer, DispatchesSizedByTimeGiveIdenticalImages) {
 
   Renderer generous(device(), scene);  // the default budget, 200 ms
   generous.render(scene.camera, 1024, 80, all);
-  EXPECT_EQ(generous.timings().tiles, 2u);  // 64 rows, then the other 16 (at most four times as many)
+  EXPECT_EQ(generous.timings().tiles, 2u);  // 64 rows, then the other 16 (at most sixteen times as many)
 }
 
 // One Renderer, many renders: a new camera and size must give what a fresh Renderer gives, and
