@@ -616,11 +616,9 @@ RayHits Renderer::cast_rays(std::span<const GivenRay> rays) {
       auto copy = [&]<typename T>(const T* depths, const T* normals) {
         parallel_for_chunks(count, [&](size_t begin, size_t end) {
           for (size_t k = begin; k < end; ++k) {
-            hits.t[first + k] = static_cast<float>(depths[k]);
-            for (size_t c = 0; c < 3; ++c) hits.normal[c * hits.count + first + k] = static_cast<float>(normals[c * plane_size + k]);
-            const ObjectPrimitive source = r.hit_sources(slots[k]);
-            hits.object[first + k] = source.object;
-            hits.primitive[first + k] = source.primitive;
+            const glm::vec3 normal(static_cast<float>(normals[k]), static_cast<float>(normals[plane_size + k]),
+                                   static_cast<float>(normals[2 * plane_size + k]));
+            hits.store(first + k, static_cast<float>(depths[k]), normal, r.hit_sources(slots[k]));
           }
         });
       };

@@ -319,12 +319,17 @@ class PyReference {
       hits = render_reference_hits(*reference_, make_camera_basis(view.camera, view.width, view.height), view.width, view.height);
     }
     const size_t pixels = hits.size();
-    std::vector<double> depth(pixels), normal(3 * pixels), uv(2 * pixels);
+    // Only the outputs asked for, as the Renderer does.
+    std::vector<double> depth(aovs.has(Aov::depth) ? pixels : 0), normal(aovs.has(Aov::normal) ? 3 * pixels : 0),
+        uv(aovs.has(Aov::uv) ? 2 * pixels : 0);
     for (size_t p = 0; p < pixels; ++p) {
-      depth[p] = hits[p].t;
-      for (size_t c = 0; c < 3; ++c) normal[c * pixels + p] = hits[p].normal[int(c)];
-      const glm::dvec2 at = pixel_uv(static_cast<uint32_t>(p % view.width), static_cast<uint32_t>(p / view.width), view.width, view.height);
-      uv[p] = at.x, uv[pixels + p] = at.y;
+      if (!depth.empty()) depth[p] = hits[p].t;
+      for (size_t c = 0; c < 3 && !normal.empty(); ++c) normal[c * pixels + p] = hits[p].normal[int(c)];
+      if (!uv.empty()) {
+        const glm::dvec2 at = pixel_uv(static_cast<uint32_t>(p % view.width), static_cast<uint32_t>(p / view.width),
+                                       view.width, view.height);
+        uv[p] = at.x, uv[pixels + p] = at.y;
+      }
     }
     const auto rows = static_cast<py::ssize_t>(view.height), columns = static_cast<py::ssize_t>(view.width);
     py::dict result;
