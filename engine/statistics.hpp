@@ -3,16 +3,19 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
 #include <vector>
 
 namespace vkray {
 
-// Nearest-rank percentile, fraction in [0, 1]; sorts `values`; 0 for none.
+// Nearest-rank percentile, fraction in [0, 1]; reorders `values`; 0 for none. A selection, not a
+// sort: linear time, which at 7680x4320 (33M errors a frame) is seconds less per call.
 inline double percentile(std::vector<double>& values, double fraction) {
   if (values.empty()) return 0.0;
-  std::sort(values.begin(), values.end());
   const auto rank = static_cast<size_t>(std::ceil(fraction * static_cast<double>(values.size())));
-  return values[std::clamp<size_t>(rank, 1, values.size()) - 1];
+  const auto nth = values.begin() + static_cast<std::ptrdiff_t>(std::clamp<size_t>(rank, 1, values.size()) - 1);
+  std::nth_element(values.begin(), nth, values.end());
+  return *nth;
 }
 
 // Median (the mean of the middle two for an even count); 0 for none.
