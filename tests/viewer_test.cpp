@@ -305,9 +305,10 @@ TEST_F(ViewerTest, ALeftDragOrbitsAndCPrintsTheCameraRenderSees) {
   Process viewer = start_vkray("view --no-overlay --size 160x120 --output normal --screenshot " + shell_quote(shot.string()));
   ASSERT_TRUE(wait_for_output(viewer, "vkray view: showing"));
   const std::string window = viewer_window();
+  // The drag and C in one go, as a quick hand gives them: the viewer may take both in one batch of
+  // input, and must still print the camera the drag made.
   xdotool("mousemove --sync --window " + window + " 80 60 mousedown 1 mousemove --sync --window " + window +
-          " 120 40 mouseup 1");
-  xdotool("key c");
+          " 120 40 mouseup 1 key c");
   ASSERT_TRUE(wait_for_output(viewer, "\"camera\""));
   xdotool("key Escape");
   ASSERT_EQ(viewer.wait(start_timeout), 0) << viewer.stderr_text();

@@ -64,6 +64,7 @@ class Viewer {
  private:
   void resize();
   void handle(const WindowInput& input, double dt);
+  void press(const KeyPress& press);
   void reload();
   void save();
   void render();
@@ -202,35 +203,41 @@ void Viewer::resize() {
   dirty_ = true;
 }
 
+void Viewer::press(const KeyPress& press) {
+  switch (press.key) {
+    case GLFW_KEY_ESCAPE: window_.close(); break;
+    case GLFW_KEY_1: output_ = Aov::depth, dirty_ = true; break;
+    case GLFW_KEY_2: output_ = Aov::normal, dirty_ = true; break;
+    case GLFW_KEY_3: output_ = Aov::uv, dirty_ = true; break;
+    case GLFW_KEY_R: controller_.reset(), dirty_ = true; break;
+    case GLFW_KEY_C:
+      std::printf("%s\n", controller_.json().c_str());
+      std::fflush(stdout);
+      break;
+    case GLFW_KEY_S:
+      if (press.mods & GLFW_MOD_CONTROL) save();  // plain S flies backwards
+      break;
+    default: break;
+  }
+}
+
 void Viewer::handle(const WindowInput& input, double dt) {
   const vk::Extent2D extent = display_.extent();
   const double shorter = std::max(1u, std::min(extent.width, extent.height));
-  for (const KeyPress& press : input.keys) {
-    switch (press.key) {
-      case GLFW_KEY_ESCAPE: window_.close(); break;
-      case GLFW_KEY_1: output_ = Aov::depth, dirty_ = true; break;
-      case GLFW_KEY_2: output_ = Aov::normal, dirty_ = true; break;
-      case GLFW_KEY_3: output_ = Aov::uv, dirty_ = true; break;
-      case GLFW_KEY_R: controller_.reset(), dirty_ = true; break;
-      case GLFW_KEY_C:
-        std::printf("%s\n", controller_.json().c_str());
-        std::fflush(stdout);
+  for (const InputEvent& event : input.events) {
+    switch (event.kind) {
+      case InputEvent::Kind::key: press(event.key); break;
+      case InputEvent::Kind::orbit:
+        controller_.orbit(-event.x * orbit_per_shorter_side / shorter, event.y * orbit_per_shorter_side / shorter);
+        dirty_ = true;
         break;
-      case GLFW_KEY_S:
-        if (press.mods & GLFW_MOD_CONTROL) save();  // plain S flies backwards
+      case InputEvent::Kind::pan:
+        controller_.pan(2.0 * event.x / shorter, -2.0 * event.y / shorter, extent.width, extent.height);
+        dirty_ = true;
         break;
-      default: break;
+      case InputEvent::Kind::scroll: controller_.zoom(event.y), dirty_ = true; break;
     }
   }
-  if (input.orbit_x != 0.0 || input.orbit_y != 0.0) {
-    controller_.orbit(-input.orbit_x * orbit_per_shorter_side / shorter, input.orbit_y * orbit_per_shorter_side / shorter);
-    dirty_ = true;
-  }
-  if (input.pan_x != 0.0 || input.pan_y != 0.0) {
-    controller_.pan(2.0 * input.pan_x / shorter, -2.0 * input.pan_y / shorter, extent.width, extent.height);
-    dirty_ = true;
-  }
-  if (input.scroll != 0.0) controller_.zoom(input.scroll), dirty_ = true;
   if (!(window_.key_held(GLFW_KEY_LEFT_CONTROL) || window_.key_held(GLFW_KEY_RIGHT_CONTROL))) {
     auto axis = [&](int positive, int negative) {
       return (window_.key_held(positive) ? 1.0 : 0.0) - (window_.key_held(negative) ? 1.0 : 0.0);

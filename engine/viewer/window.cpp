@@ -96,7 +96,7 @@ vk::Extent2D Window::framebuffer_size() const {
 }
 
 void Window::on_key(GLFWwindow* window, int key, int /*scancode*/, int action, int mods) {
-  if (action == GLFW_PRESS) owner(window).input_.keys.push_back({key, mods});
+  if (action == GLFW_PRESS) owner(window).input_.events.push_back({InputEvent::Kind::key, {key, mods}});
 }
 
 void Window::on_cursor(GLFWwindow* window, double x, double y) {
@@ -104,14 +104,22 @@ void Window::on_cursor(GLFWwindow* window, double x, double y) {
   const double dx = x - self.cursor_x_, dy = y - self.cursor_y_;
   self.cursor_x_ = x, self.cursor_y_ = y;
   if (glfwGetMouseButton(window, GLFW_MOUSE_BUTTON_LEFT) == GLFW_PRESS) {
-    self.input_.orbit_x += dx, self.input_.orbit_y += dy;
+    self.add_motion(InputEvent::Kind::orbit, dx, dy);
   } else if (glfwGetMouseButton(window, GLFW_MOUSE_BUTTON_RIGHT) == GLFW_PRESS ||
              glfwGetMouseButton(window, GLFW_MOUSE_BUTTON_MIDDLE) == GLFW_PRESS) {
-    self.input_.pan_x += dx, self.input_.pan_y += dy;
+    self.add_motion(InputEvent::Kind::pan, dx, dy);
   }
 }
 
-void Window::on_scroll(GLFWwindow* window, double /*x*/, double y) { owner(window).input_.scroll += y; }
+void Window::on_scroll(GLFWwindow* window, double /*x*/, double y) { owner(window).add_motion(InputEvent::Kind::scroll, 0, y); }
+
+void Window::add_motion(InputEvent::Kind kind, double x, double y) {
+  if (!input_.events.empty() && input_.events.back().kind == kind) {
+    input_.events.back().x += x, input_.events.back().y += y;
+  } else {
+    input_.events.push_back({kind, {}, x, y});
+  }
+}
 
 void Window::on_refresh(GLFWwindow* window) { owner(window).input_.damaged = true; }
 

@@ -17,12 +17,19 @@ struct KeyPress {
   int mods;  // GLFW_MOD_*
 };
 
-// What happened since the last take_input(): drags in pixels, wheel notches, keys pressed.
+// One thing the user did: a key pressed, or the pointer dragged or the wheel turned (consecutive
+// ones of a kind added up).
+struct InputEvent {
+  enum class Kind { key, orbit, pan, scroll };
+  Kind kind;
+  KeyPress key{};     // Kind::key
+  double x = 0, y = 0;  // orbit, pan: the drag in pixels (left button; right or middle); scroll: notches in y
+};
+
+// What happened since the last take_input(), in the order it happened: a slow frame can gather a
+// drag and a key in one batch, and C after a drag must print the camera the drag made.
 struct WindowInput {
-  double orbit_x = 0, orbit_y = 0;  // cursor moved with the left button held
-  double pan_x = 0, pan_y = 0;      // ... with the right or middle button held
-  double scroll = 0;
-  std::vector<KeyPress> keys;
+  std::vector<InputEvent> events;
   bool damaged = false;  // the window's contents must be shown again (exposed, restored)
 };
 
@@ -55,6 +62,7 @@ class Window {
   static void on_cursor(GLFWwindow* window, double x, double y);
   static void on_scroll(GLFWwindow* window, double x, double y);
   static void on_refresh(GLFWwindow* window);
+  void add_motion(InputEvent::Kind kind, double x, double y);
 
   GLFWwindow* window_ = nullptr;
   WindowInput input_;
