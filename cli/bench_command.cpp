@@ -91,7 +91,7 @@ int run_bench(const BenchOptions& options) {
   GpuDevice device(options.device_options.device, options.device_options.transfer_mode());
   print_cpu_device_note(device.info());
   BenchReport report = new_bench_report(device.info(), options.suite, options.frames);
-  std::printf("vkray bench on %s\ndriver %s; transfer %s; %ux%u, %u frame%s after a warm-up\n%s%s",
+  std::printf("vkray bench on %s\ndriver %s\ntransfer %s; %ux%u, %u frame%s after a warm-up\n%s%s",
               device.info().name.c_str(), device.info().driver.c_str(),
               device.transfer() == TransferMode::staging ? "staging" : "direct", width, height, options.frames, options.frames == 1 ? "" : "s",
               bench_table_legend(options.wide).c_str(), bench_table_header(options.wide).c_str());

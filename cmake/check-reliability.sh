@@ -12,7 +12,7 @@ jobs="$(nproc)"
 cmake -S . -B build-sanitize -DVKRAY_SANITIZE=ON -DVKRAY_WERROR=ON
 cmake --build build-sanitize -j"$jobs"
 # LeakSanitizer checks the tests that run on the host alone. Where the Vulkan driver is loaded,
-# lavapipe (Mesa 22.3) and its LLVM keep allocations until exit, and LeakSanitizer cannot unwind
+# lavapipe and its LLVM keep allocations until exit, and LeakSanitizer cannot unwind
 # their stacks (they are built without frame pointers), so suppressions by library cannot hold and
 # a leak of ours could not be told from theirs: there AddressSanitizer and UBSan still check every
 # access and operation, leaks are not checked.
