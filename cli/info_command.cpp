@@ -19,7 +19,7 @@ Action add_info_command(CLI::App& app) {
     for (size_t i = 0; i < devices.size(); ++i) {
       const GpuDeviceInfo& d = devices[i];
       std::cout << (i == chosen ? "* " : "  ") << "[" << i << "] " << d.name << " (" << d.type << ", Vulkan "
-                << d.api_version << ", " << d.driver << ")" << (d.can_compute ? "" : " - unusable: no compute queue or no subgroup vote, ballot and arithmetic") << '\n'
+                << d.api_version << ", " << d.driver << ")" << (d.can_compute ? "" : " - unusable: no compute queue or no subgroup vote, ballot, arithmetic and shuffle") << '\n'
                 << "      UUID " << d.uuid << '\n';
     }
     const GpuDeviceInfo& d = devices[chosen];
@@ -37,7 +37,9 @@ Action add_info_command(CLI::App& app) {
               << "  --transfer auto            "
               << (d.main_memory_host_visible ? "direct (its main memory is host-visible)"
                                              : "staging (its main memory is not host-visible)")
-              << '\n';
+              << '\n'
+              << "  tree walk                  "
+              << (d.favours_packet_walk ? "packets of 8x8 camera rays (llvmpipe from Mesa 25 on)" : "per ray") << '\n';
     if (const std::string note = cpu_device_note(d); !note.empty()) std::cout << '\n' << note << '\n';
     const GeometryLayout layout;
     std::cout << "\ngeometry on the device, bytes (render --timings gives a scene's bytes a triangle)\n"

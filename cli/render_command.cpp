@@ -224,7 +224,10 @@ int run_render(const RenderOptions& options) {
       if (stats.triangles > 0 && stats.spheres == 0) {
         std::printf(" (%.1f bytes a triangle)", static_cast<double>(stats.geometry_bytes) / stats.triangles);
       }
-      if (stats.bvh_nodes > 0) std::printf("; BVH of %u nodes, depth %u", stats.bvh_nodes, stats.bvh_depth);
+      if (stats.bvh_nodes > 0) {
+        std::printf("; BVH of %u nodes, depth %u, walked %s", stats.bvh_nodes, stats.bvh_depth,
+                    stats.search == PrimitiveSearch::bvh_packet ? "by packets of rays" : "per ray");
+      }
       std::printf("\n");
     }
     std::printf("peak host memory: %.1f MiB\n", static_cast<double>(peak_host_memory_bytes()) / (1 << 20));

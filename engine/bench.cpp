@@ -91,8 +91,10 @@ const std::vector<BenchVariant>& bench_variants() {
       shader_variant("default", "what vkray render uses", ShaderVariant{}),
       search_variant("brute-force", "every primitive tested, no tree", PrimitiveSearch::brute_force,
                      bench_brute_force_max_primitives),
-      search_variant("bvh-per-ray", "BVH, each ray its own stack", PrimitiveSearch::bvh_per_ray, SIZE_MAX),
-      search_variant("bvh-packet", "BVH, a subgroup's rays walk together", PrimitiveSearch::bvh_packet, SIZE_MAX),
+      search_variant("bvh-per-ray", "BVH, each ray its own stack (the default but on llvmpipe from Mesa 25)",
+                     PrimitiveSearch::bvh_per_ray, SIZE_MAX),
+      search_variant("bvh-packet", "BVH, a subgroup's camera rays together, 8 an invocation (the default on llvmpipe from Mesa 25)",
+                     PrimitiveSearch::bvh_packet, SIZE_MAX),
       shader_variant("generic", "not specialized: every primitive type and output, counts at run time", generic),
       shader_variant("stack-in-memory", "the tree walk's stack in an array, not registers", stack_in_memory,
                      [](const Scene& scene) {

@@ -140,9 +140,8 @@ glm::dvec3 scene_anchor(const Scene& scene) {
   return 0.5 * (bounds.lower + bounds.upper);
 }
 
-// Per-ray walks: on lavapipe they beat packets (bunny at 1920x1080: ~165 against ~230 ms), since
-// llvmpipe runs subgroup operations as loops over the lanes and a packet visits the union of its
-// rays' nodes. No GPU has measured packets faster yet (see README, "Meshes").
+// The packet walk, where the renderer allows it, is chosen once the tree's depth is known (see
+// GpuSceneOptions::packet_walk).
 PrimitiveSearch choose_search(size_t triangle_count, size_t sphere_count) {
   return triangle_count + sphere_count <= brute_force_max_primitives ? PrimitiveSearch::brute_force
                                                                      : PrimitiveSearch::bvh_per_ray;
@@ -258,6 +257,9 @@ GpuScene make_gpu_scene(const Scene& scene, const GpuSceneOptions& options, cons
     };
   }
   gpu.bvh_depth = bvh.depth;
+  if (options.search == PrimitiveSearch::automatic && options.packet_walk && bvh.depth <= VKRAY_STACK_REGISTERS_MAX) {
+    gpu.search = PrimitiveSearch::bvh_packet;
+  }
   gpu.bvh_build_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   return gpu;
 }

@@ -22,6 +22,9 @@ enum class PrimitiveSearch : uint32_t {
 
 struct GpuSceneOptions {
   PrimitiveSearch search = PrimitiveSearch::automatic;
+  // automatic takes the packet walk for a tree shallow enough for its stack in registers
+  // (VKRAY_STACK_REGISTERS_MAX); the renderer sets this where the device and shader favour it.
+  bool packet_walk = false;
   BvhBuildOptions bvh;
 };
 

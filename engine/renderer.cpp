@@ -84,13 +84,33 @@ struct PixelPatch {
   glm::vec4 value;  // as the shader stores it
 };
 
-// Loop iterations of raycast.comp outside the tree walk, and a margin for the few iterations the
-// compiler may keep where it fails to unroll a constant-trip loop.
+// Loop iterations of raycast.comp outside the tree walk, for each of an invocation's rays the
+// planes and spheres tested one by one and the loops over those rays, and a margin for the few
+// iterations the compiler may keep where it fails to unroll a constant-trip loop.
 uint64_t fixed_loop_iterations(const GpuScene& scene) {
   constexpr uint64_t loop_margin = 16;
-  uint64_t iterations = scene.spheres.size() + scene.planes.size() + loop_margin;
+  constexpr uint64_t loops_over_rays = 4;
+  const uint64_t rays = scene.search == PrimitiveSearch::bvh_packet ? VKRAY_PACKET_ROWS : 1;
+  uint64_t iterations = rays * (scene.spheres.size() + scene.planes.size() + loops_over_rays) + loop_margin;
   iterations += scene.brute_force_triangle_slots() / VKRAY_TRIANGLE_BATCH;
   return iterations;
+}
+
+// Why the packet walk (shaders/packet_walk.glsl) cannot run on this device with this shader;
+// empty where it can.
+std::string packet_walk_obstacle(const GpuDeviceInfo& device, const ShaderVariant& shader) {
+  if (shader.precision != Precision::float32) return "the float64 shader walks the tree per ray";
+  if (resolve_edges(device, shader.edges) != EdgeArithmetic::double_products) {
+    return "it takes its edge planes in double (a CPU device with shaderFloat64, double edge functions)";
+  }
+  if (shader.generic) return "the generic shader walks the tree per ray";
+  if (!shader.stack_in_registers) return "it keeps its stack in registers";
+  if (shader.triangle_test != VKRAY_TRIANGLE_WATERTIGHT) return "it has its own watertight triangle test";
+  if (shader.workgroup_width != VKRAY_WORKGROUP_X || shader.workgroup_height != VKRAY_WORKGROUP_Y || !shader.morton_order) {
+    return "it lays out its own 8x8 workgroups";
+  }
+  if (device.subgroup_size < VKRAY_BVH_MAX_LEAF_SIZE) return "it needs subgroups of at least 8 invocations";
+  return {};
 }
 
 // VKRAY_SPEC_STACK_REGISTERS for a tree `depth` edges deep: a walk holds at most one stack entry per
@@ -103,17 +123,22 @@ uint32_t stack_registers_for_depth(uint32_t depth) {
 // Rows of the next dispatch, from the time the earlier ones took (RendererOptions::dispatch_budget_ms).
 class DispatchSizer {
  public:
-  // `max_rows`: what the output buffers hold; rows are counted in `width`-wide rows.
-  DispatchSizer(uint32_t width, uint32_t max_rows, double budget_ms)
-      : width_(width), max_rows_(max_rows), budget_ms_(budget_ms) {}
+  // `max_rows`: what the output buffers hold; rows are counted in `width`-wide rows, and taken in
+  // whole `row_step`s (the rows of a workgroup) where `max_rows` allows.
+  DispatchSizer(uint32_t width, uint32_t max_rows, double budget_ms, uint32_t row_step = 1)
+      : width_(width), max_rows_(max_rows), budget_ms_(budget_ms), row_step_(row_step) {}
 
   uint32_t next_rows() const {
     if (budget_ms_ <= 0.0) return max_rows_;
-    if (last_rows_ == 0) return std::clamp<uint32_t>(first_dispatch_pixels / width_, 1, max_rows_);
-    // Growth bounded, so a jump in cost shows before it costs much; sixteen, since on lavapipe every
-    // dispatch beyond three cost the bunny at 1920x1080 about 3 ms (four times: 4 dispatches, 160 ms).
-    uint64_t rows = uint64_t{16} * last_rows_;
-    if (slowest_ms_per_row_ > 0.0) rows = std::min<uint64_t>(rows, static_cast<uint64_t>(0.5 * budget_ms_ / slowest_ms_per_row_));
+    uint64_t rows = first_dispatch_pixels / width_;
+    if (last_rows_ > 0) {
+      // Growth bounded, so a jump in cost shows before it costs much; sixteen, since on lavapipe
+      // every dispatch beyond three cost the bunny at 1920x1080 about 3 ms (four times: 4
+      // dispatches, 160 ms).
+      rows = uint64_t{16} * last_rows_;
+      if (slowest_ms_per_row_ > 0.0) rows = std::min<uint64_t>(rows, static_cast<uint64_t>(0.5 * budget_ms_ / slowest_ms_per_row_));
+    }
+    rows = std::max<uint64_t>(rows / row_step_, 1) * row_step_;
     return static_cast<uint32_t>(std::clamp<uint64_t>(rows, 1, max_rows_));
   }
 
@@ -128,6 +153,7 @@ class DispatchSizer {
   static constexpr uint32_t first_dispatch_pixels = 65536;
   uint32_t width_, max_rows_;
   double budget_ms_;
+  uint32_t row_step_;
   uint32_t last_rows_ = 0;
   double slowest_ms_per_row_ = 0.0;
 };
@@ -162,6 +188,15 @@ struct Renderer::Impl {
   RenderTimings timings;
 
   Precision precision() const { return options.shader.precision; }
+
+  // The pixels (or given rays, as rows) one workgroup covers in `mode`: its own invocations', or
+  // the packet walk's columns (VKRAY_PACKET_*).
+  vk::Extent2D workgroup_footprint(RaycastMode mode) const {
+    if (stats.search == PrimitiveSearch::bvh_packet && mode != RaycastMode::given_rays) {
+      return {VKRAY_PACKET_GROUP_WIDTH, VKRAY_PACKET_GROUP_HEIGHT};
+    }
+    return {options.shader.workgroup_width, options.shader.workgroup_height};
+  }
 
   // The most bytes one geometry (or given-ray) buffer may hold: what one texel buffer or, for the
   // storage-geometry variant, one storage buffer binds, and one allocation holds.
@@ -293,7 +328,7 @@ struct Renderer::Impl {
       by_bytes = std::min(by_bytes, std::max<vk::DeviceSize>(1, ray_limit / (vk::DeviceSize{width} * sizeof(gpu::GpuRay))));
     }
     const vk::DeviceSize by_groups =
-        vk::DeviceSize{context.limits.maxComputeWorkGroupCount[1]} * options.shader.workgroup_height;
+        vk::DeviceSize{context.limits.maxComputeWorkGroupCount[1]} * workgroup_footprint(mode).height;
     return static_cast<uint32_t>(std::min<vk::DeviceSize>({height, by_bytes, by_groups}));
   }
 
@@ -342,9 +377,8 @@ struct Renderer::Impl {
                                  cleared, {}, {});
       }
       pipeline->bind(commands, chosen, params);
-      const uint32_t group_width = options.shader.workgroup_width;
-      const uint32_t group_height = options.shader.workgroup_height;
-      commands.dispatch((tile.width + group_width - 1) / group_width, (params.image.w + group_height - 1) / group_height, 1);
+      const vk::Extent2D group = workgroup_footprint(tile.mode);
+      commands.dispatch((tile.width + group.width - 1) / group.width, (params.image.w + group.height - 1) / group.height, 1);
       if (*timestamps) commands.writeTimestamp(vk::PipelineStageFlagBits::eComputeShader, *timestamps, 1);
       // Make the shader's writes visible to the copy into host-visible memory, and to the host.
       const vk::MemoryBarrier barrier(vk::AccessFlagBits::eShaderWrite,
@@ -427,7 +461,17 @@ Renderer::Renderer(GpuDevice& device, const Scene& scene, RendererOptions option
   with_vulkan_errors("uploading the scene", [&] {
     const auto start = Clock::now();
     Impl& r = *impl_;
-    const GpuScene gpu_scene = make_gpu_scene(scene, options.scene, options.shader);
+    const std::string packet_obstacle = packet_walk_obstacle(r.context.info, options.shader);
+    GpuSceneOptions scene_options = options.scene;
+    scene_options.packet_walk = r.context.info.favours_packet_walk && packet_obstacle.empty();
+    const GpuScene gpu_scene = make_gpu_scene(scene, scene_options, options.shader);
+    if (gpu_scene.search == PrimitiveSearch::bvh_packet && !packet_obstacle.empty()) {
+      throw GpuError("the packet walk cannot run here: " + packet_obstacle);
+    }
+    if (gpu_scene.search == PrimitiveSearch::bvh_packet && gpu_scene.bvh_depth > VKRAY_STACK_REGISTERS_MAX) {
+      throw GpuError("the packet walk keeps its stack in registers, for trees up to " +
+                     std::to_string(VKRAY_STACK_REGISTERS_MAX) + " deep; this one is " + std::to_string(gpu_scene.bvh_depth));
+    }
     const vk::DeviceSize buffer_limit = r.binding_limit();
     auto upload = [&]<typename T>(const std::vector<T>& items, const char* what) -> std::optional<TexelBuffer> {
       static_assert(sizeof(T) % texel_bytes == 0);
@@ -533,7 +577,8 @@ Frame Renderer::render(const Camera& camera, uint32_t width, uint32_t height, Ao
     const CameraBasis basis = make_camera_basis(camera, width, height);
     uint32_t tile_rows = 0;
     const vk::raii::Pipeline& pipeline = r.begin_render(camera, width, height, aovs, nullptr, tile_rows);
-    DispatchSizer sizer(width, tile_rows, r.options.dispatch_budget_ms);
+    DispatchSizer sizer(width, tile_rows, r.options.dispatch_budget_ms,
+                        r.workgroup_footprint(RaycastMode::image_buffers).height);
     for (uint32_t first_row = 0, rows = 0; first_row < height; first_row += rows) {
       rows = std::min(sizer.next_rows(), height - first_row);
       sizer.measured(rows, r.dispatch_tile(pipeline, make_ray_gen_params(basis, r.anchor, r.precision(), width, height,
@@ -655,7 +700,8 @@ DepthRange Renderer::render(const Camera& camera, Aov aov, ImageTarget& target) 
     uint32_t tile_rows = 0;
     const vk::raii::Pipeline& pipeline = r.begin_render(camera, width, height, AovSet{aov}, &target, tile_rows);
     std::vector<PixelPatch> patches;
-    DispatchSizer sizer(width, tile_rows, r.options.dispatch_budget_ms);
+    DispatchSizer sizer(width, tile_rows, r.options.dispatch_budget_ms,
+                        r.workgroup_footprint(RaycastMode::image_target).height);
     for (uint32_t first_row = 0, rows = 0; first_row < height; first_row += rows) {
       rows = std::min(sizer.next_rows(), height - first_row);
       sizer.measured(rows, r.dispatch_tile(pipeline, make_ray_gen_params(basis, r.anchor, r.precision(), width, height,

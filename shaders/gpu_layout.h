@@ -53,7 +53,15 @@ using uvec4 = glm::uvec4;
 // infinite: they stay outside the tree, in their own loop.
 #define VKRAY_SEARCH_BRUTE_FORCE 0  // every primitive in a loop; no tree (a handful of them)
 #define VKRAY_SEARCH_BVH_PER_RAY 1  // each ray walks the tree with its own stack
-#define VKRAY_SEARCH_BVH_PACKET 2   // a subgroup's rays walk the tree together, one shared stack
+#define VKRAY_SEARCH_BVH_PACKET 2   // a subgroup's camera rays walk the tree together (packet_walk.glsl)
+
+// The packet walk's pixels: each invocation traces a column of VKRAY_PACKET_ROWS pixels, and the
+// 64 invocations of a workgroup (8x8, in index order) cover VKRAY_PACKET_GROUP_WIDTH columns of
+// 4 such rows of columns: invocation i takes column i % 16 of row block i / 16. A subgroup of 8
+// consecutive invocations (lavapipe) thus holds an 8x8 block of pixels, one of 32 a 16x16 block.
+#define VKRAY_PACKET_ROWS 8
+#define VKRAY_PACKET_GROUP_WIDTH 16
+#define VKRAY_PACKET_GROUP_HEIGHT 32
 
 // Specialization constants: counts (0 removes that loop and its reads), how primitives are found,
 // what the tree holds, which outputs are written, and the loop budget.
@@ -98,7 +106,9 @@ using uvec4 = glm::uvec4;
 // Trace the rays of VKRAY_BINDING_RAYS, one an invocation, rather than a camera's, and write what
 // each hit to VKRAY_BINDING_HITS (Python's cast_rays): depth and normal as for pixels.
 #define VKRAY_SPEC_RAY_INPUT 20
-#define VKRAY_SPEC_COUNT 21
+// The device's subgroup size where it is 8, else 0 (see shaders/packet_walk.glsl).
+#define VKRAY_SPEC_SUBGROUP_SIZE 21
+#define VKRAY_SPEC_COUNT 22
 #define VKRAY_STACK_REGISTERS_MAX 32
 
 #define VKRAY_SPHERE_STABLE 0               // Ray Tracing Gems ch. 7 (intersect.glsl)

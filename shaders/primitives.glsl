@@ -239,11 +239,7 @@ uint pop_registers(inout RegisterStack s) {
 // plus the primitive test whatever the ray needs; doing both every time wastes neither. (A node may
 // be tested against a nearest hit not yet updated by its leaf's last primitive; that only makes the
 // test looser, never culls a hit.)
-// `packet` false: each ray walks on its own (per-ray stack). `packet` true: the rays of a subgroup
-// walk together, as Embree's packets do on the CPU: one node at a time for all of them, descending
-// where any ray's box test passes, nearer child first by majority; every value steering the walk is
-// uniform across the subgroup, so the lanes never diverge and share one stack's contents.
-PrimitiveHit nearest_primitive_in_tree(RayFrame frame, Origin origin, real3 dir, real t_max, const bool packet) {
+PrimitiveHit nearest_primitive_in_tree(RayFrame frame, Origin origin, real3 dir, real t_max) {
   real3 inv_dir = safe_inverse(dir);
 #ifdef VKRAY_FLOAT64
   dvec3 box_origin = origin.position;
@@ -284,14 +280,7 @@ PrimitiveHit nearest_primitive_in_tree(RayFrame frame, Origin origin, real3 dir,
                                   FETCH(bvh_bounds, 4 * int(current) + 2), box_origin, box_margin, inv_dir,
                                   hit.t, enter);
       uvec2 children = FETCH(bvh_links, 4 * int(current) + 3).xy;
-      bool prefers_second = hits.y && (!hits.x || enter.y < enter.x);
-      bool second_first = prefers_second;
-      if (packet) {
-        hits = bvec2(subgroupAny(hits.x), subgroupAny(hits.y));
-        bool prefers_first = hits.x && !prefers_second;
-        second_first = subgroupBallotBitCount(subgroupBallot(prefers_second)) >
-                       subgroupBallotBitCount(subgroupBallot(prefers_first));
-      }
+      bool second_first = hits.y && (!hits.x || enter.y < enter.x);
       if (hits.x && hits.y) {
         uint later = second_first ? children.x : children.y;
         if (STACK_REGISTERS > 0) {
@@ -333,7 +322,7 @@ PrimitiveHit nearest_primitive(Origin origin, real3 dir, real t_max, uvec4 count
     return nearest_primitive_brute_force(frame, origin, dir, t_max, sphere_count, GENERIC ? counts.z : TRIANGLE_SLOTS);
   }
   PrimitiveHit sphere_hit = nearest_primitive_brute_force(frame, origin, dir, t_max, sphere_count, 0u);
-  PrimitiveHit tree_hit = nearest_primitive_in_tree(frame, origin, dir, sphere_hit.t, search_mode == VKRAY_SEARCH_BVH_PACKET);
+  PrimitiveHit tree_hit = nearest_primitive_in_tree(frame, origin, dir, sphere_hit.t);
   if (tree_hit.t < sphere_hit.t) return tree_hit;
   sphere_hit.unfinished = tree_hit.unfinished;
   return sphere_hit;

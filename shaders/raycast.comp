@@ -40,12 +40,13 @@ layout(std430, binding = VKRAY_BINDING_DEPTH_RANGE) buffer DepthRange { DepthRan
 GEOMETRY_BUFFER(VKRAY_BINDING_RAYS, GeometryTexel, GeometrySampler, rays_in);  // GpuRay
 layout(std430, binding = VKRAY_BINDING_HITS) writeonly buffer HitsOut { uint hit_out[]; };
 
-// Folds the depths of the counted pixels into depth_range: reduced across the subgroup first, then
-// one atomic pair per subgroup (per-invocation atomics cost llvmpipe ~20 ms a 1280x720 frame; a
-// workgroup barrier costs it more than that). Positive floats order as their bits do.
-void record_depth_range(bool counted, float depth) {
-  uint near_bits = subgroupMin(counted ? floatBitsToUint(depth) : 0x7f800000u);  // +infinity when none
-  uint far_bits = subgroupMax(counted ? floatBitsToUint(depth) : 0u);
+// Folds a range of depths into depth_range (near = +infinity and far = 0 where the invocation has
+// none): reduced across the subgroup first, then one atomic pair per subgroup (per-invocation
+// atomics cost llvmpipe ~20 ms a 1280x720 frame; a workgroup barrier costs it more than that).
+// Positive floats order as their bits do.
+void record_depth_range(float near, float far) {
+  uint near_bits = subgroupMin(floatBitsToUint(near));
+  uint far_bits = subgroupMax(floatBitsToUint(far));
   if (subgroupElect() && far_bits != 0u) {
     atomicMin(depth_range.near_far.x, near_bits);
     atomicMax(depth_range.near_far.y, far_bits);
@@ -59,131 +60,194 @@ uint compact_even_bits(uint bits) {
   return (bits | (bits >> 2)) & 0x0fu;
 }
 
+#ifdef VKRAY_DOUBLE_EDGES
+#include "packet_walk.glsl"
+const bool PACKET_WALK = SEARCH_MODE == VKRAY_SEARCH_BVH_PACKET && !RAY_INPUT;
+#else
+const bool PACKET_WALK = false;
+#endif
+// The rays this invocation traces: one, or a column of a packet (see VKRAY_PACKET_ROWS).
+const uint RAYS = PACKET_WALK ? VKRAY_PACKET_ROWS : 1u;
+
 void main() {
   uint width = params.image.x;
   uint height = params.image.y;
-  // Invocations cover their square workgroup in Morton order, so any 8 consecutive ones (a lavapipe
-  // subgroup) form a 4x2 block and any 32 (an NVIDIA warp) an 8x4 block: rays that run together are
-  // as close together as they can be, which is what tree walks in lockstep want.
-  // Given rays come in rows one workgroup wide (see Renderer::cast_rays): in row-major order the
-  // invocations take consecutive rays, which callers usually order as they lie in space.
+  // Where this invocation's first ray goes, relative to the tile, and the step to its next one.
+  // One ray each: invocations cover their square workgroup in Morton order, so any 8 consecutive
+  // ones (a lavapipe subgroup) form a 4x2 block and any 32 (an NVIDIA warp) an 8x4 block: rays
+  // that run together are as close together as they can be, which is what tree walks in lockstep
+  // want. Given rays come in rows one workgroup wide (see Renderer::cast_rays): in row-major order
+  // the invocations take consecutive rays, which callers usually order as they lie in space.
   uint local = gl_LocalInvocationIndex;
-  uvec2 in_group = RAY_INPUT      ? uvec2(local % gl_WorkGroupSize.x, local / gl_WorkGroupSize.x)
-                   : MORTON_ORDER ? uvec2(compact_even_bits(local), compact_even_bits(local >> 1))
-                                  : gl_LocalInvocationID.xy;
-  uvec2 tile_pixel = gl_WorkGroupID.xy * gl_WorkGroupSize.xy + in_group;
-  // Invocations past the image's edge stay alive with a ray that can hit nothing (t_max = 0): the
-  // packet walk's subgroup operations then always see whole subgroups.
-  uint row = params.image.z + tile_pixel.y;
-  uint ray_index = row * width + tile_pixel.x;  // RAY_INPUT: rows of `width` rays, `height` in all
-  bool inside = tile_pixel.x < width && tile_pixel.y < params.image.w && (!RAY_INPUT || ray_index < height);
+  uvec2 first_pixel;
+  if (PACKET_WALK) {
+    first_pixel = gl_WorkGroupID.xy * uvec2(VKRAY_PACKET_GROUP_WIDTH, VKRAY_PACKET_GROUP_HEIGHT) +
+                  uvec2(local % VKRAY_PACKET_GROUP_WIDTH, (local / VKRAY_PACKET_GROUP_WIDTH) * VKRAY_PACKET_ROWS);
+  } else {
+    uvec2 in_group = RAY_INPUT      ? uvec2(local % gl_WorkGroupSize.x, local / gl_WorkGroupSize.x)
+                     : MORTON_ORDER ? uvec2(compact_even_bits(local), compact_even_bits(local >> 1))
+                                    : gl_LocalInvocationID.xy;
+    first_pixel = gl_WorkGroupID.xy * gl_WorkGroupSize.xy + in_group;
+  }
   // Outputs are planar (all x, then all y, ...) with one plane per buffer tile, so neighbouring
   // invocations store to neighbouring addresses.
-  uint out_index = tile_pixel.y * width + tile_pixel.x;
   uint plane_size = params.image.x * params.image.w;
-
-  // UV of the pixel centre: origin at the image centre, the shorter side spans [-1, 1]. The
-  // numerators are small integers, exact in float; the division is the only rounding (within
-  // 2.5 ulp by Vulkan's precision rules).
   float shorter = float(min(width, height));
-  vec2 uv_numerator = vec2(float(2 * tile_pixel.x + 1) - float(width), float(height) - float(2 * row + 1));
-  vec2 uv = uv_numerator / shorter;
-  if (WRITE_UV && !RAY_INPUT && inside) {
-    if (IMAGE_TARGET) {
-      imageStore(image_out, ivec2(tile_pixel.x, row), vec4(uv, 0.0, 0.0));
-    } else {
-      uv_out[out_index] = uv.x;
-      uv_out[plane_size + out_index] = uv.y;
+
+  // Per ray: its pixel, whether it lies in the image (rays past the image's edge stay alive with
+  // t_max = 0: they can hit nothing, and subgroup operations always see whole subgroups), the
+  // nearest plane hit, and the search's bound. (Arrays of RAYS entries used; the rest is removed.)
+  uvec2 tile_pixel[VKRAY_PACKET_ROWS];
+  bool inside[VKRAY_PACKET_ROWS];
+  real3 dirs[VKRAY_PACKET_ROWS];
+  real t_best[VKRAY_PACKET_ROWS];
+  real primitive_t_max[VKRAY_PACKET_ROWS];
+  real3 normal[VKRAY_PACKET_ROWS];
+  uint hit_id[VKRAY_PACKET_ROWS];
+  bool unfinished[VKRAY_PACKET_ROWS];
+  Origin origin;
+  for (uint r = 0; r < RAYS; ++r) {
+    tile_pixel[r] = first_pixel + uvec2(0, r);
+    uint row = params.image.z + tile_pixel[r].y;
+    uint ray_index = row * width + tile_pixel[r].x;  // RAY_INPUT: rows of `width` rays, `height` in all
+    inside[r] = tile_pixel[r].x < width && tile_pixel[r].y < params.image.w && (!RAY_INPUT || ray_index < height);
+    uint out_index = tile_pixel[r].y * width + tile_pixel[r].x;
+
+    // UV of the pixel centre: origin at the image centre, the shorter side spans [-1, 1]. The
+    // numerators are small integers, exact in float; the division is the only rounding (within
+    // 2.5 ulp by Vulkan's precision rules).
+    vec2 uv_numerator = vec2(float(2 * tile_pixel[r].x + 1) - float(width), float(height) - float(2 * row + 1));
+    vec2 uv = uv_numerator / shorter;
+    if (WRITE_UV && !RAY_INPUT && inside[r]) {
+      if (IMAGE_TARGET) {
+        imageStore(image_out, ivec2(tile_pixel[r].x, row), vec4(uv, 0.0, 0.0));
+      } else {
+        uv_out[out_index] = uv.x;
+        uv_out[plane_size + out_index] = uv.y;
+      }
+    }
+    if (!WRITE_DEPTH && !WRITE_NORMAL) continue;
+
+    // A GpuRay is two points; lanes past the last ray read the first (their t_max is 0). float32
+    // shaders take the direction rounded to float, as a camera's.
+    Point ray_origin = fetch_point(rays_in, RAY_INPUT && inside[r] ? 2 * int(ray_index) : 0);
+#ifdef VKRAY_FLOAT64
+    Point ray_direction = fetch_point(rays_in, RAY_INPUT && inside[r] ? 2 * int(ray_index) + 1 : 1);
+    dvec3 camera[4];  // origin, right, up, forward_scaled
+    for (int k = 0; k < 4; ++k) {
+      uvec4 first = params.camera[(3 * k) / 2];
+      uvec4 second = params.camera[(3 * k + 2) / 2];
+      uvec2 x = k % 2 == 0 ? first.xy : first.zw;
+      uvec2 y = k % 2 == 0 ? first.zw : second.xy;
+      uvec2 z = k % 2 == 0 ? second.xy : second.zw;
+      camera[k] = dvec3(packDouble2x32(x), packDouble2x32(y), packDouble2x32(z));
+    }
+    origin = Origin(RAY_INPUT ? ray_origin.value.xyz : camera[0]);
+    dirs[r] = RAY_INPUT ? ray_direction.value.xyz
+                        : normalize(double(uv_numerator.x) / shorter * camera[1] +
+                                    double(uv_numerator.y) / shorter * camera[2] + camera[3]);
+#else
+    Point ray_direction = fetch_point_hi(rays_in, RAY_INPUT && inside[r] ? 2 * int(ray_index) + 1 : 1);
+    origin = RAY_INPUT ? Origin(ray_origin.hi.xyz, ray_origin.lo.xyz)
+                       : Origin(uintBitsToFloat(params.camera[0].xyz),
+                                use_lo_parts ? uintBitsToFloat(params.camera[1].xyz) : vec3(0.0));
+    dirs[r] = RAY_INPUT ? ray_direction.hi.xyz
+                        : normalize(uv.x * uintBitsToFloat(params.camera[2].xyz) + uv.y * uintBitsToFloat(params.camera[3].xyz) +
+                                    uintBitsToFloat(params.camera[4].xyz));
+#endif
+    real3 dir = dirs[r];
+
+    const real no_hit = uintBitsToFloat(0x7f800000u);  // +infinity
+    t_best[r] = inside[r] ? no_hit : 0.0;
+    normal[r] = real3(0.0);
+    hit_id[r] = VKRAY_HIT_NONE;
+
+    // Planes first; spheres and triangles then search up to VKRAY_PRIMITIVE_T_MAX (coincident
+    // surfaces: the plane wins; see gpu_layout.h).
+    primitive_t_max[r] = t_best[r];
+    uint plane_count = GENERIC ? params.counts.y : PLANE_COUNT;
+    for (uint i = 0; i < plane_count; ++i) {
+      // The height above the camera, set by the host per render (see GpuPlane). Plain float
+      // coordinates subtract the camera from the anchored offset instead, and so does each given
+      // ray (its own origin), hi and lo parts apart: the height is then within a few float32
+      // roundings of the larger of the offset and the origin's distance from the anchor.
+#ifdef VKRAY_FLOAT64
+      Point plane = fetch_point(planes, RAY_INPUT ? 2 * int(i) + 1 : 2 * int(i));
+      real3 plane_normal = plane.value.xyz;
+      real height = RAY_INPUT ? plane.value.w - dot(plane_normal, origin.position) : plane.value.w;
+#else
+      bool anchored = RAY_INPUT || COORDINATES != VKRAY_COORDINATES_CAMERA_RELATIVE;
+      Point plane = RAY_INPUT ? fetch_point(planes, 2 * int(i) + 1) : fetch_point_hi(planes, anchored ? 2 * int(i) + 1 : 2 * int(i));
+      vec3 plane_normal = plane.hi.xyz;
+      float height = anchored ? plane.hi.w - dot(plane_normal, origin.hi) : plane.hi.w;
+      if (RAY_INPUT) height += plane.lo.w - dot(plane_normal, origin.lo);
+#endif
+      real t = intersect_plane(plane_normal, height, dir, t_best[r]);
+      if (t < t_best[r]) {
+        t_best[r] = t;
+        normal[r] = dot(plane_normal, dir) > 0.0 ? -plane_normal : plane_normal;
+        primitive_t_max[r] = VKRAY_PRIMITIVE_T_MAX(t, abs(dot(plane_normal, dir)));
+        hit_id[r] = VKRAY_HIT_PLANE | i;
+      }
     }
   }
   if (!WRITE_DEPTH && !WRITE_NORMAL) return;
 
-  // A GpuRay is two points; lanes past the last ray read the first (their t_max is 0). float32
-  // shaders take the direction rounded to float, as a camera's.
-  Point ray_origin = fetch_point(rays_in, RAY_INPUT && inside ? 2 * int(ray_index) : 0);
-#ifdef VKRAY_FLOAT64
-  Point ray_direction = fetch_point(rays_in, RAY_INPUT && inside ? 2 * int(ray_index) + 1 : 1);
-#else
-  Point ray_direction = fetch_point_hi(rays_in, RAY_INPUT && inside ? 2 * int(ray_index) + 1 : 1);
-#endif
-#ifdef VKRAY_FLOAT64
-  dvec3 camera[4];  // origin, right, up, forward_scaled
-  for (int k = 0; k < 4; ++k) {
-    uvec4 first = params.camera[(3 * k) / 2];
-    uvec4 second = params.camera[(3 * k + 2) / 2];
-    uvec2 x = k % 2 == 0 ? first.xy : first.zw;
-    uvec2 y = k % 2 == 0 ? first.zw : second.xy;
-    uvec2 z = k % 2 == 0 ? second.xy : second.zw;
-    camera[k] = dvec3(packDouble2x32(x), packDouble2x32(y), packDouble2x32(z));
-  }
-  Origin origin = Origin(RAY_INPUT ? ray_origin.value.xyz : camera[0]);
-  dvec3 dir = RAY_INPUT ? ray_direction.value.xyz
-                        : normalize(double(uv_numerator.x) / shorter * camera[1] +
-                                    double(uv_numerator.y) / shorter * camera[2] + camera[3]);
-#else
-  Origin origin = RAY_INPUT ? Origin(ray_origin.hi.xyz, ray_origin.lo.xyz)
-                            : Origin(uintBitsToFloat(params.camera[0].xyz),
-                                     use_lo_parts ? uintBitsToFloat(params.camera[1].xyz) : vec3(0.0));
-  vec3 dir = RAY_INPUT ? ray_direction.hi.xyz
-                       : normalize(uv.x * uintBitsToFloat(params.camera[2].xyz) + uv.y * uintBitsToFloat(params.camera[3].xyz) +
-                                   uintBitsToFloat(params.camera[4].xyz));
-#endif
-
-  const real no_hit = uintBitsToFloat(0x7f800000u);  // +infinity
-  real t_best = inside ? no_hit : 0.0;
-  real3 normal = real3(0.0);
-  uint hit_id = VKRAY_HIT_NONE;
-
-  // Planes first; spheres and triangles then search up to VKRAY_PRIMITIVE_T_MAX (coincident
-  // surfaces: the plane wins; see gpu_layout.h).
-  real primitive_t_max = t_best;
-  uint plane_count = GENERIC ? params.counts.y : PLANE_COUNT;
-  for (uint i = 0; i < plane_count; ++i) {
-    // The height above the camera, set by the host per render (see GpuPlane). Plain float
-    // coordinates subtract the camera from the anchored offset instead, and so does each given ray
-    // (its own origin), hi and lo parts apart: the height is then within a few float32 roundings of
-    // the larger of the offset and the origin's distance from the anchor.
-#ifdef VKRAY_FLOAT64
-    Point plane = fetch_point(planes, RAY_INPUT ? 2 * int(i) + 1 : 2 * int(i));
-    real3 plane_normal = plane.value.xyz;
-    real height = RAY_INPUT ? plane.value.w - dot(plane_normal, origin.position) : plane.value.w;
-#else
-    bool anchored = RAY_INPUT || COORDINATES != VKRAY_COORDINATES_CAMERA_RELATIVE;
-    Point plane = RAY_INPUT ? fetch_point(planes, 2 * int(i) + 1) : fetch_point_hi(planes, anchored ? 2 * int(i) + 1 : 2 * int(i));
-    vec3 plane_normal = plane.hi.xyz;
-    float height = anchored ? plane.hi.w - dot(plane_normal, origin.hi) : plane.hi.w;
-    if (RAY_INPUT) height += plane.lo.w - dot(plane_normal, origin.lo);
-#endif
-    real t = intersect_plane(plane_normal, height, dir, t_best);
-    if (t < t_best) {
-      t_best = t;
-      normal = dot(plane_normal, dir) > 0.0 ? -plane_normal : plane_normal;
-      primitive_t_max = VKRAY_PRIMITIVE_T_MAX(t, abs(dot(plane_normal, dir)));
-      hit_id = VKRAY_HIT_PLANE | i;
+  // Spheres and triangles: each ray on its own, or the packet's rays together.
+  PrimitiveHit hits[VKRAY_PACKET_ROWS];
+#ifdef VKRAY_DOUBLE_EDGES
+  if (PACKET_WALK) {
+    // Spheres tested one by one (a handful beside the tree's triangles) bound each ray's walk.
+    float t_max[VKRAY_PACKET_ROWS];
+    for (uint r = 0; r < RAYS; ++r) {
+      hits[r] = nearest_primitive_brute_force(make_ray_frame(dirs[r]), origin, dirs[r], primitive_t_max[r], SPHERE_COUNT, 0u);
+      t_max[r] = hits[r].t;
+    }
+    uint slots[VKRAY_PACKET_ROWS];
+    bool packet_unfinished;
+    nearest_primitives_packet(origin, dirs, t_max, slots, packet_unfinished);
+    for (uint r = 0; r < RAYS; ++r) {
+      // The normal is read for the winner alone.
+      if (slots[r] != no_primitive) hits[r] = PrimitiveHit(t_max[r], primitive_normal(slots[r], origin, dirs[r]), false, slots[r]);
+      hits[r].unfinished = packet_unfinished;
     }
   }
-  PrimitiveHit hit = nearest_primitive(origin, dir, primitive_t_max, params.counts);
-  if (hit.t < primitive_t_max) {
-    t_best = hit.t;
-    normal = hit.normal;
-    hit_id = hit.id;
-  }
-  if (hit.unfinished && inside) overflow_pixels[atomicAdd(overflow_count, 1u)] = out_index;
-  // Unfinished rays stay out: the host finishes them and folds their depth in.
-  if (IMAGE_TARGET && WRITE_DEPTH) record_depth_range(inside && !hit.unfinished && t_best < no_hit, float(t_best));
-  if (!inside) return;
+#endif
+  if (!PACKET_WALK) hits[0] = nearest_primitive(origin, dirs[0], primitive_t_max[0], params.counts);
 
-  // Unit length again (the sphere normal carries rounding); every kind turned it to face the ray.
-  if (WRITE_NORMAL && t_best < no_hit) normal = normalize(normal);
-  if (IMAGE_TARGET) {
-    imageStore(image_out, ivec2(tile_pixel.x, row), WRITE_DEPTH ? vec4(t_best, 0.0, 0.0, 0.0) : vec4(normal, 0.0));
-    return;
+  float near = uintBitsToFloat(0x7f800000u), far = 0.0;
+  for (uint r = 0; r < RAYS; ++r) {
+    if (hits[r].t < primitive_t_max[r]) {
+      t_best[r] = hits[r].t;
+      normal[r] = hits[r].normal;
+      hit_id[r] = hits[r].id;
+    }
+    uint out_index = tile_pixel[r].y * width + tile_pixel[r].x;
+    if (hits[r].unfinished && inside[r]) overflow_pixels[atomicAdd(overflow_count, 1u)] = out_index;
+    // Unfinished rays stay out of the depth range: the host finishes them and folds their depth in.
+    if (inside[r] && !hits[r].unfinished && t_best[r] < uintBitsToFloat(0x7f800000u)) {
+      near = min(near, float(t_best[r]));
+      far = max(far, float(t_best[r]));
+    }
   }
-  if (RAY_INPUT) hit_out[out_index] = hit_id;
-  if (WRITE_DEPTH) depth_out[out_index] = t_best;
-  if (WRITE_NORMAL) {
-    normal_out[out_index] = normal.x;
-    normal_out[plane_size + out_index] = normal.y;
-    normal_out[2 * plane_size + out_index] = normal.z;
+  if (IMAGE_TARGET && WRITE_DEPTH) record_depth_range(near, far);
+
+  for (uint r = 0; r < RAYS; ++r) {
+    if (!inside[r]) continue;
+    uint out_index = tile_pixel[r].y * width + tile_pixel[r].x;
+    // Unit length again (the sphere normal carries rounding); every kind turned it to face the ray.
+    if (WRITE_NORMAL && t_best[r] < uintBitsToFloat(0x7f800000u)) normal[r] = normalize(normal[r]);
+    if (IMAGE_TARGET) {
+      imageStore(image_out, ivec2(tile_pixel[r].x, params.image.z + tile_pixel[r].y),
+                 WRITE_DEPTH ? vec4(t_best[r], 0.0, 0.0, 0.0) : vec4(normal[r], 0.0));
+      continue;
+    }
+    if (RAY_INPUT) hit_out[out_index] = hit_id[r];
+    if (WRITE_DEPTH) depth_out[out_index] = t_best[r];
+    if (WRITE_NORMAL) {
+      normal_out[out_index] = normal[r].x;
+      normal_out[plane_size + out_index] = normal[r].y;
+      normal_out[2 * plane_size + out_index] = normal[r].z;
+    }
   }
 }

@@ -177,31 +177,39 @@ TEST(GpuRenderer, TilingGivesIdenticalImages) {
   EXPECT_EQ(0, std::memcmp(frame.uv.data(), reference.uv.data(), frame.uv.size() * sizeof(float)));
 }
 
-// Dispatches sized by their measured time: a budget far below what a row takes leaves one row a
-// dispatch after the first, and the pixels are those of one dispatch; none is longer than the
-// longest measured, and a generous budget gives one dispatch after the first.
+// Dispatches sized by their measured time: a budget far below what a row takes leaves one
+// workgroup's rows a dispatch after the first (8 per ray, 32 for the packet walk), and the
+// pixels are those of one dispatch; none is longer than the longest measured, and a generous budget
+// gives one dispatch after the first.
 TEST(GpuRenderer, DispatchesSizedByTimeGiveIdenticalImages) {
-  const Scene scene = sized(default_scene(), 1024, 80);  // the first dispatch: 65536 pixels, 64 rows
+  const Scene scene = sized(default_scene(), 1024, 160);  // the first dispatch: 65536 pixels, 64 rows
   const AovSet all{Aov::depth, Aov::normal, Aov::uv};
-  RendererOptions unbudgeted;
-  unbudgeted.dispatch_budget_ms = 0.0;
-  Renderer whole(device(), scene, unbudgeted);
-  const Frame reference = whole.render(scene.camera, 1024, 80, all);
-  EXPECT_EQ(whole.timings().tiles, 1u);
+  for (const auto& [search, row_step] : {std::pair{PrimitiveSearch::bvh_per_ray, uint32_t{VKRAY_WORKGROUP_Y}},
+                                         std::pair{PrimitiveSearch::bvh_packet, uint32_t{VKRAY_PACKET_GROUP_HEIGHT}}}) {
+    SCOPED_TRACE(testing::Message() << "search " << int(search));
+    RendererOptions unbudgeted;
+    unbudgeted.dispatch_budget_ms = 0.0;
+    unbudgeted.scene.search = search;
+    Renderer whole(device(), scene, unbudgeted);
+    const Frame reference = whole.render(scene.camera, 1024, 160, all);
+    EXPECT_EQ(whole.timings().tiles, 1u);
 
-  RendererOptions tight;
-  tight.dispatch_budget_ms = 1e-6;
-  Renderer budgeted(device(), scene, tight);
-  const Frame frame = budgeted.render(scene.camera, 1024, 80, all);
-  EXPECT_EQ(budgeted.timings().tiles, 1u + 16u);
-  EXPECT_GT(budgeted.timings().longest_dispatch_ms, 0.0);
-  EXPECT_EQ(0, std::memcmp(frame.depth.data(), reference.depth.data(), frame.depth.size() * sizeof(float)));
-  EXPECT_EQ(0, std::memcmp(frame.normal.data(), reference.normal.data(), frame.normal.size() * sizeof(float)));
-  EXPECT_EQ(0, std::memcmp(frame.uv.data(), reference.uv.data(), frame.uv.size() * sizeof(float)));
+    RendererOptions tight = unbudgeted;
+    tight.dispatch_budget_ms = 1e-6;
+    Renderer budgeted(device(), scene, tight);
+    const Frame frame = budgeted.render(scene.camera, 1024, 160, all);
+    EXPECT_EQ(budgeted.timings().tiles, 1u + 96u / row_step);
+    EXPECT_GT(budgeted.timings().longest_dispatch_ms, 0.0);
+    EXPECT_EQ(0, std::memcmp(frame.depth.data(), reference.depth.data(), frame.depth.size() * sizeof(float)));
+    EXPECT_EQ(0, std::memcmp(frame.normal.data(), reference.normal.data(), frame.normal.size() * sizeof(float)));
+    EXPECT_EQ(0, std::memcmp(frame.uv.data(), reference.uv.data(), frame.uv.size() * sizeof(float)));
 
-  Renderer generous(device(), scene);  // the default budget, 200 ms
-  generous.render(scene.camera, 1024, 80, all);
-  EXPECT_EQ(generous.timings().tiles, 2u);  // 64 rows, then the other 16 (at most sixteen times as many)
+    RendererOptions generous_options;  // the default budget, 200 ms
+    generous_options.scene.search = search;
+    Renderer generous(device(), scene, generous_options);
+    generous.render(scene.camera, 1024, 160, all);
+    EXPECT_EQ(generous.timings().tiles, 2u);  // 64 rows, then the other 96 (at most sixteen times as many)
+  }
 }
 
 // One Renderer, many renders: a new camera and size must give what a fresh Renderer gives, and

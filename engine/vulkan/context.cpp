@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cctype>
+#include <charconv>
 #include <cstdio>
 #include <cstdlib>
 
@@ -176,11 +177,16 @@ GpuDeviceInfo describe(const vk::raii::PhysicalDevice& physical_device) {
   info.max_allocation_bytes = chain.get<vk::PhysicalDeviceMaintenance3Properties>().maxMemoryAllocationSize;
   // VkPhysicalDeviceDriverProperties is core in Vulkan 1.2 only.
   bool llvmpipe = info.name.starts_with("llvmpipe");
+  int mesa_major = 0;  // from driverInfo, "Mesa 25.0.7 (LLVM 15.0.6)": lavapipe's driverVersion is 1
   if (properties.apiVersion >= VK_API_VERSION_1_2) {
     const auto driver = physical_device.getProperties2<vk::PhysicalDeviceProperties2, vk::PhysicalDeviceDriverProperties>()
                             .get<vk::PhysicalDeviceDriverProperties>();
     info.driver = std::string(driver.driverName.data()) + " " + driver.driverInfo.data();
     llvmpipe = driver.driverID == vk::DriverId::eMesaLlvmpipe;
+    const std::string_view driver_info(driver.driverInfo.data());
+    if (const size_t at = driver_info.find("Mesa "); at != std::string_view::npos) {
+      std::from_chars(driver_info.data() + at + 5, driver_info.data() + driver_info.size(), mesa_major);
+    }
   } else {
     info.driver = "driver version " + std::to_string(properties.driverVersion);
   }
@@ -202,8 +208,10 @@ GpuDeviceInfo describe(const vk::raii::PhysicalDevice& physical_device) {
       (subgroups.supportedStages & vk::ShaderStageFlagBits::eCompute) &&
       (subgroups.supportedOperations & vk::SubgroupFeatureFlagBits::eVote) &&
       (subgroups.supportedOperations & vk::SubgroupFeatureFlagBits::eBallot) &&
-      (subgroups.supportedOperations & vk::SubgroupFeatureFlagBits::eArithmetic);
+      (subgroups.supportedOperations & vk::SubgroupFeatureFlagBits::eArithmetic) &&
+      (subgroups.supportedOperations & vk::SubgroupFeatureFlagBits::eShuffle);
   info.can_compute = family != UINT32_MAX && subgroup_operations;
+  info.favours_packet_walk = llvmpipe && mesa_major >= 25 && info.subgroup_size == 8;
   if (info.can_compute && physical_device.getQueueFamilyProperties()[family].timestampValidBits > 0) {
     info.timestamp_period_ns = limits.timestampPeriod;
   }
@@ -248,7 +256,7 @@ size_t choose_gpu_device(const std::vector<GpuDeviceInfo>& devices, std::string_
     if (!named) continue;
     if (!devices[i].can_compute) {
       throw GpuError("Vulkan device " + std::string(name_filter) + " ('" + devices[i].name +
-                     "') has no compute queue with subgroup vote, ballot and arithmetic");
+                     "') has no compute queue with subgroup vote, ballot, arithmetic and shuffle");
     }
     return i;
   }
@@ -272,9 +280,9 @@ size_t choose_gpu_device(const std::vector<GpuDeviceInfo>& devices, std::string_
       names += "'" + device.name + "'";
     }
     throw GpuError(name_filter.empty()
-                       ? "no Vulkan device with a compute queue and subgroup vote, ballot and arithmetic among " + names
+                       ? "no Vulkan device with a compute queue and subgroup vote, ballot, arithmetic and shuffle among " + names
                        : "no Vulkan device named like '" + std::string(name_filter) +
-                             "' with a compute queue and subgroup vote, ballot and arithmetic; found " + names);
+                             "' with a compute queue and subgroup vote, ballot, arithmetic and shuffle; found " + names);
   }
   return best;
 }

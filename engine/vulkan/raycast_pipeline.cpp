@@ -10,6 +10,11 @@
 
 namespace vkray {
 
+EdgeArithmetic resolve_edges(const GpuDeviceInfo& device, EdgeArithmetic requested) {
+  if (requested != EdgeArithmetic::automatic) return requested;
+  return device.type == "cpu" && device.shader_float64 ? EdgeArithmetic::double_products : EdgeArithmetic::float_error_free;
+}
+
 RaycastPipeline::RaycastPipeline(VulkanContext& context, PipelineSpecialization specialization)
     : context_(context), specialization_(specialization) {
   std::array<vk::DescriptorSetLayoutBinding, VKRAY_BINDING_COUNT> bindings;
@@ -26,11 +31,7 @@ RaycastPipeline::RaycastPipeline(VulkanContext& context, PipelineSpecialization 
   if (float64 && !context.info.shader_float64) {
     throw GpuError(context.info.name + " has no float64 arithmetic in shaders (shaderFloat64); use --precision float");
   }
-  EdgeArithmetic edges = specialization.variant.edges;
-  if (edges == EdgeArithmetic::automatic) {
-    edges = context.info.type == "cpu" && context.info.shader_float64 ? EdgeArithmetic::double_products
-                                                                      : EdgeArithmetic::float_error_free;
-  }
+  const EdgeArithmetic edges = resolve_edges(context.info, specialization.variant.edges);
   if (!float64 && edges == EdgeArithmetic::double_products && !context.info.shader_float64) {
     throw GpuError(context.info.name + " has no float64 arithmetic in shaders (shaderFloat64) for double edge functions");
   }
@@ -86,6 +87,7 @@ const vk::raii::Pipeline& RaycastPipeline::pipeline(AovSet aovs, bool lo_parts, 
   values[VKRAY_SPEC_IMAGE_TARGET] = mode == RaycastMode::image_target ? 1u : 0u;
   values[VKRAY_SPEC_RAY_INPUT] = mode == RaycastMode::given_rays ? 1u : 0u;
   values[VKRAY_SPEC_STACK_REGISTERS] = specialization_.stack_registers;
+  values[VKRAY_SPEC_SUBGROUP_SIZE] = context_.info.subgroup_size == 8 ? 8u : 0u;
   std::array<vk::SpecializationMapEntry, values.size()> entries;
   for (uint32_t id = 0; id < entries.size(); ++id) entries[id] = vk::SpecializationMapEntry(id, id * 4u, 4u);
   const vk::SpecializationInfo specialization(entries, vk::ArrayProxyNoTemporaries<const uint32_t>(values));

@@ -32,6 +32,10 @@ enum class RaycastMode : uint32_t {
   given_rays,     // the caller's rays (VKRAY_SPEC_RAY_INPUT) into output buffers
 };
 
+// How float32 shaders on `device` take the triangle edge functions for `requested` (see
+// EdgeArithmetic): automatic is double products on CPU devices with shaderFloat64, float elsewhere.
+EdgeArithmetic resolve_edges(const GpuDeviceInfo& device, EdgeArithmetic requested);
+
 class RaycastPipeline {
  public:
   RaycastPipeline(VulkanContext& context, PipelineSpecialization specialization);
