@@ -157,6 +157,7 @@ int run_render(const RenderOptions& options) {
     RendererOptions renderer_options;
     renderer_options.scene.bvh.progress = progress.callback();
     if (options.precision == "double") renderer_options.shader.precision = Precision::float64;
+    renderer_options.first_aovs = aovs;
     Renderer renderer(device, scene, renderer_options);
     upload_ms = stopwatch.lap_ms();
     frame = renderer.render(scene.camera, scene.width, scene.height, aovs);
@@ -196,8 +197,12 @@ int run_render(const RenderOptions& options) {
                    staging ? "the scene to the device, through staging buffers (--transfer)"
                            : "the scene to the device, into memory the host maps (--transfer)");
       if (scene_stats->bvh_nodes > 0) print_timing(2, "BVH build", gpu_timings->bvh_build_ms);
+      if (gpu_timings->pipeline_beside_upload_ms > 0.0) {
+        print_timing(2, "pipeline creation", gpu_timings->pipeline_beside_upload_ms,
+                     "beside the BVH build and upload, on a second thread");
+      }
       print_timing(1, "render", render_ms);
-      print_timing(2, "pipeline creation", gpu_timings->pipeline_ms);
+      if (gpu_timings->pipeline_ms > 0.0) print_timing(2, "pipeline creation", gpu_timings->pipeline_ms);
       char longest[64];
       std::snprintf(longest, sizeof longest, ", the longest %.1f ms (budget %.0f)", gpu_timings->longest_dispatch_ms,
                     default_dispatch_budget_ms);

@@ -147,6 +147,51 @@ PrimitiveSearch choose_search(size_t triangle_count, size_t sphere_count) {
                                                                      : PrimitiveSearch::bvh_per_ray;
 }
 
+namespace {
+
+// A handful of spheres beside triangles stay out of the tree, tested one by one before its walk:
+// the walk's loop then holds the triangle test alone. On lavapipe that loop's size is its speed:
+// the built-in scene at 960x540 took 46-54 ms a frame with its sphere in the tree, 19-21 ms apart
+// (fastest of 20 frames, two runs of `vkray bench --variants default`).
+bool keeps_spheres_apart(size_t triangle_count, size_t sphere_count) {
+  return triangle_count > 0 && sphere_count <= brute_force_max_primitives;
+}
+
+// Triangle slots of the brute-force loop: whole batches.
+uint32_t batched_slots(size_t triangle_count) {
+  return static_cast<uint32_t>((triangle_count + VKRAY_TRIANGLE_BATCH - 1) / VKRAY_TRIANGLE_BATCH * VKRAY_TRIANGLE_BATCH);
+}
+
+}  // namespace
+
+GpuSceneShape plan_gpu_scene(const Scene& scene, const GpuSceneOptions& options) {
+  const size_t triangles = scene.triangle_count(), spheres = scene.spheres.size();
+  GpuSceneShape shape;
+  shape.planes = static_cast<uint32_t>(scene.planes.size());
+  shape.search = options.search == PrimitiveSearch::automatic ? choose_search(triangles, spheres) : options.search;
+  if (triangles == 0 && spheres == 0) shape.search = PrimitiveSearch::brute_force;
+  if (shape.search == PrimitiveSearch::brute_force) {
+    shape.spheres_apart = static_cast<uint32_t>(spheres);
+    shape.brute_force_triangle_slots = batched_slots(triangles);
+    return shape;
+  }
+  if (options.search == PrimitiveSearch::automatic && options.packet_walk) shape.search = PrimitiveSearch::bvh_packet;
+  const bool apart = keeps_spheres_apart(triangles, spheres);
+  shape.spheres_apart = apart ? static_cast<uint32_t>(spheres) : 0;
+  shape.tree_has_triangles = triangles > 0;
+  shape.tree_has_spheres = spheres > 0 && !apart;
+  return shape;
+}
+
+double scene_radius(const Scene& scene, const glm::dvec3& anchor) {
+  double radius = 0.0;
+  for (const auto& sphere : scene.spheres) radius = std::max(radius, glm::length(sphere.center - anchor) + sphere.radius);
+  for (const auto& mesh : scene.meshes) {
+    for (const auto& position : mesh.positions) radius = std::max(radius, glm::length(position - anchor));
+  }
+  return radius;
+}
+
 GpuScene make_gpu_scene(const Scene& scene, const GpuSceneOptions& options, const ShaderVariant& shader) {
   GpuScene gpu;
   gpu.precision = shader.precision;
@@ -155,10 +200,7 @@ GpuScene make_gpu_scene(const Scene& scene, const GpuSceneOptions& options, cons
   gpu.hit_sources.first_sphere_object = static_cast<uint32_t>(scene.meshes.size());
   gpu.hit_sources.first_plane_object = static_cast<uint32_t>(scene.meshes.size() + scene.spheres.size());
   auto encode = [&](const glm::dvec3& position, double w) { return encode_point(glm::dvec4(position, w), gpu.precision); };
-  for (const auto& sphere : scene.spheres) gpu.radius = std::max(gpu.radius, glm::length(sphere.center - gpu.anchor) + sphere.radius);
-  for (const auto& mesh : scene.meshes) {
-    for (const auto& position : mesh.positions) gpu.radius = std::max(gpu.radius, glm::length(position - gpu.anchor));
-  }
+  gpu.radius = scene_radius(scene, gpu.anchor);
   for (const auto& plane : scene.planes) {
     gpu.planes.push_back({{}, encode(plane.normal, glm::dot(plane.normal, plane.point - gpu.anchor))});
   }
@@ -205,7 +247,7 @@ GpuScene make_gpu_scene(const Scene& scene, const GpuSceneOptions& options, cons
       append_normal(gpu.normal_texels, triangle.normal, gpu.precision);
       gpu.hit_sources.slots.push_back(triangle.source);
     }
-    while (gpu.primitives.size() % VKRAY_TRIANGLE_BATCH != 0) {
+    while (gpu.primitives.size() < batched_slots(triangles.size())) {
       gpu.primitives.push_back(gpu::GpuPrimitive{});
       append_normal(gpu.normal_texels, glm::dvec3(0.0), gpu.precision);
       gpu.hit_sources.slots.push_back({});
@@ -215,11 +257,7 @@ GpuScene make_gpu_scene(const Scene& scene, const GpuSceneOptions& options, cons
 
   const auto start = std::chrono::steady_clock::now();
   std::vector<EncodedPrimitive> unordered = std::move(triangles);
-  // A handful of spheres beside triangles stay out of the tree, tested one by one before its walk:
-  // the walk's loop then holds the triangle test alone. On lavapipe that loop's size is its speed:
-  // the built-in scene at 960x540 took 46-54 ms a frame with its sphere in the tree, 19-21 ms apart
-  // (fastest of 20 frames, two runs of `vkray bench --variants default`).
-  const bool spheres_apart = !unordered.empty() && scene.spheres.size() <= brute_force_max_primitives;
+  const bool spheres_apart = keeps_spheres_apart(unordered.size(), scene.spheres.size());
   for (uint32_t k = 0; k < (spheres_apart ? 0 : scene.spheres.size()); ++k) {
     const Sphere& sphere = scene.spheres[k];
     const glm::dvec3 centre = sphere.center - gpu.anchor;
@@ -278,7 +316,16 @@ gpu::GpuRay encode_ray(const glm::dvec3& origin, const glm::dvec3& direction, co
           encode_point(glm::dvec4(unit_vector(direction), 0.0), precision)};
 }
 
-uint32_t GpuScene::search_mode() const {
+GpuSceneShape GpuScene::shape() const {
+  return {search,
+          static_cast<uint32_t>(spheres.size()),
+          static_cast<uint32_t>(planes.size()),
+          brute_force_triangle_slots(),
+          tree_has_triangles,
+          tree_has_spheres};
+}
+
+uint32_t search_mode(PrimitiveSearch search) {
   switch (search) {
     case PrimitiveSearch::bvh_packet:
       return VKRAY_SEARCH_BVH_PACKET;
@@ -299,7 +346,7 @@ void set_plane_heights(std::vector<gpu::GpuPlane>& planes, const std::vector<Pla
 
 glm::uvec4 run_time_counts(const GpuScene& scene) {
   return {static_cast<uint32_t>(scene.spheres.size()), static_cast<uint32_t>(scene.planes.size()),
-          scene.brute_force_triangle_slots(), scene.search_mode()};
+          scene.brute_force_triangle_slots(), search_mode(scene.search)};
 }
 
 bool needs_lo_parts(const glm::dvec3& anchor, double radius, const glm::dvec3& origin) {

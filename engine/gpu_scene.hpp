@@ -36,6 +36,20 @@ struct HitSources {
   ObjectPrimitive operator()(uint32_t hit) const;
 };
 
+// A GpuScene by kind and count: what the shader is specialized on besides the tree's depth. Known
+// before anything is built (plan_gpu_scene), so that the pipeline can be made while the tree builds,
+// and read off the built scene (GpuScene::shape), which differs from the plan only where building
+// shows otherwise: zero-area triangles dropped, a tree too deep for the packet walk.
+struct GpuSceneShape {
+  PrimitiveSearch search = PrimitiveSearch::brute_force;
+  uint32_t spheres_apart = 0;  // spheres tested one by one
+  uint32_t planes = 0;
+  uint32_t brute_force_triangle_slots = 0;
+  bool tree_has_triangles = false;
+  bool tree_has_spheres = false;
+  bool operator==(const GpuSceneShape&) const = default;
+};
+
 struct GpuScene {
   // Every position on the GPU is stored relative to this point (see GpuPoint in gpu_layout.h): the
   // centre of the scene's box, so that the split into hi and lo float parts covers the scene with
@@ -67,7 +81,7 @@ struct GpuScene {
   double bvh_build_ms = 0.0;
 
   bool has_tree() const { return !bvh_nodes.empty(); }
-  uint32_t search_mode() const;  // VKRAY_SEARCH_*
+  GpuSceneShape shape() const;
   // Triangle slots the brute-force loop walks (0 with the tree).
   uint32_t brute_force_triangle_slots() const { return has_tree() ? 0 : static_cast<uint32_t>(primitives.size()); }
   // Bytes of device memory the triangles, spheres and their tree take.
@@ -92,8 +106,18 @@ struct GeometryLayout {
 // scene of planes alone.
 glm::dvec3 scene_anchor(const Scene& scene);
 
+// The shader's VKRAY_SEARCH_* for `search` (never automatic).
+uint32_t search_mode(PrimitiveSearch search);
+
 // brute_force for scenes of a handful of triangles and spheres, bvh_per_ray otherwise.
 PrimitiveSearch choose_search(size_t triangle_count, size_t sphere_count);
+
+// What make_gpu_scene will build for `scene`, as far as it can be known without building it (see
+// GpuSceneShape): every triangle counted as kept, the tree shallow enough for the packet walk.
+GpuSceneShape plan_gpu_scene(const Scene& scene, const GpuSceneOptions& options);
+
+// The largest distance from `anchor` of a sphere's surface or a mesh vertex (0 without either).
+double scene_radius(const Scene& scene, const glm::dvec3& anchor);
 
 // Positions encoded for `shader`'s precision and coordinates.
 GpuScene make_gpu_scene(const Scene& scene, const GpuSceneOptions& options = {}, const ShaderVariant& shader = {});

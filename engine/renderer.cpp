@@ -13,6 +13,7 @@
 #include <bit>
 #include <chrono>
 #include <cstring>
+#include <future>
 #include <optional>
 
 namespace vkray {
@@ -87,13 +88,30 @@ struct PixelPatch {
 // Loop iterations of raycast.comp outside the tree walk, for each of an invocation's rays the
 // planes and spheres tested one by one and the loops over those rays, and a margin for the few
 // iterations the compiler may keep where it fails to unroll a constant-trip loop.
-uint64_t fixed_loop_iterations(const GpuScene& scene) {
+uint64_t fixed_loop_iterations(const GpuSceneShape& shape) {
   constexpr uint64_t loop_margin = 16;
   constexpr uint64_t loops_over_rays = 4;
-  const uint64_t rays = scene.search == PrimitiveSearch::bvh_packet ? VKRAY_PACKET_ROWS : 1;
-  uint64_t iterations = rays * (scene.spheres.size() + scene.planes.size() + loops_over_rays) + loop_margin;
-  iterations += scene.brute_force_triangle_slots() / VKRAY_TRIANGLE_BATCH;
+  const uint64_t rays = shape.search == PrimitiveSearch::bvh_packet ? VKRAY_PACKET_ROWS : 1;
+  uint64_t iterations = rays * (uint64_t{shape.spheres_apart} + shape.planes + loops_over_rays) + loop_margin;
+  iterations += shape.brute_force_triangle_slots / VKRAY_TRIANGLE_BATCH;
   return iterations;
+}
+
+// Iterations a tree walk may take on this device (0: no limit): a tree walk has no static bound on
+// its iterations; where the device caps them, the walk gets what the other loops leave and rays
+// that need more are finished on the CPU. Throws where the other loops alone pass the cap.
+uint32_t tree_loop_budget(const GpuSceneShape& shape, const GpuDeviceInfo& device, uint32_t requested) {
+  const uint64_t loop_limit = device.max_loop_iterations;
+  const uint64_t fixed_iterations = fixed_loop_iterations(shape);
+  if (loop_limit > 0 && fixed_iterations >= loop_limit) {
+    throw GpuError("this scene needs " + std::to_string(fixed_iterations) + " shader loop iterations per pixel, but " +
+                   device.name + " stops a shader after " + std::to_string(loop_limit) +
+                   " and would silently drop geometry; use another device (--device)");
+  }
+  if (shape.search == PrimitiveSearch::brute_force || (loop_limit == 0 && requested == 0)) return 0;
+  uint64_t budget = loop_limit > 0 ? loop_limit - fixed_iterations : UINT32_MAX;
+  if (requested > 0) budget = std::min<uint64_t>(budget, requested);
+  return static_cast<uint32_t>(budget);
 }
 
 // Why the packet walk (shaders/packet_walk.glsl) cannot run on this device with this shader;
@@ -118,6 +136,27 @@ std::string packet_walk_obstacle(const GpuDeviceInfo& device, const ShaderVarian
 uint32_t stack_registers_for_depth(uint32_t depth) {
   if (depth > VKRAY_STACK_REGISTERS_MAX) return 0;
   return std::max<uint32_t>(4, (depth + 3) / 4 * 4);
+}
+
+// The pipelines' specialization for a scene of `shape` whose tree is `depth` deep. The packet walk
+// always takes the most registers for its stack, so that its pipeline can be made before the tree
+// exists (measured: 16 or 32 registers gave the bunny the same time).
+PipelineSpecialization specialization_for(const GpuSceneShape& shape, uint32_t depth, uint32_t loop_budget,
+                                          const ShaderVariant& shader) {
+  PipelineSpecialization specialization;
+  specialization.spheres = shape.spheres_apart;
+  specialization.planes = shape.planes;
+  specialization.triangle_slots = shape.brute_force_triangle_slots;
+  specialization.search_mode = search_mode(shape.search);
+  specialization.tree_has_triangles = shape.tree_has_triangles;
+  specialization.tree_has_spheres = shape.tree_has_spheres;
+  specialization.loop_budget = loop_budget;
+  const bool stack_in_registers = shader.stack_in_registers && !shader.generic;
+  specialization.stack_registers = !stack_in_registers                           ? 0
+                                   : shape.search == PrimitiveSearch::bvh_packet ? VKRAY_STACK_REGISTERS_MAX
+                                                                                 : stack_registers_for_depth(depth);
+  specialization.variant = shader;
+  return specialization;
 }
 
 // Rows of the next dispatch, from the time the earlier ones took (RendererOptions::dispatch_budget_ms).
@@ -333,8 +372,8 @@ struct Renderer::Impl {
   }
 
   void reset_timings() {
-    timings = RenderTimings{timings.upload_ms, timings.bvh_build_ms, 0.0, *timestamps != vk::QueryPool(), 0.0, 0.0, 0, 0.0, 0,
-                            0.0};
+    timings = RenderTimings{timings.upload_ms, timings.bvh_build_ms, 0.0, timings.pipeline_beside_upload_ms,
+                            *timestamps != vk::QueryPool(), 0.0, 0.0, 0, 0.0, 0, 0.0};
   }
 
   // What a render needs before its tiles: the pipeline (returned), the planes' heights above this
@@ -464,6 +503,31 @@ Renderer::Renderer(GpuDevice& device, const Scene& scene, RendererOptions option
     const std::string packet_obstacle = packet_walk_obstacle(r.context.info, options.shader);
     GpuSceneOptions scene_options = options.scene;
     scene_options.packet_walk = r.context.info.favours_packet_walk && packet_obstacle.empty();
+    // The packet walk's pipeline does not depend on the tree: the first one is made on a second
+    // thread while the tree builds and the scene uploads, and kept if the built scene is as planned.
+    const GpuSceneShape planned = plan_gpu_scene(scene, scene_options);
+    std::optional<RaycastPipeline> early_pipeline;
+    std::future<double> early_creation;
+    if (!options.first_aovs.empty() && planned.search == PrimitiveSearch::bvh_packet && packet_obstacle.empty()) {
+      early_pipeline.emplace(r.context, specialization_for(planned, 0, tree_loop_budget(planned, r.context.info, options.loop_budget),
+                                                           options.shader));
+      const bool lo_parts = needs_lo_parts(scene_anchor(scene), scene_radius(scene, scene_anchor(scene)), scene.camera.from);
+      early_creation = std::async(std::launch::async, [&early_pipeline, &options, lo_parts] {
+        double created_ms = 0.0;
+        early_pipeline->pipeline(options.first_aovs, lo_parts, RaycastMode::image_buffers, created_ms);
+        return created_ms;
+      });
+    }
+    // Joins the second thread however the constructor ends: it uses the pipeline above.
+    const auto join_early = [&] {
+      return early_creation.valid() ? early_creation.get() : 0.0;
+    };
+    struct Joiner {
+      std::future<double>& creation;
+      ~Joiner() {
+        if (creation.valid()) creation.wait();
+      }
+    } joiner{early_creation};
     const GpuScene gpu_scene = make_gpu_scene(scene, scene_options, options.shader);
     if (gpu_scene.search == PrimitiveSearch::bvh_packet && !packet_obstacle.empty()) {
       throw GpuError("the packet walk cannot run here: " + packet_obstacle);
@@ -502,21 +566,8 @@ Renderer::Renderer(GpuDevice& device, const Scene& scene, RendererOptions option
                          gpu_scene.geometry_bytes(), static_cast<uint32_t>(gpu_scene.bvh_nodes.size()),
                          gpu_scene.bvh_depth, gpu_scene.search, 0};
 
-    // A tree walk has no static bound on its iterations; where the device caps them, the walk gets
-    // what the other loops leave and rays that need more are finished on the CPU.
-    const uint64_t loop_limit = r.context.info.max_loop_iterations;
-    const uint64_t fixed_iterations = fixed_loop_iterations(gpu_scene);
-    if (loop_limit > 0 && fixed_iterations >= loop_limit) {
-      throw GpuError("this scene needs " + std::to_string(fixed_iterations) + " shader loop iterations per pixel, but " +
-                     r.context.info.name + " stops a shader after " + std::to_string(loop_limit) +
-                     " and would silently drop geometry; use another device (--device)");
-    }
-    if (gpu_scene.has_tree() && (loop_limit > 0 || options.loop_budget > 0)) {
-      uint64_t budget = loop_limit > 0 ? loop_limit - fixed_iterations : UINT32_MAX;
-      if (options.loop_budget > 0) budget = std::min<uint64_t>(budget, options.loop_budget);
-      r.stats.loop_budget = static_cast<uint32_t>(budget);
-      r.scene_for_unfinished = scene;
-    }
+    r.stats.loop_budget = tree_loop_budget(gpu_scene.shape(), r.context.info, options.loop_budget);
+    if (r.stats.loop_budget > 0) r.scene_for_unfinished = scene;
 
     const ShaderVariant& shader = options.shader;
     const uint32_t group_size = shader.workgroup_width * shader.workgroup_height;
@@ -537,19 +588,18 @@ Renderer::Renderer(GpuDevice& device, const Scene& scene, RendererOptions option
     r.placeholder_image = std::make_unique<ImageTarget>(device, 1, 1);
     const std::array<uint32_t, 4> zero_texel{};
     r.placeholder_texels = make_texel_buffer(r.context, zero_texel.data(), texel_bytes);
-    PipelineSpecialization specialization;
-    specialization.spheres = checked_count(gpu_scene.spheres.size(), "spheres");
-    specialization.planes = checked_count(gpu_scene.planes.size(), "planes");
-    specialization.triangle_slots = gpu_scene.brute_force_triangle_slots();
-    specialization.search_mode = gpu_scene.search_mode();
-    specialization.tree_has_triangles = gpu_scene.tree_has_triangles;
-    specialization.tree_has_spheres = gpu_scene.tree_has_spheres;
-    specialization.loop_budget = r.stats.loop_budget;
-    const bool stack_in_registers = options.shader.stack_in_registers && !options.shader.generic;
-    specialization.stack_registers = stack_in_registers ? stack_registers_for_depth(gpu_scene.bvh_depth) : 0;
-    specialization.variant = options.shader;
+    checked_count(gpu_scene.spheres.size(), "spheres");
+    checked_count(gpu_scene.planes.size(), "planes");
+    const PipelineSpecialization specialization =
+        specialization_for(gpu_scene.shape(), gpu_scene.bvh_depth, r.stats.loop_budget, options.shader);
     r.counts = run_time_counts(gpu_scene);
-    r.pipeline.emplace(r.context, specialization);
+    const double early_ms = join_early();
+    if (early_pipeline && early_pipeline->specialization() == specialization) {
+      r.pipeline.emplace(std::move(*early_pipeline));
+      r.timings.pipeline_beside_upload_ms = early_ms;
+    } else {
+      r.pipeline.emplace(r.context, specialization);
+    }
     if (r.context.info.timestamp_period_ns > 0.0) {
       r.timestamps = vk::raii::QueryPool(r.context.device, vk::QueryPoolCreateInfo({}, vk::QueryType::eTimestamp, 3));
     }

@@ -20,6 +20,9 @@ struct RenderTimings {
   double upload_ms = 0.0;          // scene conversion and upload (once, in the constructor), BVH build included
   double bvh_build_ms = 0.0;       // of which building the BVH
   double pipeline_ms = 0.0;        // pipeline creation (first render with a given set of outputs)
+  // The pipeline made on a second thread while the tree was built and the scene uploaded
+  // (RendererOptions::first_aovs), in the constructor: its creation time; 0 where none was.
+  double pipeline_beside_upload_ms = 0.0;
   bool has_gpu_times = false;      // the device has timestamps; else dispatch_gpu_ms is not measured
   double dispatch_gpu_ms = 0.0;    // GPU time of the ray-casting dispatches (timestamp queries)
   double readback_ms = 0.0;        // copying results back into the Frame (or the few the host reads)
@@ -70,6 +73,11 @@ struct RendererOptions {
   // allows. Tests lower it to force that path.
   uint32_t loop_budget = 0;
   ShaderVariant shader;
+  // The outputs the first render will ask for, of the scene's camera into buffers: where known before
+  // the tree is built (the packet walk, whose pipeline the tree's depth does not change), that
+  // pipeline is made on a second thread while the tree builds and the scene uploads. Empty: every
+  // pipeline is made on first use.
+  AovSet first_aovs;
 };
 
 class Renderer {

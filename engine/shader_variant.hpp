@@ -43,6 +43,7 @@ struct ShaderVariant {
   // Geometry (and given rays) read from storage buffers rather than uniform texel buffers (float32
   // shaders): what NVIDIA and AMD drivers are usually tuned for; llvmpipe gathers texels faster.
   bool storage_geometry = false;
+  bool operator==(const ShaderVariant&) const = default;
 };
 
 // The default variant with another workgroup shape and order.

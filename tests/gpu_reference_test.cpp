@@ -214,6 +214,35 @@ TEST(GpuRenderer, DispatchesSizedByTimeGiveIdenticalImages) {
 
 // One Renderer, many renders: a new camera and size must give what a fresh Renderer gives, and
 // each output alone must equal the same output rendered together with the others.
+// The first pipeline made beside the tree's build (RendererOptions::first_aovs) renders what one
+// made on first use renders; where the built scene turns out other than planned (zero-area triangles
+// dropped, leaving few enough for brute force), it is made again, not used.
+TEST(GpuRenderer, FirstPipelineMadeBesideTheUploadRendersTheSame) {
+  Scene dropped = sized(default_scene(), 48, 36);
+  dropped.meshes.clear();
+  dropped.spheres.clear();
+  Mesh mesh;  // 9 triangles planned, a tree; 5 of them zero-area
+  for (int k = 0; k < 9; ++k) {
+    const double x = k - 4.0;
+    mesh.positions.insert(mesh.positions.end(), {{x, 0, 0}, {x + 0.8, 0, 0}, {x, k < 4 ? 0.8 : 0.0, 0}});
+    mesh.triangles.push_back({3u * k, 3u * k + 1, 3u * k + 2});
+  }
+  dropped.meshes.push_back(mesh);
+  const AovSet aovs{Aov::depth, Aov::normal};
+  for (const auto& [scene, planned_as_built] : {std::pair{sized(default_scene(), 48, 36), true}, {dropped, false}}) {
+    Renderer on_first_use(device(), scene);
+    const Frame expected = on_first_use.render(scene.camera, scene.width, scene.height, aovs);
+    RendererOptions options;
+    options.first_aovs = aovs;
+    Renderer prepared(device(), scene, options);
+    EXPECT_EQ(prepared.timings().pipeline_beside_upload_ms > 0.0,
+              planned_as_built && device().info().favours_packet_walk);
+    const Frame frame = prepared.render(scene.camera, scene.width, scene.height, aovs);
+    EXPECT_EQ(0, std::memcmp(frame.depth.data(), expected.depth.data(), frame.depth.size() * sizeof(float)));
+    EXPECT_EQ(0, std::memcmp(frame.normal.data(), expected.normal.data(), frame.normal.size() * sizeof(float)));
+  }
+}
+
 TEST(GpuRenderer, RerenderAndOutputSubsets) {
   Scene scene = sized(default_scene(), 40, 30);
   Renderer renderer(device(), scene);

@@ -96,7 +96,7 @@ std::vector<double> triangle_reaches(const Scene& scene) {
 }
 
 // Bound on the distance from the GPU anchor of everything the rays can meet or start from.
-double scene_radius(const Scene& scene, const glm::dvec3& anchor) {
+double reach_radius(const Scene& scene, const glm::dvec3& anchor) {
   double radius = glm::length(scene.camera.from - anchor);
   for (const auto& sphere : scene.spheres) radius = std::max(radius, glm::length(sphere.center - anchor) + sphere.radius);
   for (const auto& plane : scene.planes) radius = std::max(radius, std::abs(glm::dot(plane.normal, plane.point - anchor)));
@@ -126,7 +126,7 @@ EnvelopeReport check_against_reference(const Scene& scene, const Frame& frame, u
   const uint32_t width = frame.width, height = frame.height;
   const ReferenceScene reference(scene);
   const CameraBasis camera = make_camera_basis(scene.camera, width, height);
-  const double radius = scene_radius(scene, scene_anchor(scene));
+  const double radius = reach_radius(scene, scene_anchor(scene));
   const double split_error = 0x1p-44 * radius;  // the hi/lo split's 2^-46 R, times 4
   const std::vector<double> triangle_reach = triangle_reaches(scene);
 

@@ -23,6 +23,7 @@ struct PipelineSpecialization {
   uint32_t loop_budget = 0;
   uint32_t stack_registers = 0;  // VKRAY_SPEC_STACK_REGISTERS
   ShaderVariant variant;
+  bool operator==(const PipelineSpecialization&) const = default;
 };
 
 // Where a pipeline's rays come from and where its outputs go.
@@ -39,6 +40,7 @@ EdgeArithmetic resolve_edges(const GpuDeviceInfo& device, EdgeArithmetic request
 class RaycastPipeline {
  public:
   RaycastPipeline(VulkanContext& context, PipelineSpecialization specialization);
+  const PipelineSpecialization& specialization() const { return specialization_; }
 
   // The pipeline for this set of outputs, with or without the lo parts of positions
   // (VKRAY_SPEC_LO_PARTS), in `mode`, created on first request. `created_ms` receives the creation
