@@ -45,6 +45,7 @@ int main(int argc, char** argv) {
   const vkray::cli::Action info = vkray::cli::add_info_command(app);
   const vkray::cli::Action bench = vkray::cli::add_bench_command(app);
   const vkray::cli::Action view = vkray::cli::add_view_command(app);
+  const vkray::cli::Action manifest = vkray::cli::add_manifest_command(app);
 
   // A mistyped command would otherwise read as a stray argument ("A subcommand is required").
   if (argc > 1 && argv[1][0] != '-') {
@@ -74,6 +75,7 @@ int main(int argc, char** argv) {
     if (app.got_subcommand("render")) return render();
     if (app.got_subcommand("bench")) return bench();
     if (app.got_subcommand("view")) return view();
+    if (app.got_subcommand("manifest")) return manifest();
     return info();
   } catch (const vkray::InputError& error) {
     std::cerr << "vkray: " << error.what() << '\n';

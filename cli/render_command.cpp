@@ -2,6 +2,7 @@
 #include "cli/device_options.hpp"
 #include "cli/progress.hpp"
 #include "cli/scene_argument.hpp"
+#include "cli/views_options.hpp"
 #include "engine/compare.hpp"
 #include "engine/host_memory.hpp"
 #include "engine/image_io.hpp"
@@ -37,6 +38,8 @@ struct RenderOptions {
   bool reference = false;
   std::string compression = default_exr_compression;
   std::string precision = "float";
+  ViewsOptions views;
+  bool output_given = false;  // -o on the command line (many views default to view-{index:05}.exr)
 };
 
 AovSet parse_aov_list(const std::string& list) {
@@ -94,7 +97,56 @@ void print_timing(int depth, const std::string& what, double ms, const std::stri
               note.empty() ? "" : ("  " + note).c_str());
 }
 
+// Many views in one run: the scene uploaded and the pipeline made once, the views written while the
+// next ones render (engine/views/view_batch.hpp).
+int run_render_views(const RenderOptions& options, const AovSet& aovs) {
+  check_render_options(options, aovs);
+  if (options.check || options.reference) throw InputError("--check and --reference render one view; leave out --views, --orbit and --sphere");
+  if (options.no_preview) throw InputError("--no-preview: many views write no previews unless --preview names them");
+  ViewBatch batch;
+  batch.exr = OutputPattern(options.output_given ? options.output : "view-{index:05}.exr", "-o");
+  if (options.preview) batch.png = OutputPattern(*options.preview, "--preview");
+  batch.shard = parse_shard(options.views);
+  batch.manifest = manifest_path(options.views, batch.shard, batch.exr);
+  batch.compression = options.compression;
+  batch.aovs = aovs;
+  batch.overwrite = options.views.overwrite;
+  if (options.views.views_file) batch.cameras = batch_cameras(options.views, Camera{});
+  auto opening = std::async(std::launch::async, [&options] {
+    return std::make_unique<GpuDevice>(options.device_options.device, options.device_options.transfer_mode());
+  });
+  Scene scene = load_scene_argument(options.scene_path, options.width, options.height);
+  if (options.camera) apply_camera_option(*options.camera, scene.camera);
+  if (!options.views.views_file) batch.cameras = batch_cameras(options.views, scene.camera);
+  batch.width = scene.width;
+  batch.height = scene.height;
+  if (batch.cameras.size() > 1 && (!batch.exr.has_index() || (batch.png && !batch.png->has_index()))) {
+    throw InputError(std::string(batch.exr.has_index() ? "--preview" : "-o") + ": '" +
+                     (batch.exr.has_index() ? batch.png->text() : batch.exr.text()) + "' has no {index}, so the " +
+                     std::to_string(batch.cameras.size()) + " views would overwrite one file (as out/view-{index:05}.exr)");
+  }
+  const std::unique_ptr<GpuDevice> device = opening.get();
+  print_cpu_device_note(device->info());
+  RendererOptions renderer_options;
+  if (options.precision == "double") renderer_options.shader.precision = Precision::float64;
+  renderer_options.first_aovs = aovs;
+  Renderer renderer(*device, scene, renderer_options);
+  ViewsProgress progress;
+  const ViewBatchSummary summary = render_views(renderer, batch, std::ref(progress));
+  std::printf("vkray: %u views written, %u complete already (shard %u of %u, %zu views in all), to %s on %s; manifest %s\n",
+              summary.rendered, summary.skipped, batch.shard.index, batch.shard.count, batch.cameras.size(),
+              batch.exr.text().c_str(), device->info().name.c_str(), batch.manifest.c_str());
+  if (options.timings && summary.rendered > 0) {
+    std::printf("timings: %.2f s for %u views, %.2f views/s (%.1f ms a view); the device %.2f s of it, waiting for the "
+                "writers %.2f s\n",
+                summary.seconds, summary.rendered, summary.rendered / summary.seconds, 1e3 * summary.seconds / summary.rendered,
+                summary.render_seconds, summary.queue_wait_seconds);
+  }
+  return 0;
+}
+
 int run_render(const RenderOptions& options) {
+  if (options.views.any()) return run_render_views(options, parse_aov_list(options.aovs));
   Stopwatch stopwatch;
   const auto start = std::chrono::steady_clock::now();
   const AovSet aovs = parse_aov_list(options.aovs);
@@ -250,7 +302,10 @@ Action add_render_command(CLI::App& app) {
   command->add_option("--camera", options->camera,
                       "Override the camera: 'from=X,Y,Z to=X,Y,Z up=X,Y,Z fovy=DEGREES' (any of the keys), or the "
                       "scene file's camera as JSON '{\"from\": [0, 1, 5]}'");
-  command->add_option("-o,--output", options->output, "OpenEXR file to write")->capture_default_str();
+  CLI::Option* output = command->add_option("-o,--output", options->output,
+                                             "OpenEXR file to write; with many views a name holding {index} or "
+                                             "{index:05} (default view-{index:05}.exr)")
+                            ->capture_default_str();
   command->add_option("--width", options->width, "Image width in pixels (overrides the scene)");
   command->add_option("--height", options->height, "Image height in pixels (overrides the scene)");
   command->add_option("--aov", options->aovs, std::string("Outputs to compute, comma-separated: ") + aov_names_help)
@@ -268,6 +323,7 @@ Action add_render_command(CLI::App& app) {
       ->check(CLI::IsMember({"float", "double"}))
       ->capture_default_str();
   command->add_flag("--timings", options->timings, "Print where the time went");
+  add_views_options(command, options->views);
   CLI::Option* check = command->add_flag("--check", options->check,
                     "Also render the double-precision CPU reference and print the GPU's error against it");
   // The reference runs on the CPU in double: no device, no shader precision, nothing to check it against.
@@ -275,7 +331,10 @@ Action add_render_command(CLI::App& app) {
       ->excludes(check)
       ->excludes(device)
       ->excludes(precision);
-  return [options] { return run_render(*options); };
+  return [options, output] {
+    options->output_given = output->count() > 0;
+    return run_render(*options);
+  };
 }
 
 }  // namespace vkray::cli

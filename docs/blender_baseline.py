@@ -2,7 +2,12 @@
 # Cycles writing the same depth and normal passes of an OBJ model, from the camera `vkray render
 # MODEL.obj` frames it with, 1 sample on the CPU, to a multilayer OpenEXR.
 #
-#   blender -b --factory-startup -noaudio -P docs/blender_baseline.py -- MODEL.obj OUT.exr WIDTH HEIGHT
+#   blender -b --factory-startup -noaudio -P docs/blender_baseline.py -- MODEL.obj OUT.exr WIDTH HEIGHT [VIEWS]
+#
+# With VIEWS, it renders that many views in one process, as `vkray render MODEL.obj --orbit VIEWS`
+# does: view k turned about +y through the centre by 360 k / VIEWS degrees (counterclockwise seen
+# from above), each to OUT with "#####" standing for k zero-padded (out/view-#####.exr). Cycles
+# keeps its scene between them (persistent data): Blender's fastest way to render many views.
 #
 # The framing repeats engine/framing.cpp: the centre of the vertices' bounding box, the radius of
 # the farthest vertex from it, seen from the direction (0, 0.25, 1), up +y, 40 degrees across the
@@ -14,8 +19,10 @@ import sys
 import bpy
 from mathutils import Matrix, Vector
 
-model, output, width, height = sys.argv[sys.argv.index("--") + 1:]
+arguments = sys.argv[sys.argv.index("--") + 1:]
+model, output, width, height = arguments[:4]
 width, height = int(width), int(height)
+views = int(arguments[4]) if len(arguments) > 4 else 0
 
 positions = []
 with open(model) as obj:
@@ -35,11 +42,17 @@ bpy.ops.import_scene.obj(filepath=model, axis_forward="Y", axis_up="Z")
 
 camera = bpy.data.objects.new("camera", bpy.data.cameras.new("camera"))
 bpy.context.scene.collection.objects.link(camera)
-forward = (centre - eye).normalized()
-right = forward.cross(Vector((0.0, 1.0, 0.0))).normalized()
-up = right.cross(forward)
-# A Blender camera looks down its local -z with its local +y up.
-camera.matrix_world = Matrix.Translation(eye) @ Matrix((right, up, -forward)).transposed().to_4x4()
+
+
+def aim(eye):
+    forward = (centre - eye).normalized()
+    right = forward.cross(Vector((0.0, 1.0, 0.0))).normalized()
+    up = right.cross(forward)
+    # A Blender camera looks down its local -z with its local +y up.
+    camera.matrix_world = Matrix.Translation(eye) @ Matrix((right, up, -forward)).transposed().to_4x4()
+
+
+aim(eye)
 camera.data.sensor_fit = "VERTICAL" if width >= height else "HORIZONTAL"
 camera.data.angle = 2 * half
 camera.data.clip_end = 10 * (eye - centre).length
@@ -59,5 +72,16 @@ settings = scene.render.image_settings
 settings.file_format = "OPEN_EXR_MULTILAYER"
 settings.color_depth = "32"
 settings.exr_codec = "ZIP"
-scene.render.filepath = output
-bpy.ops.render.render(write_still=True)
+if not views:
+    scene.render.filepath = output
+    bpy.ops.render.render(write_still=True)
+else:
+    scene.render.use_persistent_data = True
+    for k in range(views):
+        angle = 2 * math.pi * k / views
+        offset = eye - centre
+        turned = Vector((offset.x * math.cos(angle) + offset.z * math.sin(angle), offset.y,
+                         -offset.x * math.sin(angle) + offset.z * math.cos(angle)))
+        aim(centre + turned)
+        scene.render.filepath = output.replace("#####", "%05d" % k)
+        bpy.ops.render.render(write_still=True)

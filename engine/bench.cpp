@@ -2,9 +2,15 @@
 
 #include "engine/bench_report.hpp"
 #include "engine/embree_baseline.hpp"
+#include "engine/image_io.hpp"
+#include "engine/views/view_batch.hpp"
+#include "engine/views/view_list.hpp"
+
+#include <unistd.h>
 
 #include <algorithm>
 #include <chrono>
+#include <filesystem>
 #include <optional>
 #include <thread>
 
@@ -35,11 +41,60 @@ BenchVariant shader_variant(std::string name, std::string description, ShaderVar
   return variant;
 }
 
+BenchVariant views_variant(uint32_t views) {
+  BenchVariant variant{"views-" + std::to_string(views),
+                       std::to_string(views) + " orbiting views rendered and written in one run: wall time a view",
+                       {}, CpuBaseline::none, [](const Scene& scene) { return finite_primitives(scene) > 0; }};
+  variant.orbit_views = views;
+  return variant;
+}
+
 BenchVariant cpu_baseline(std::string name, std::string description, CpuBaseline baseline) {
   BenchVariant variant{std::move(name), std::move(description), {}, baseline, [](const Scene& scene) {
                          return finite_primitives(scene) > 0;  // Embree has nothing to trace for planes alone
                        }};
   return variant;
+}
+
+// The views of a many-views row are written to a folder of their own under the system's temporary
+// folder, removed afterwards.
+BenchRow run_views_variant(GpuDevice& device, const Scene& scene, const BenchVariant& variant,
+                           const std::vector<ReferenceHit>& reference) {
+  const AovSet aovs{Aov::depth, Aov::normal};
+  RendererOptions options = variant.options;
+  options.first_aovs = aovs;
+  Renderer renderer(device, scene, options);
+  BenchRow row;
+  row.variant = variant.name;
+  row.stats = renderer.scene_stats();
+  row.error = measure_error(renderer.render(scene.camera, scene.width, scene.height, aovs), reference);
+  row.upload_ms = renderer.timings().upload_ms;
+  row.bvh_build_ms = renderer.timings().bvh_build_ms;
+  row.pipeline_ms = renderer.timings().pipeline_ms + renderer.timings().pipeline_beside_upload_ms;
+  const std::filesystem::path folder =
+      std::filesystem::temp_directory_path() / ("vkray-bench-views-" + std::to_string(getpid()));
+  ViewBatch batch;
+  batch.cameras = orbit_views(scene.camera, variant.orbit_views);
+  batch.width = scene.width;
+  batch.height = scene.height;
+  batch.aovs = aovs;
+  batch.exr = OutputPattern((folder / "view-{index:05}.exr").string(), "views");
+  batch.compression = default_exr_compression;
+  batch.manifest = folder / "manifest.jsonl";
+  batch.overwrite = true;
+  struct Remover {
+    std::filesystem::path folder;
+    ~Remover() {
+      std::error_code ignored;
+      std::filesystem::remove_all(folder, ignored);
+    }
+  } remover{folder};
+  const ViewBatchSummary summary = render_views(renderer, batch);
+  const double ms_a_view = 1e3 * summary.seconds / summary.rendered;
+  row.gpu = time_stats({ms_a_view});
+  row.frame_median_ms = ms_a_view;
+  row.mrays_per_s = static_cast<double>(scene.width) * scene.height / (ms_a_view * 1e3);
+  return row;
 }
 
 BenchRow run_variant(GpuDevice& device, const Scene& scene, const BenchVariant& variant, uint32_t frames,
@@ -114,6 +169,7 @@ const std::vector<BenchVariant>& bench_variants() {
       shader_variant("naive", "every textbook choice: b^2 - c spheres, Moeller-Trumbore, float32 world coordinates",
                      naive),
       shader_variant("float64", "the shader in double precision (--precision double)", float64),
+      views_variant(100),
       cpu_baseline("embree-1", "Embree 3 on the CPU, all threads, one ray at a time", CpuBaseline::embree_single),
       cpu_baseline("embree-8", "Embree 3 on the CPU, all threads, packets of 8 rays", CpuBaseline::embree_packet),
   };
@@ -171,7 +227,9 @@ BenchSceneResult bench_scene(GpuDevice& device, const BenchScene& bench, const B
   std::vector<const BenchVariant*> chosen;
   for (const auto& name : settings.variants) chosen.push_back(&find_bench_variant(name));
   if (settings.variants.empty()) {
-    for (const auto& variant : bench_variants()) chosen.push_back(&variant);
+    for (const auto& variant : bench_variants()) {
+      if (variant.orbit_views == 0) chosen.push_back(&variant);
+    }
   }
   std::optional<EmbreeResult> embree;  // one trace gives both Embree rows
   for (const BenchVariant* variant : chosen) {
@@ -192,7 +250,8 @@ BenchSceneResult bench_scene(GpuDevice& device, const BenchScene& bench, const B
       continue;
     }
     try {
-      result.rows.push_back(run_variant(device, scene, *variant, settings.frames, reference));
+      result.rows.push_back(variant->orbit_views > 0 ? run_views_variant(device, scene, *variant, reference)
+                                                     : run_variant(device, scene, *variant, settings.frames, reference));
     } catch (const DeviceLostError&) {
       throw;  // nothing more can run on it
     } catch (const GpuError& error) {  // e.g. a workgroup shape or loop count this device lacks

@@ -26,6 +26,10 @@ struct BenchVariant {
   // Whether the variant means anything for a scene (a sphere formula for a scene without spheres
   // does not, brute force over a million triangles would only take minutes to say so).
   std::function<bool(const Scene&)> applies;
+  // > 0: a many-views row: this many views orbiting the scene's camera rendered and written to
+  // OpenEXR files in one run (engine/views), writing overlapped with rendering; its time is the
+  // whole run's wall time a view, its error the first view's. Run only where named (--variants).
+  uint32_t orbit_views = 0;
 };
 
 // Every variant, by name: the default (what `vkray render` does) first, then one change each, then

@@ -60,4 +60,21 @@ CameraBasis make_camera_basis(const Camera& camera, uint32_t width, uint32_t hei
   return basis;
 }
 
+PinholeIntrinsics pinhole_intrinsics(const Camera& camera, uint32_t width, uint32_t height) {
+  // A pixel is 2 / min(W, H) of the image plane at distance plane_distance: fx = plane_distance
+  // min(W, H) / 2, which is H / (2 tan(fovy / 2)).
+  const CameraBasis basis = make_camera_basis(camera, width, height);
+  const double focal = basis.plane_distance * std::min(width, height) / 2.0;
+  return {focal, focal, (width - 1.0) / 2.0, (height - 1.0) / 2.0};
+}
+
+std::array<std::array<double, 4>, 4> world_to_camera(const Camera& camera, uint32_t width, uint32_t height) {
+  const CameraBasis basis = make_camera_basis(camera, width, height);
+  const glm::dvec3 rows[3] = {basis.right, -basis.up, -basis.forward};
+  std::array<std::array<double, 4>, 4> matrix{};
+  for (int r = 0; r < 3; ++r) matrix[r] = {rows[r].x, rows[r].y, rows[r].z, -glm::dot(rows[r], basis.origin)};
+  matrix[3] = {0.0, 0.0, 0.0, 1.0};
+  return matrix;
+}
+
 }  // namespace vkray

@@ -5,6 +5,7 @@
 #include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
 
+#include <array>
 #include <cstdint>
 
 namespace vkray {
@@ -42,5 +43,19 @@ glm::dvec3 float32_ray_direction(const CameraBasis& camera, uint32_t i, uint32_t
 // frame then uses the coordinate axis least aligned with the view direction as `up` (ties: +z,
 // then +x), so the image is well defined instead of NaN.
 CameraBasis make_camera_basis(const Camera& camera, uint32_t width, uint32_t height);
+
+// The same camera as vision code describes it, OpenCV's pinhole model: camera coordinates x right,
+// y down, z along the view direction; pixel coordinates (u, v) from the centre of the top-left
+// pixel, u right and v down. A world point p is at (x, y, z) = R p + t, seen at
+// (u, v) = (fx x / z + cx, fy y / z + cy), and z is its planar depth. For vkray's image plane
+// (README, "Output contract") fx = fy = H / (2 tan(fovy / 2)), cx = (W - 1) / 2, cy = (H - 1) / 2.
+struct PinholeIntrinsics {
+  double fx, fy, cx, cy;
+};
+PinholeIntrinsics pinhole_intrinsics(const Camera& camera, uint32_t width, uint32_t height);
+
+// [R t; 0 0 0 1] of the pinhole model above, by rows: rows of R are right, -up and -forward of the
+// camera's basis, t = -R from.
+std::array<std::array<double, 4>, 4> world_to_camera(const Camera& camera, uint32_t width, uint32_t height);
 
 }  // namespace vkray

@@ -11,6 +11,7 @@
 #include <png.h>
 
 #include <fcntl.h>
+#include <signal.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -19,6 +20,7 @@
 #include <atomic>
 #include <cerrno>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <exception>
 #include <fstream>
@@ -225,10 +227,12 @@ std::pair<Imf::Compression, int> exr_compression(std::string_view name) {
   return {Imf::NO_COMPRESSION, level};
 }
 
-// OpenEXR compresses blocks of rows on its own thread pool, one thread a core.
-void start_exr_threads() {
-  static std::once_flag started;
-  std::call_once(started, [] { Imf::setGlobalThreadCount(static_cast<int>(std::max(1u, std::thread::hardware_concurrency()))); });
+std::once_flag exr_threads_started;
+
+// OpenEXR compresses blocks of rows on its own thread pool, one thread a core, unless
+// use_exr_threads said otherwise first.
+void start_exr_threads(unsigned count = std::max(1u, std::thread::hardware_concurrency())) {
+  std::call_once(exr_threads_started, [count] { Imf::setGlobalThreadCount(static_cast<int>(count)); });
 }
 
 void write_exr_to(const PartialFile& file, const std::filesystem::path& path, const Frame& frame,
@@ -295,6 +299,22 @@ void write_preview_png_to(const PartialFile& file, const std::filesystem::path& 
 }
 
 }  // namespace
+
+void use_exr_threads(unsigned count) { start_exr_threads(count); }
+
+void remove_stale_partial_files(const std::filesystem::path& target) {
+  const std::filesystem::path folder = target.parent_path().empty() ? "." : target.parent_path();
+  const std::string prefix = "." + target.stem().string() + ".vkray-";
+  std::error_code error;
+  for (const auto& entry : std::filesystem::directory_iterator(folder, error)) {
+    const std::string name = entry.path().filename().string();
+    if (!name.starts_with(prefix) || entry.path().extension() != target.extension()) continue;
+    // ".NAME.vkray-PID-N.EXT": the writer's process id, then a counter.
+    const std::string rest = name.substr(prefix.size());
+    const pid_t writer = static_cast<pid_t>(std::strtol(rest.c_str(), nullptr, 10));
+    if (writer > 0 && writer != getpid() && kill(writer, 0) != 0 && errno == ESRCH) std::filesystem::remove(entry.path(), error);
+  }
+}
 
 void write_outputs(const std::filesystem::path& exr, const std::filesystem::path* preview, const Frame& frame,
                    std::string_view compression) {

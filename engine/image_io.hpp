@@ -35,6 +35,15 @@ void write_text_file(const std::filesystem::path& path, std::string_view text);
 // then end the process (see cli/main.cpp).
 void remove_partial_outputs() noexcept;
 
+// Removes temporary files beside `target` that a vkray process no longer running left when it was
+// killed (SIGKILL leaves no chance to clean up): a resumed many-view run starts clean.
+void remove_stale_partial_files(const std::filesystem::path& target);
+
+// Threads OpenEXR compresses one file on: by default one a core, for one file at a time; 0 compresses
+// on the writing thread, for several threads each writing its own file. Takes effect only before the
+// first EXR is written.
+void use_exr_threads(unsigned count);
+
 // float32 channels, by output: depth -> Z; normal -> N.X N.Y N.Z; uv -> U V; and A (1 on a hit,
 // 0 on a miss) whenever depth or normal is present. Throws std::runtime_error naming the file.
 void write_exr(const std::filesystem::path& path, const Frame& frame, std::string_view compression = default_exr_compression);

@@ -372,16 +372,25 @@ Camera parse_camera_override(std::string_view json_text, const std::string& name
   return parse_camera(Node(root, "", name), &base);
 }
 
-Scene load_scene_file(const std::filesystem::path& path) {
+Camera parse_camera_object(std::string_view json_text, const std::string& name) {
+  const Json root = parse_document(json_text, name);
+  return parse_camera(Node(root, "", name));
+}
+
+std::string read_input_file(const std::filesystem::path& path, const std::string& what) {
   std::error_code error;
   if (!std::filesystem::is_regular_file(path, error)) {
-    throw InputError(path.string() + (std::filesystem::exists(path, error) ? ": is not a regular file" : ": no such scene file"));
+    throw InputError(path.string() + (std::filesystem::exists(path, error) ? ": is not a regular file" : ": no such " + what));
   }
   std::ifstream file(path, std::ios::binary);
   std::ostringstream contents;
   contents << file.rdbuf();
-  if (!file) throw InputError(path.string() + ": cannot read scene file");
-  return parse_scene(contents.str(), path.string(), path.parent_path(), load_obj_file);
+  if (!file) throw InputError(path.string() + ": cannot read the " + what);
+  return contents.str();
+}
+
+Scene load_scene_file(const std::filesystem::path& path) {
+  return parse_scene(read_input_file(path, "scene file"), path.string(), path.parent_path(), load_obj_file);
 }
 
 }  // namespace vkray

@@ -17,6 +17,10 @@ using ObjFileLoader = std::function<Mesh(const std::filesystem::path&)>;
 
 Scene load_scene_file(const std::filesystem::path& path);
 
+// The whole of an input file, `what` naming it in messages ("scene file": "a.json: no such scene
+// file"). Throws InputError.
+std::string read_input_file(const std::filesystem::path& path, const std::string& what);
+
 // Parses scene JSON held in memory. `name` stands for the file in messages; relative OBJ paths
 // resolve against `base_dir` and load through `load_obj`.
 Scene parse_scene(std::string_view json_text, const std::string& name, const std::filesystem::path& base_dir,
@@ -26,6 +30,10 @@ Scene parse_scene(std::string_view json_text, const std::string& name, const std
 // replaces that part of `base`, checked as the scene file checks it. `name` stands for the source in
 // messages ("--camera"). Throws InputError.
 Camera parse_camera_override(std::string_view json_text, const std::string& name, const Camera& base);
+
+// A whole camera object in the scene-file form ("from" and "to" required), as a views file holds
+// them. `name` stands for the source in messages ("views.jsonl:57"). Throws InputError.
+Camera parse_camera_object(std::string_view json_text, const std::string& name);
 
 // The built-in scene: a camera, a sphere, a ground plane, a handcrafted triangle mesh and
 // a mesh that goes through the OBJ loader (from an OBJ text compiled into the binary).

@@ -1,0 +1,23 @@
+#!/bin/bash
+# Renders MODEL's views on a Slurm cluster, one shard of them per array task, into one shared folder
+# (README, "Many views"). Each task renders the views whose index is its shard modulo the task count
+# and writes its own manifest part; after the array, one command merges the parts:
+#
+#   sbatch docs/slurm-views.sh
+#   vkray manifest merge "$OUT"/manifest-shard-*-of-*.jsonl -o "$OUT"/manifest.jsonl
+#
+# A task that is requeued or run again renders only the views it has not finished. The settings
+# below may also be given in the environment (sbatch --export).
+#SBATCH --job-name=vkray-views
+#SBATCH --array=0-3
+#SBATCH --cpus-per-task=2
+#SBATCH --output=vkray-views-%a.log
+set -eu
+VKRAY="${VKRAY:-vkray}"
+MODEL="${MODEL-models/stanford-bunny.obj}"
+OUT="${OUT:-views}"
+VIEWS="${VIEWS:-100}"
+WIDTH="${WIDTH:-1920}"
+HEIGHT="${HEIGHT:-1080}"
+exec "$VKRAY" render "$MODEL" --width "$WIDTH" --height "$HEIGHT" --orbit "$VIEWS" \
+  -o "$OUT/view-{index:05}.exr" --shard auto

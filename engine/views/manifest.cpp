@@ -1,0 +1,144 @@
+#include "engine/views/manifest.hpp"
+
+#include "engine/image_io.hpp"
+#include "engine/scene.hpp"
+
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <nlohmann/json.hpp>
+
+#include <cerrno>
+#include <cstring>
+#include <fstream>
+#include <map>
+#include <sstream>
+
+namespace vkray {
+namespace {
+
+using Json = nlohmann::json;
+
+Json vector_json(const glm::dvec3& v) { return Json::array({v.x, v.y, v.z}); }
+
+std::string relative_name(const std::filesystem::path& file, const std::filesystem::path& folder) {
+  const std::filesystem::path relative = std::filesystem::absolute(file).lexically_normal().lexically_relative(
+      std::filesystem::absolute(folder).lexically_normal());
+  return relative.empty() ? file.string() : relative.string();
+}
+
+std::string read_file(const std::filesystem::path& path) {
+  std::ifstream file(path, std::ios::binary);
+  std::ostringstream contents;
+  contents << file.rdbuf();
+  return contents.str();
+}
+
+// The record a line holds, or nothing.
+std::optional<Json> parse_record(const std::string& line) {
+  const Json record = Json::parse(line, nullptr, false);
+  if (!record.is_object() || !record.contains("index") || !record["index"].is_number_unsigned() ||
+      !record.contains("exr") || !record["exr"].is_string()) {
+    return std::nullopt;
+  }
+  return record;
+}
+
+}  // namespace
+
+std::string manifest_line(const ViewRecord& record, const std::filesystem::path& folder) {
+  nlohmann::ordered_json line;  // keys in this order, the index first
+  line["index"] = record.index;
+  line["exr"] = relative_name(record.exr, folder);
+  if (record.png) line["png"] = relative_name(*record.png, folder);
+  line["width"] = record.width;
+  line["height"] = record.height;
+  line["camera"] = nlohmann::ordered_json{{"from", vector_json(record.camera.from)},
+                                          {"to", vector_json(record.camera.to)},
+                                          {"up", vector_json(record.camera.up)},
+                                          {"fovy", record.camera.fovy_degrees}};
+  const PinholeIntrinsics intrinsics = pinhole_intrinsics(record.camera, record.width, record.height);
+  line["intrinsics"] =
+      nlohmann::ordered_json{{"fx", intrinsics.fx}, {"fy", intrinsics.fy}, {"cx", intrinsics.cx}, {"cy", intrinsics.cy}};
+  line["world_to_camera"] = world_to_camera(record.camera, record.width, record.height);
+  return line.dump();
+}
+
+std::optional<uint32_t> manifest_line_index(const std::string& line) {
+  const auto record = parse_record(line);
+  if (!record) return std::nullopt;
+  return (*record)["index"].get<uint32_t>();
+}
+
+ManifestWriter::ManifestWriter(const std::filesystem::path& path, bool fresh) : path_(path) {
+  std::error_code error;
+  if (!fresh && std::filesystem::exists(path, error)) {
+    // Keep the whole records; a line an interruption cut off (no newline, or no record) goes.
+    const std::string text = read_file(path);
+    std::string kept;
+    bool dropped = false;
+    for (size_t start = 0; start < text.size();) {
+      const size_t end = text.find('\n', start);
+      if (end == std::string::npos) {
+        dropped = true;
+        break;
+      }
+      const std::string line = text.substr(start, end - start);
+      start = end + 1;
+      if (const auto index = manifest_line_index(line)) {
+        recorded_.insert(*index);
+        kept += line + '\n';
+      } else {
+        dropped = dropped || !line.empty();
+      }
+    }
+    if (dropped) write_text_file(path, kept);
+  } else {
+    write_text_file(path, "");
+  }
+  descriptor_ = ::open(path.c_str(), O_WRONLY | O_APPEND | O_CLOEXEC);
+  if (descriptor_ < 0) throw std::runtime_error(path.string() + ": cannot open the manifest: " + std::strerror(errno));
+}
+
+ManifestWriter::~ManifestWriter() {
+  if (descriptor_ >= 0) ::close(descriptor_);
+}
+
+void ManifestWriter::append(const ViewRecord& record) {
+  const std::string line = manifest_line(record, path_.parent_path()) + '\n';
+  const ssize_t written = ::write(descriptor_, line.data(), line.size());
+  if (written != static_cast<ssize_t>(line.size())) {
+    throw std::runtime_error(path_.string() + ": cannot append to the manifest: " +
+                             (written < 0 ? std::strerror(errno) : "short write"));
+  }
+  recorded_.insert(record.index);
+}
+
+std::string merge_manifests(const std::vector<std::filesystem::path>& parts) {
+  std::map<uint32_t, std::pair<std::string, std::string>> records;  // index -> line, where it came from
+  for (const auto& part : parts) {
+    std::error_code error;
+    if (!std::filesystem::is_regular_file(part, error)) throw InputError(part.string() + ": no such manifest");
+    const std::string text = read_file(part);
+    size_t line_number = 0;
+    for (size_t start = 0; start < text.size();) {
+      const size_t end = std::min(text.find('\n', start), text.size());
+      const std::string line = text.substr(start, end - start);
+      start = end + 1;
+      ++line_number;
+      if (line.empty()) continue;
+      const std::string where = part.string() + ":" + std::to_string(line_number);
+      const auto index = manifest_line_index(line);
+      if (!index) throw InputError(where + ": not a view record");
+      const auto [found, inserted] = records.emplace(*index, std::pair{line, where});
+      if (!inserted && found->second.first != line) {
+        throw InputError(where + ": view " + std::to_string(*index) + " differs from its record at " + found->second.second);
+      }
+    }
+  }
+  std::string merged;
+  for (const auto& [index, record] : records) merged += record.first + '\n';
+  return merged;
+}
+
+}  // namespace vkray

@@ -1,0 +1,63 @@
+// The manifest of a many-view render: JSON Lines, one record a view, appended as each view's files
+// are in place, so that it is valid after any interruption. Every record is one line:
+//
+//   {"index": 42, "exr": "view-00042.exr", "png": "view-00042.png", "width": 1920, "height": 1080,
+//    "camera": {"from": [...], "to": [...], "up": [...], "fovy": 40},
+//    "intrinsics": {"fx": ..., "fy": ..., "cx": ..., "cy": ...},
+//    "world_to_camera": [[...], [...], [...], [0, 0, 0, 1]]}
+//
+// "png" only where previews are written; file names relative to the manifest's folder; intrinsics
+// and world_to_camera in OpenCV's pinhole convention (engine/camera.hpp, README "Many views").
+#pragma once
+
+#include "engine/camera.hpp"
+
+#include <cstdint>
+#include <filesystem>
+#include <optional>
+#include <set>
+#include <string>
+#include <vector>
+
+namespace vkray {
+
+struct ViewRecord {
+  uint32_t index = 0;
+  std::filesystem::path exr;
+  std::optional<std::filesystem::path> png;
+  Camera camera;
+  uint32_t width = 0, height = 0;
+};
+
+// One line, without its newline; file names relative to `folder`.
+std::string manifest_line(const ViewRecord& record, const std::filesystem::path& folder);
+
+// The index of a manifest line that is a complete record; nothing for any other line.
+std::optional<uint32_t> manifest_line_index(const std::string& line);
+
+// A manifest being written: opened, it keeps the complete records already there (a line cut off by
+// an interruption is dropped) unless `fresh`, which starts it empty. Each append writes one whole
+// line with a single write(). Throws std::runtime_error naming the file.
+class ManifestWriter {
+ public:
+  ManifestWriter(const std::filesystem::path& path, bool fresh);
+  ~ManifestWriter();
+  ManifestWriter(const ManifestWriter&) = delete;
+  ManifestWriter& operator=(const ManifestWriter&) = delete;
+
+  bool has(uint32_t index) const { return recorded_.contains(index); }
+  void append(const ViewRecord& record);
+  const std::filesystem::path& path() const { return path_; }
+
+ private:
+  std::filesystem::path path_;
+  int descriptor_ = -1;
+  std::set<uint32_t> recorded_;
+};
+
+// The parts' records in index order, each index once (identical copies of a record merge; two
+// different records of one index are an error), as one manifest's text. Throws InputError naming
+// the file and line of a line that is no record, and of a conflicting one.
+std::string merge_manifests(const std::vector<std::filesystem::path>& parts);
+
+}  // namespace vkray

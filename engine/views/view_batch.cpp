@@ -1,0 +1,188 @@
+#include "engine/views/view_batch.hpp"
+
+#include "engine/image_io.hpp"
+#include "engine/views/manifest.hpp"
+
+#include <chrono>
+#include <condition_variable>
+#include <deque>
+#include <exception>
+#include <mutex>
+#include <set>
+#include <thread>
+
+namespace vkray {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double seconds_since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
+
+struct WriteJob {
+  uint32_t index;
+  Frame frame;
+};
+
+// Frames from the device to the writers: at most `capacity` wait, so the device blocks rather than
+// memory growing when writing is the slower part. The first writer failure stops everything.
+class WriteQueue {
+ public:
+  explicit WriteQueue(size_t capacity) : capacity_(capacity) {}
+
+  // Waits for room; false once a writer has failed. Returns the seconds it waited.
+  bool push(WriteJob job, double& waited_s) {
+    const auto start = Clock::now();
+    std::unique_lock lock(mutex_);
+    room_.wait(lock, [&] { return jobs_.size() < capacity_ || failure_; });
+    waited_s += seconds_since(start);
+    if (failure_) return false;
+    jobs_.push_back(std::move(job));
+    work_.notify_one();
+    return true;
+  }
+
+  // The next job, or nothing once closed and empty (or failed).
+  std::optional<WriteJob> pop() {
+    std::unique_lock lock(mutex_);
+    work_.wait(lock, [&] { return !jobs_.empty() || closed_ || failure_; });
+    if (failure_ || jobs_.empty()) return std::nullopt;
+    WriteJob job = std::move(jobs_.front());
+    jobs_.pop_front();
+    room_.notify_one();
+    return job;
+  }
+
+  void close() {
+    const std::lock_guard lock(mutex_);
+    closed_ = true;
+    work_.notify_all();
+  }
+
+  void fail(std::exception_ptr failure) {
+    const std::lock_guard lock(mutex_);
+    if (!failure_) failure_ = failure;
+    room_.notify_all();
+    work_.notify_all();
+  }
+
+  std::exception_ptr failure() {
+    const std::lock_guard lock(mutex_);
+    return failure_;
+  }
+
+ private:
+  size_t capacity_;
+  std::mutex mutex_;
+  std::condition_variable room_, work_;
+  std::deque<WriteJob> jobs_;
+  bool closed_ = false;
+  std::exception_ptr failure_;
+};
+
+bool complete(const ViewBatch& batch, uint32_t index) {
+  std::error_code error;
+  return std::filesystem::is_regular_file(batch.exr.path(index), error) &&
+         (!batch.png || std::filesystem::is_regular_file(batch.png->path(index), error));
+}
+
+ViewRecord record_of(const ViewBatch& batch, uint32_t index) {
+  ViewRecord record;
+  record.index = index;
+  record.exr = batch.exr.path(index);
+  if (batch.png) record.png = batch.png->path(index);
+  record.camera = batch.cameras[index];
+  record.width = batch.width;
+  record.height = batch.height;
+  return record;
+}
+
+// Every folder the batch writes into exists and takes new files, before any view is rendered.
+void prepare_folders(const ViewBatch& batch, const std::vector<uint32_t>& views) {
+  std::set<std::filesystem::path> checked;
+  auto prepare = [&](const std::filesystem::path& file) {
+    const std::filesystem::path folder = file.parent_path();
+    if (!checked.insert(folder).second) return;
+    std::error_code error;
+    if (!folder.empty()) std::filesystem::create_directories(folder, error);
+    if (error) throw std::runtime_error(folder.string() + ": cannot create the output folder: " + error.message());
+    check_output_path(file);
+  };
+  prepare(batch.manifest);
+  for (uint32_t index : views) {
+    prepare(batch.exr.path(index));
+    if (batch.png) prepare(batch.png->path(index));
+  }
+}
+
+}  // namespace
+
+ViewBatchSummary render_views(Renderer& renderer, const ViewBatch& batch,
+                              const std::function<void(const ViewBatchProgress&)>& progress) {
+  if (batch.cameras.size() > 1 && (!batch.exr.has_index() || (batch.png && !batch.png->has_index()))) {
+    throw InputError("many views need the view's index in every output name, as in out/view-{index:05}.exr; '" +
+                     (batch.exr.has_index() ? batch.png->text() : batch.exr.text()) + "' would write them all to one file");
+  }
+  ViewBatchSummary summary;
+  std::vector<uint32_t> shard_views;
+  for (uint32_t index = 0; index < batch.cameras.size(); ++index) {
+    if (batch.shard.holds(index)) shard_views.push_back(index);
+  }
+  prepare_folders(batch, shard_views);
+  ManifestWriter manifest(batch.manifest, batch.overwrite);
+  std::vector<uint32_t> to_render;
+  for (uint32_t index : shard_views) {
+    if (!batch.overwrite && complete(batch, index)) {
+      ++summary.skipped;
+      // Its files were in place before an interruption could record them.
+      if (!manifest.has(index)) manifest.append(record_of(batch, index));
+      continue;
+    }
+    remove_stale_partial_files(batch.exr.path(index));
+    if (batch.png) remove_stale_partial_files(batch.png->path(index));
+    to_render.push_back(index);
+  }
+  if (to_render.empty()) return summary;
+
+  // Each writer compresses its own file: with several views in flight, that keeps the cores as busy
+  // as OpenEXR's own threads would, without their hand-offs.
+  use_exr_threads(0);
+  const auto start = Clock::now();
+  WriteQueue queue(batch.writers + 1);
+  std::mutex progress_mutex;
+  ViewBatchProgress done{0, static_cast<uint32_t>(to_render.size()), 0.0};
+  std::vector<std::jthread> writers;
+  for (unsigned w = 0; w < std::max(1u, batch.writers); ++w) {
+    writers.emplace_back([&] {
+      while (std::optional<WriteJob> job = queue.pop()) {
+        try {
+          const std::filesystem::path exr = batch.exr.path(job->index);
+          const std::optional<std::filesystem::path> png =
+              batch.png ? std::optional(batch.png->path(job->index)) : std::nullopt;
+          write_outputs(exr, png ? &*png : nullptr, job->frame, batch.compression);
+          const std::lock_guard lock(progress_mutex);
+          manifest.append(record_of(batch, job->index));
+          ++done.done;
+          done.seconds = seconds_since(start);
+          if (progress) progress(done);
+        } catch (...) {
+          queue.fail(std::current_exception());
+          return;
+        }
+      }
+    });
+  }
+  for (uint32_t index : to_render) {
+    const auto render_start = Clock::now();
+    Frame frame = renderer.render(batch.cameras[index], batch.width, batch.height, batch.aovs);
+    summary.render_seconds += seconds_since(render_start);
+    if (!queue.push({index, std::move(frame)}, summary.queue_wait_seconds)) break;
+  }
+  queue.close();
+  writers.clear();  // joins
+  if (const std::exception_ptr failure = queue.failure()) std::rethrow_exception(failure);
+  summary.rendered = done.done;
+  summary.seconds = seconds_since(start);
+  return summary;
+}
+
+}  // namespace vkray

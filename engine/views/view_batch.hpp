@@ -1,0 +1,62 @@
+// Rendering many views of one scene in one run: the scene uploaded and the pipeline made once, each
+// view only a new camera. The device renders the next view while writer threads write the last
+// ones, through a queue that blocks rather than grows; every file is written whole or not at all,
+// and the manifest gets a view's record once its files are in place, so that a run stopped at any
+// moment and started again ends with the same files.
+#pragma once
+
+#include "engine/renderer.hpp"
+#include "engine/views/output_pattern.hpp"
+
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace vkray {
+
+// Which views this process renders: every view whose index is `index` modulo `count` (a Slurm array
+// task or a Kubernetes Indexed Job's pod each take one shard).
+struct Shard {
+  uint32_t index = 0;
+  uint32_t count = 1;
+  bool holds(uint32_t view) const { return view % count == index; }
+};
+
+struct ViewBatch {
+  std::vector<Camera> cameras;  // view k is cameras[k]
+  uint32_t width = 0, height = 0;
+  AovSet aovs;
+  OutputPattern exr{"view-{index}.exr", "-o"};
+  std::optional<OutputPattern> png;  // a preview per view, where given
+  std::string compression;
+  std::filesystem::path manifest;
+  Shard shard;
+  bool overwrite = false;  // render views whose files exist too (and start the manifest afresh)
+  unsigned writers = 2;    // threads writing files; the queue holds one frame more
+};
+
+struct ViewBatchProgress {
+  uint32_t done = 0;      // views rendered and written in this run
+  uint32_t to_do = 0;     // views this run renders (its shard's, less those already complete)
+  double seconds = 0.0;   // since the first render
+};
+
+struct ViewBatchSummary {
+  uint32_t rendered = 0;
+  uint32_t skipped = 0;   // complete already (files in place): left alone
+  double seconds = 0.0;   // from the first render to the last file in place
+  double render_seconds = 0.0;      // the device's part: renders and readbacks
+  double queue_wait_seconds = 0.0;  // the device waiting for a writer (the writing took longer)
+};
+
+// Creates the output folders, checks that they take files, then renders and writes the shard's
+// views that are not complete. `progress` is called after each view is written, on a writer
+// thread. Throws std::runtime_error for a file that cannot be written (after the views before it
+// are written and recorded), InputError for a batch without an index in its output pattern.
+ViewBatchSummary render_views(Renderer& renderer, const ViewBatch& batch,
+                              const std::function<void(const ViewBatchProgress&)>& progress = {});
+
+}  // namespace vkray

@@ -1,0 +1,137 @@
+#include "engine/views/view_list.hpp"
+
+#include "engine/scene_loader.hpp"
+
+#include <glm/geometric.hpp>
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <numbers>
+
+namespace vkray {
+namespace {
+
+// The camera objects of a JSON array: where each element starts and ends in `text`, found by
+// tracking nesting outside strings, so that an error can name its element's line.
+struct Element {
+  size_t begin, end;
+};
+
+std::vector<Element> array_elements(std::string_view text) {
+  std::vector<Element> elements;
+  int depth = 0;
+  bool in_string = false, escaped = false;
+  size_t begin = std::string_view::npos;
+  for (size_t k = 0; k < text.size(); ++k) {
+    const char c = text[k];
+    if (in_string) {
+      if (escaped) {
+        escaped = false;
+      } else if (c == '\\') {
+        escaped = true;
+      } else if (c == '"') {
+        in_string = false;
+      }
+      continue;
+    }
+    // An element starts at depth 1 with its first character, and ends at the comma or bracket that
+    // brings the walk back to depth 1 (an object or array) or leaves it there (a scalar, which,
+    // parsed alone, fails as not a camera).
+    const bool element_pending = begin != std::string_view::npos;
+    if (depth == 1 && !element_pending && !std::isspace(static_cast<unsigned char>(c)) && c != ',' && c != ']') begin = k;
+    if (c == '"') {
+      in_string = true;
+    } else if (c == '[' || c == '{') {
+      ++depth;
+    } else if (c == ']' || c == '}') {
+      --depth;
+      if (depth == 1 && begin != std::string_view::npos) elements.push_back({begin, k + 1}), begin = std::string_view::npos;
+      if (depth == 0 && begin != std::string_view::npos) elements.push_back({begin, k}), begin = std::string_view::npos;
+    } else if (c == ',' && depth == 1 && begin != std::string_view::npos) {
+      elements.push_back({begin, k});
+      begin = std::string_view::npos;
+    }
+  }
+  return elements;
+}
+
+size_t line_of(std::string_view text, size_t offset) {
+  return 1 + static_cast<size_t>(std::count(text.begin(), text.begin() + static_cast<std::ptrdiff_t>(offset), '\n'));
+}
+
+// `direction` turned by `angle` radians about the unit `axis` (Rodrigues' formula).
+glm::dvec3 rotated(const glm::dvec3& direction, const glm::dvec3& axis, double angle) {
+  return direction * std::cos(angle) + glm::cross(axis, direction) * std::sin(angle) +
+         axis * glm::dot(axis, direction) * (1.0 - std::cos(angle));
+}
+
+}  // namespace
+
+std::vector<Camera> parse_views(std::string_view text, const std::string& name) {
+  std::vector<Camera> views;
+  const size_t first = text.find_first_not_of(" \t\r\n");
+  if (first != std::string_view::npos && text[first] == '[') {
+    if (!nlohmann::json::accept(text)) {
+      parse_camera_object(text, name);  // throws with the line and column of the syntax error
+    }
+    for (const Element& element : array_elements(text)) {
+      views.push_back(parse_camera_object(text.substr(element.begin, element.end - element.begin),
+                                          name + ":" + std::to_string(line_of(text, element.begin))));
+    }
+  } else {
+    size_t line = 0;
+    for (size_t start = 0; start < text.size();) {
+      const size_t end = std::min(text.find('\n', start), text.size());
+      const std::string_view content = text.substr(start, end - start);
+      ++line;
+      start = end + 1;
+      if (content.find_first_not_of(" \t\r") == std::string_view::npos) continue;
+      const std::string where = name + ":" + std::to_string(line);
+      if (!nlohmann::json::accept(content)) {
+        throw InputError(where + ": invalid JSON (JSON Lines: one camera object a line, or a JSON array of them)");
+      }
+      views.push_back(parse_camera_object(content, where));
+    }
+  }
+  if (views.empty()) throw InputError(name + ": no cameras (a JSON array of camera objects, or one a line)");
+  return views;
+}
+
+std::vector<Camera> load_views(const std::filesystem::path& path) {
+  return parse_views(read_input_file(path, "views file"), path.string());
+}
+
+std::vector<Camera> orbit_views(const Camera& start, uint32_t count) {
+  const glm::dvec3 axis = glm::normalize(start.up);
+  std::vector<Camera> views(count, start);
+  for (uint32_t k = 0; k < count; ++k) {
+    const double angle = 2.0 * std::numbers::pi * k / count;
+    views[k].from = start.to + rotated(start.from - start.to, axis, angle);
+  }
+  return views;
+}
+
+std::vector<Camera> sphere_views(const Camera& start, uint32_t count) {
+  const glm::dvec3 pole = glm::normalize(start.up);
+  const glm::dvec3 offset = start.from - start.to;
+  const double distance = glm::length(offset);
+  // The lattice's longitude 0 is the start's own side; any side where it looks along the pole.
+  glm::dvec3 side = offset - pole * glm::dot(pole, offset);
+  if (glm::length(side) < 1e-9 * distance) side = std::abs(pole.x) < 0.9 ? glm::dvec3(1, 0, 0) : glm::dvec3(0, 1, 0);
+  side = glm::normalize(side - pole * glm::dot(pole, side));
+  const glm::dvec3 across = glm::cross(pole, side);
+  const double golden_angle = std::numbers::pi * (3.0 - std::sqrt(5.0));
+  std::vector<Camera> views(count, start);
+  for (uint32_t k = 0; k < count; ++k) {
+    const double height = 1.0 - (2.0 * k + 1.0) / count;  // cos of the angle from the pole
+    const double ring = std::sqrt(std::max(0.0, 1.0 - height * height));
+    const double longitude = golden_angle * k;
+    const glm::dvec3 direction = ring * (std::cos(longitude) * side + std::sin(longitude) * across) + height * pole;
+    views[k].from = start.to + distance * direction;
+  }
+  return views;
+}
+
+}  // namespace vkray

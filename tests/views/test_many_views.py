@@ -1,0 +1,282 @@
+"""Many views in one run of `vkray render` (--views, --orbit, --sphere): shards, resuming after a
+kill, the manifest, the errors a batch user meets, and the Slurm script and Kubernetes Job of the
+README run locally with the environment their schedulers set. ctest runs this with pytest
+(tests/CMakeLists.txt sets VKRAY_CLI and VKRAY_SOURCE_DIR); nothing is written outside tmp_path."""
+import json
+import math
+import os
+import signal
+import subprocess
+import time
+
+import numpy as np
+import OpenImageIO as oiio
+import pytest
+import yaml
+
+VKRAY = os.environ["VKRAY_CLI"]
+SOURCE = os.environ["VKRAY_SOURCE_DIR"]
+SIZE = ["--width", "64", "--height", "48"]
+
+
+def vkray(*arguments, check=True, env=None, cwd=None):
+    result = subprocess.run([VKRAY, *arguments], capture_output=True, text=True, env=env, cwd=cwd)
+    if check and result.returncode != 0:
+        raise AssertionError(f"vkray {' '.join(arguments)}: exit {result.returncode}\n{result.stderr}")
+    return result
+
+
+def pixels(path):
+    image = oiio.ImageInput.open(str(path))
+    assert image, oiio.geterror()
+    names = image.spec().channelnames
+    data = image.read_image(oiio.FLOAT)
+    image.close()
+    return names, data
+
+
+def same_pixels(a, b):
+    names_a, data_a = pixels(a)
+    names_b, data_b = pixels(b)
+    return names_a == names_b and np.array_equal(data_a, data_b)
+
+
+def manifest_records(path):
+    """A manifest's records by index (writers append them as views complete, in any order)."""
+    with open(path) as manifest:
+        lines = manifest.read().splitlines()
+    records = [json.loads(line) for line in lines]
+    assert all(isinstance(record["index"], int) for record in records)
+    return sorted(records, key=lambda record: record["index"])
+
+
+def views_in(folder):
+    """The EXRs in place (a write in progress has a hidden temporary name)."""
+    return sorted(name for name in os.listdir(folder) if name.endswith(".exr") and not name.startswith("."))
+
+
+@pytest.fixture(scope="module")
+def whole_run(tmp_path_factory):
+    """12 orbiting views of the built-in scene, unsharded: what every other run must reproduce."""
+    folder = tmp_path_factory.mktemp("whole")
+    vkray("render", *SIZE, "--orbit", "12", "-o", str(folder / "view-{index:05}.exr"))
+    return folder
+
+
+def test_the_orbit_turns_the_camera_about_up_through_to(whole_run):
+    records = manifest_records(whole_run / "manifest.jsonl")
+    assert [record["index"] for record in records] == list(range(12))
+    first, third = records[0]["camera"], records[3]["camera"]  # 90 degrees apart
+    to = np.array(first["to"])
+    a, b = np.array(first["from"]) - to, np.array(third["from"]) - to
+    up = np.array(first["up"]) / np.linalg.norm(first["up"])
+    assert abs(np.linalg.norm(a) - np.linalg.norm(b)) < 1e-12 * np.linalg.norm(a)
+    assert abs(a @ up - b @ up) < 1e-12 * np.linalg.norm(a)  # the same height
+    flat_a, flat_b = a - (a @ up) * up, b - (b @ up) * up
+    assert abs(flat_a @ flat_b) < 1e-12 * (flat_a @ flat_a)  # a quarter turn
+    assert np.cross(flat_a, flat_b) @ up > 0  # counterclockwise seen from above
+
+
+def test_the_manifest_reprojects_each_views_depth(whole_run):
+    """K [R t] of a record maps each pixel's hit point (from, plus depth along its ray) back to that
+    pixel: the intrinsics and world-to-camera matrix describe the image that was written."""
+    record = manifest_records(whole_run / "manifest.jsonl")[5]
+    names, data = pixels(whole_run / record["exr"])
+    depth = data[:, :, names.index("Z")]
+    height, width = depth.shape
+    k = record["intrinsics"]
+    rt = np.array(record["world_to_camera"])
+    eye = np.array(record["camera"]["from"])
+    j, i = np.nonzero(np.isfinite(depth))
+    # The pixel's ray in camera coordinates, from the intrinsics; then into the world.
+    rays = np.stack([(i - k["cx"]) / k["fx"], (j - k["cy"]) / k["fy"], np.ones_like(i, dtype=float)], axis=-1)
+    rays /= np.linalg.norm(rays, axis=-1, keepdims=True)
+    points = eye + (rays @ rt[:3, :3]) * depth[j, i, None]
+    camera = points @ rt[:3, :3].T + rt[:3, 3]
+    u = k["fx"] * camera[:, 0] / camera[:, 2] + k["cx"]
+    v = k["fy"] * camera[:, 1] / camera[:, 2] + k["cy"]
+    assert len(i) > 100
+    assert np.max(np.abs(u - i)) < 1e-3 and np.max(np.abs(v - j)) < 1e-3
+
+
+def test_shards_together_are_the_whole_run(whole_run, tmp_path):
+    for shard in range(3):
+        vkray("render", *SIZE, "--orbit", "12", "-o", str(tmp_path / "view-{index:05}.exr"), "--shard", f"{shard}/3")
+    assert views_in(tmp_path) == views_in(whole_run)
+    for name in views_in(whole_run):
+        assert same_pixels(tmp_path / name, whole_run / name), name
+    parts = sorted(str(tmp_path / name) for name in os.listdir(tmp_path) if name.startswith("manifest-shard-"))
+    assert len(parts) == 3
+    for shard, part in enumerate(parts):
+        assert [record["index"] for record in manifest_records(part)] == list(range(shard, 12, 3))
+    vkray("manifest", "merge", *parts, "-o", str(tmp_path / "manifest.jsonl"))
+    assert manifest_records(tmp_path / "manifest.jsonl") == manifest_records(whole_run / "manifest.jsonl")
+
+
+def test_a_killed_run_started_again_completes_the_set(tmp_path):
+    command = [VKRAY, "render", "--width", "160", "--height", "120", "--orbit", "120", "-o", str(tmp_path / "v-{index:05}.exr")]
+    run = subprocess.Popen(command, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    manifest = tmp_path / "manifest.jsonl"
+    deadline = time.monotonic() + 300
+    while run.poll() is None and time.monotonic() < deadline:
+        if manifest.exists() and manifest.read_text().count("\n") >= 5:
+            break
+        time.sleep(0.002)
+    run.send_signal(signal.SIGKILL)
+    run.wait()
+    done_before = len(views_in(tmp_path))
+    assert 5 <= done_before < 120, f"the kill came at {done_before} of 120 views: the test tested nothing"
+    # What a kill can leave: a temporary file of a write in progress, from a process that is gone.
+    (tmp_path / f".v-00119.vkray-{run.pid}-7.exr").write_bytes(b"half an EXR")
+    result = vkray(*command[1:])
+    assert f"{120 - done_before} views written, {done_before} complete already" in result.stdout
+    assert len(views_in(tmp_path)) == 120
+    assert not [name for name in os.listdir(tmp_path) if ".vkray-" in name]
+    assert [record["index"] for record in manifest_records(manifest)] == list(range(120))
+    whole = tmp_path / "whole"
+    vkray("render", "--width", "160", "--height", "120", "--orbit", "120", "-o", str(whole / "v-{index:05}.exr"))
+    for name in views_in(whole):
+        assert same_pixels(tmp_path / name, whole / name), name
+
+
+def test_overwrite_renders_all_again_and_starts_the_manifest_afresh(tmp_path):
+    arguments = ["render", *SIZE, "--orbit", "3", "-o", str(tmp_path / "v{index}.exr")]
+    vkray(*arguments)
+    assert "0 views written, 3 complete already" in vkray(*arguments).stdout
+    assert "3 views written, 0 complete already" in vkray(*arguments, "--overwrite").stdout
+    assert len(manifest_records(tmp_path / "manifest.jsonl")) == 3
+
+
+def test_views_file_as_json_array_and_as_json_lines(tmp_path):
+    cameras = [{"from": [0, 1.8, 6], "to": [0, 0.7, 0], "fovy": 45}, {"from": [3, 2, 5], "to": [0, 0.7, 0], "fovy": 30}]
+    (tmp_path / "views.json").write_text(json.dumps(cameras, indent=2))
+    (tmp_path / "views.jsonl").write_text("".join(json.dumps(camera) + "\n" for camera in cameras))
+    for name in ("views.json", "views.jsonl"):
+        folder = tmp_path / name.replace(".", "-")
+        vkray("render", *SIZE, "--views", str(tmp_path / name), "-o", str(folder / "v{index:03}.exr"))
+        records = manifest_records(folder / "manifest.jsonl")
+        assert [record["camera"]["fovy"] for record in records] == [45, 30]
+        assert views_in(folder) == ["v000.exr", "v001.exr"]
+    assert same_pixels(tmp_path / "views-json" / "v001.exr", tmp_path / "views-jsonl" / "v001.exr")
+
+
+def test_a_bad_camera_is_named_by_its_line(tmp_path):
+    lines = [json.dumps({"from": [0, 1, 5 + k], "to": [0, 0, 0], "fovy": 40}) for k in range(60)]
+    lines[56] = json.dumps({"from": [0, 1, 5], "to": [0, 0, 0], "fovy": 190})
+    (tmp_path / "views.jsonl").write_text("\n".join(lines) + "\n")
+    result = vkray("render", *SIZE, "--views", str(tmp_path / "views.jsonl"), "-o", str(tmp_path / "v{index}.exr"),
+                   check=False)
+    assert result.returncode == 2
+    assert result.stderr.startswith(f"vkray: {tmp_path / 'views.jsonl'}:57: fovy: ")
+    assert result.stderr.count("\n") == 1
+    array = "[\n" + ",\n".join(lines) + "\n]\n"  # camera k on line k + 2
+    (tmp_path / "views.json").write_text(array)
+    result = vkray("render", *SIZE, "--views", str(tmp_path / "views.json"), "-o", str(tmp_path / "v{index}.exr"),
+                   check=False)
+    assert result.returncode == 2 and f"views.json:58: fovy: " in result.stderr
+    (tmp_path / "broken.jsonl").write_text(lines[0] + "\n" + lines[1][:-3] + "\n")
+    result = vkray("render", *SIZE, "--views", str(tmp_path / "broken.jsonl"), "-o", str(tmp_path / "v{index}.exr"),
+                   check=False)
+    assert result.returncode == 2 and "broken.jsonl:2: invalid JSON" in result.stderr
+    assert not views_in(tmp_path)
+
+
+def test_an_output_name_without_the_index_is_refused_before_rendering(tmp_path):
+    result = vkray("render", *SIZE, "--orbit", "4", "-o", str(tmp_path / "view.exr"), check=False)
+    assert result.returncode == 2
+    assert "has no {index}" in result.stderr and "4 views would overwrite one file" in result.stderr
+    for bad in ("v{idx}.exr", "v{index:5}.exr", "v{index.exr", "v}.exr"):
+        result = vkray("render", *SIZE, "--orbit", "4", "-o", str(tmp_path / bad), check=False)
+        assert result.returncode == 2 and "-o: " in result.stderr, bad
+    assert not os.listdir(tmp_path)
+
+
+@pytest.mark.skipif(os.geteuid() == 0, reason="root writes into read-only folders")
+def test_an_unwritable_output_folder_is_found_before_rendering(tmp_path):
+    folder = tmp_path / "read-only"
+    folder.mkdir()
+    folder.chmod(0o555)
+    result = vkray("render", *SIZE, "--orbit", "4", "-o", str(folder / "v{index}.exr"), check=False)
+    assert result.returncode == 1 and "read-only" in result.stderr
+    assert not os.listdir(folder)
+
+
+def test_an_output_folder_that_is_a_file_is_found_before_rendering(tmp_path):
+    (tmp_path / "taken").write_text("a file where the folder should be")
+    result = vkray("render", *SIZE, "--orbit", "4", "-o", str(tmp_path / "taken" / "v{index}.exr"), check=False)
+    assert result.returncode == 1 and "taken" in result.stderr
+    assert sorted(os.listdir(tmp_path)) == ["taken"]
+
+
+def test_shard_options_are_checked(tmp_path):
+    out = str(tmp_path / "v{index}.exr")
+    for shard, message in [("3/3", "numbered from 0"), ("1-3", "is not I/N"), ("0/0", "0 shards"), ("auto", "neither")]:
+        env = {key: value for key, value in os.environ.items() if not key.startswith(("SLURM_", "JOB_COMPLETION"))}
+        result = vkray("render", *SIZE, "--orbit", "4", "-o", out, "--shard", shard, check=False, env=env)
+        assert result.returncode == 2 and message in result.stderr, (shard, result.stderr)
+    env = dict(os.environ, JOB_COMPLETION_INDEX="1")
+    result = vkray("render", *SIZE, "--orbit", "4", "-o", out, "--shard", "auto", check=False, env=env)
+    assert result.returncode == 2 and "--shard-count" in result.stderr
+
+
+def test_the_slurm_array_script_runs_as_slurm_would_run_it(whole_run, tmp_path):
+    script = os.path.join(SOURCE, "docs", "slurm-views.sh")
+    with open(script) as text:
+        array = next(line for line in text if line.startswith("#SBATCH --array="))
+    first, last = (int(n) for n in array.split("=")[1].split("-"))
+    tasks = last - first + 1
+    for task in range(first, last + 1):
+        env = dict(os.environ, VKRAY=VKRAY, MODEL="", OUT=str(tmp_path), VIEWS="12", WIDTH="64", HEIGHT="48",
+                   SLURM_ARRAY_TASK_ID=str(task), SLURM_ARRAY_TASK_MIN=str(first), SLURM_ARRAY_TASK_COUNT=str(tasks))
+        subprocess.run(["bash", script], check=True, capture_output=True, env=env)
+    check_sharded_views(whole_run, tmp_path, tasks)
+
+
+def test_the_kubernetes_indexed_job_runs_as_its_pods_would(whole_run, tmp_path):
+    with open(os.path.join(SOURCE, "docs", "kubernetes-views-job.yaml")) as text:
+        job = yaml.safe_load(text)
+    assert job["apiVersion"] == "batch/v1" and job["kind"] == "Job"
+    spec = job["spec"]
+    assert spec["completionMode"] == "Indexed"
+    assert spec["template"]["spec"]["restartPolicy"] in ("Never", "OnFailure")
+    (container,) = spec["template"]["spec"]["containers"]
+    command = container["command"]
+    assert command[:2] == ["vkray", "render"]
+    assert command[command.index("--shard") + 1] == "auto"
+    assert int(command[command.index("--shard-count") + 1]) == spec["completions"]
+    mount = container["volumeMounts"][0]["mountPath"]
+    output = command[command.index("-o") + 1]
+    assert output.startswith(mount + "/") and "{index:05}" in output
+    # Each pod's command, with the test's model, size, views and folder in place of the Job's.
+    local = command[2:]
+    local[0] = ""  # the built-in scene for the model
+    for option, value in (("--width", "64"), ("--height", "48"), ("--orbit", "12"), ("-o", str(tmp_path / "view-{index:05}.exr"))):
+        local[local.index(option) + 1] = value
+    for index in range(spec["completions"]):
+        vkray("render", *local, env=dict(os.environ, JOB_COMPLETION_INDEX=str(index)))
+    check_sharded_views(whole_run, tmp_path, spec["completions"])
+
+
+def check_sharded_views(whole_run, folder, shards):
+    parts = sorted(str(folder / name) for name in os.listdir(folder) if name.startswith(f"manifest-shard-"))
+    assert len(parts) == shards
+    vkray("manifest", "merge", *parts, "-o", str(folder / "manifest.jsonl"))
+    assert manifest_records(folder / "manifest.jsonl") == manifest_records(whole_run / "manifest.jsonl")
+    assert views_in(folder) == views_in(whole_run)
+    for name in views_in(whole_run):
+        assert same_pixels(folder / name, whole_run / name), name
+
+
+def test_sphere_views_spread_evenly_and_look_at_the_target(tmp_path):
+    vkray("render", *SIZE, "--sphere", "50", "-o", str(tmp_path / "s{index:02}.exr"))
+    records = manifest_records(tmp_path / "manifest.jsonl")
+    to = np.array(records[0]["camera"]["to"])
+    directions = np.array([np.array(record["camera"]["from"]) - to for record in records])
+    distances = np.linalg.norm(directions, axis=1)
+    assert np.ptp(distances) < 1e-12 * distances[0]
+    directions /= distances[:, None]
+    up = np.array(records[0]["camera"]["up"]) / np.linalg.norm(records[0]["camera"]["up"])
+    heights = directions @ up  # evenly spaced from near +1 to near -1: equal areas per view
+    assert np.allclose(np.sort(heights)[::-1], 1 - (2 * np.arange(50) + 1) / 50, atol=1e-12)
+    nearest = [np.max(np.delete(directions @ d, k)) for k, d in enumerate(directions)]
+    assert math.degrees(math.acos(max(nearest))) > 15  # no two views crowd together

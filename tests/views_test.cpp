@@ -1,0 +1,170 @@
+// Many views, the parts the command line builds on (engine/views): views files, output names with
+// the view's index, the manifest's records and their merging, and the generated cameras.
+#include "engine/camera.hpp"
+#include "engine/views/manifest.hpp"
+#include "engine/views/output_pattern.hpp"
+#include "engine/views/view_list.hpp"
+#include "tests/input_error_test.hpp"
+#include "tests/temp_dir_test.hpp"
+
+#include <glm/geometric.hpp>
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <sstream>
+
+namespace vkray {
+namespace {
+
+using test::error_of;
+using test::expect_error;
+
+TEST(OutputPattern, IndexPlainPaddedAndBraces) {
+  EXPECT_EQ(OutputPattern("out/v{index}.exr", "-o").path(42), "out/v42.exr");
+  EXPECT_EQ(OutputPattern("out/v{index:05}.exr", "-o").path(42), "out/v00042.exr");
+  EXPECT_EQ(OutputPattern("v{index:02}.exr", "-o").path(1234), "v1234.exr");  // wider than the padding
+  EXPECT_EQ(OutputPattern("{{x}}-{index}-{index:03}.exr", "-o").path(7), "{x}-7-007.exr");
+  EXPECT_FALSE(OutputPattern("render.exr", "-o").has_index());
+  EXPECT_TRUE(OutputPattern("{index}.exr", "-o").has_index());
+  expect_error(error_of([] { OutputPattern("v{i}.exr", "-o"); }), "-o: ", "unknown field {i}");
+  expect_error(error_of([] { OutputPattern("v{index:5}.exr", "-o"); }), "-o: ", "unknown field {index:5}");
+  expect_error(error_of([] { OutputPattern("v{index.exr", "--preview"); }), "--preview: ", "no '}'");
+  expect_error(error_of([] { OutputPattern("v}.exr", "-o"); }), "-o: ", "no '{'");
+}
+
+TEST(Views, JsonArrayAndJsonLines) {
+  const std::string a = R"({"from": [1, 2, 3], "to": [0, 0, 0], "fovy": 30})";
+  const std::string b = R"({"from": [0, 0, 5], "to": [0, 1, 0], "up": [0, 0, 1], "fovy": 60})";
+  for (const std::string& text : {"[" + a + ",\n" + b + "]", a + "\n\n" + b + "\n", "\n  [\n" + a + "," + b + "\n]  \n"}) {
+    const std::vector<Camera> views = parse_views(text, "views");
+    ASSERT_EQ(views.size(), 2u) << text;
+    EXPECT_EQ(views[0].from, glm::dvec3(1, 2, 3));
+    EXPECT_EQ(views[1].up, glm::dvec3(0, 0, 1));
+    EXPECT_EQ(views[1].fovy_degrees, 60.0);
+  }
+}
+
+TEST(Views, ErrorsNameTheLine) {
+  const std::string good = R"({"from": [1, 2, 3], "to": [0, 0, 0], "fovy": 30})";
+  expect_error(error_of([&] { parse_views(good + "\n" + R"({"from": [1, 2, 3], "fovy": 30})" + "\n", "v.jsonl"); }),
+               "v.jsonl:2: ", "missing required key 'to'");
+  expect_error(error_of([&] { parse_views("[\n" + good + ",\n\n 5\n]", "v.json"); }), "v.json:4: ", "expected an object");
+  expect_error(error_of([&] { parse_views("[\n" + good + ",\n" + R"({"from": [1, 2, 3], "to": [1, 2, 3], "fovy": 30})" + "]", "v.json"); }),
+               "v.json:3: ", "must differ");
+  expect_error(error_of([&] { parse_views("[\n" + good + ",\n" + good, "v.json"); }), "v.json:", "invalid JSON");
+  expect_error(error_of([&] { parse_views(good + "\n{\"from\": [1,\n", "v.jsonl"); }), "v.jsonl:2: ", "invalid JSON");
+  expect_error(error_of([] { parse_views("[]", "v.json"); }), "v.json: ", "no cameras");
+  expect_error(error_of([] { parse_views("\n\n", "v.jsonl"); }), "v.jsonl: ", "no cameras");
+  expect_error(error_of([] { load_views("/nonexistent/views.json"); }), "/nonexistent/views.json", "no such views file");
+}
+
+TEST(Views, OrbitKeepsDistanceHeightAndFirstView) {
+  Camera start;
+  start.from = {3, 2, 4};
+  start.to = {1, 1, 1};
+  start.up = {0, 2, 0};
+  start.fovy_degrees = 33;
+  const std::vector<Camera> views = orbit_views(start, 8);
+  ASSERT_EQ(views.size(), 8u);
+  EXPECT_EQ(views[0].from, start.from);
+  for (const Camera& view : views) {
+    EXPECT_NEAR(glm::length(view.from - view.to), glm::length(start.from - start.to), 1e-12);
+    EXPECT_NEAR(view.from.y, start.from.y, 1e-12);
+    EXPECT_EQ(view.to, start.to);
+    EXPECT_EQ(view.fovy_degrees, 33.0);
+  }
+  // Half way round: the opposite side.
+  EXPECT_NEAR(glm::length((views[4].from - start.to) + (start.from - start.to) * glm::dvec3(1, 0, 1) -
+                          glm::dvec3(0, start.from.y - start.to.y, 0)),
+              0.0, 1e-12);
+}
+
+TEST(Views, SphereViewsFromAStraightDownCamera) {
+  Camera start;  // looking along up: the lattice needs a side of its own
+  start.from = {0, 5, 0};
+  start.to = {0, 0, 0};
+  const std::vector<Camera> views = sphere_views(start, 7);
+  for (const Camera& view : views) {
+    EXPECT_NEAR(glm::length(view.from), 5.0, 1e-12);
+    EXPECT_TRUE(std::isfinite(make_camera_basis(view, 8, 8).right.x));
+  }
+}
+
+TEST(Camera, PinholeModelProjectsEachPixelsRayOntoItsPixel) {
+  Camera camera;
+  camera.from = {1, 2, 3};
+  camera.to = {-2, 0.5, -1};
+  camera.up = {0.1, 1, 0};
+  camera.fovy_degrees = 50;
+  for (const auto& [width, height] : {std::pair{64u, 48u}, {30u, 70u}}) {
+    const CameraBasis basis = make_camera_basis(camera, width, height);
+    const PinholeIntrinsics k = pinhole_intrinsics(camera, width, height);
+    const auto rt = world_to_camera(camera, width, height);
+    for (const auto& [i, j] : {std::pair{0u, 0u}, {width - 1, 0u}, {5u, height - 1}, {width / 2, height / 3}}) {
+      const glm::dvec3 p = camera.from + 7.5 * basis.direction(pixel_uv(i, j, width, height));
+      double c[3];
+      for (int r = 0; r < 3; ++r) c[r] = rt[r][0] * p.x + rt[r][1] * p.y + rt[r][2] * p.z + rt[r][3];
+      EXPECT_NEAR(k.fx * c[0] / c[2] + k.cx, i, 1e-9);
+      EXPECT_NEAR(k.fy * c[1] / c[2] + k.cy, j, 1e-9);
+      EXPECT_GT(c[2], 0.0);  // in front
+    }
+  }
+}
+
+class ManifestTest : public test::TempDirTest {};
+
+ViewRecord record(uint32_t index, const std::filesystem::path& folder) {
+  ViewRecord view;
+  view.index = index;
+  view.exr = folder / ("v" + std::to_string(index) + ".exr");
+  view.camera.from = {0, 0, 5.0 + index};
+  view.width = 8;
+  view.height = 6;
+  return view;
+}
+
+std::string read(const std::filesystem::path& path) {
+  std::ifstream file(path);
+  std::ostringstream text;
+  text << file.rdbuf();
+  return text.str();
+}
+
+TEST_F(ManifestTest, ACutOffLastLineIsDroppedAndWritingGoesOn) {
+  const auto path = dir_ / "manifest.jsonl";
+  {
+    ManifestWriter manifest(path, true);
+    manifest.append(record(0, dir_));
+    manifest.append(record(1, dir_));
+  }
+  const std::string whole = read(path);
+  EXPECT_EQ(manifest_line_index(whole.substr(0, whole.find('\n'))), 0u);
+  std::ofstream(path, std::ios::app) << manifest_line(record(2, dir_), dir_).substr(0, 30);  // killed mid-line
+  {
+    ManifestWriter manifest(path, false);
+    EXPECT_TRUE(manifest.has(0) && manifest.has(1));
+    EXPECT_FALSE(manifest.has(2));
+    manifest.append(record(2, dir_));
+  }
+  EXPECT_EQ(read(path), whole + manifest_line(record(2, dir_), dir_) + "\n");
+  EXPECT_NE(read(path).find("\"exr\":\"v2.exr\""), std::string::npos);  // relative to the manifest's folder
+  ManifestWriter fresh(path, true);
+  EXPECT_FALSE(fresh.has(0));
+  EXPECT_EQ(read(path), "");
+}
+
+TEST_F(ManifestTest, MergeSortsJoinsCopiesAndRefusesConflicts) {
+  const auto a = write("a.jsonl", manifest_line(record(2, dir_), dir_) + "\n" + manifest_line(record(0, dir_), dir_) + "\n");
+  const auto b = write("b.jsonl", manifest_line(record(1, dir_), dir_) + "\n" + manifest_line(record(2, dir_), dir_) + "\n");
+  EXPECT_EQ(merge_manifests({a, b}), manifest_line(record(0, dir_), dir_) + "\n" + manifest_line(record(1, dir_), dir_) +
+                                         "\n" + manifest_line(record(2, dir_), dir_) + "\n");
+  ViewRecord other = record(1, dir_);
+  other.camera.fovy_degrees = 10;
+  const auto c = write("c.jsonl", "\n" + manifest_line(other, dir_) + "\n");
+  expect_error(error_of([&] { merge_manifests({a, b, c}); }), c.string() + ":2: ", "differs from its record at " + b.string() + ":1");
+  const auto d = write("d.jsonl", "{\"index\": 3}\n");
+  expect_error(error_of([&] { merge_manifests({d}); }), d.string() + ":1: ", "not a view record");
+}
+
+}  // namespace
+}  // namespace vkray
