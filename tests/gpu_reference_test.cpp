@@ -180,7 +180,7 @@ TEST(GpuRenderer, TilingGivesIdenticalImages) {
 // Dispatches sized by their measured time: a budget far below what a row takes leaves one
 // workgroup's rows a dispatch after the first (8 per ray, 32 for the packet walk), and the
 // pixels are those of one dispatch; none is longer than the longest measured, and a generous budget
-// gives one dispatch after the first.
+// gives one dispatch after the first, and the next render one in all.
 TEST(GpuRenderer, DispatchesSizedByTimeGiveIdenticalImages) {
   const Scene scene = sized(default_scene(), 1024, 160);  // the first dispatch: 65536 pixels, 64 rows
   const AovSet all{Aov::depth, Aov::normal, Aov::uv};
@@ -209,6 +209,9 @@ TEST(GpuRenderer, DispatchesSizedByTimeGiveIdenticalImages) {
     Renderer generous(device(), scene, generous_options);
     generous.render(scene.camera, 1024, 160, all);
     EXPECT_EQ(generous.timings().tiles, 2u);  // 64 rows, then the other 96 (at most sixteen times as many)
+    // Once it has measured the scene's pixels, a quarter of the budget holds the frame.
+    generous.render(scene.camera, 1024, 160, all);
+    EXPECT_EQ(generous.timings().tiles, 1u);
   }
 }
 
