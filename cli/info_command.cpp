@@ -1,4 +1,5 @@
 #include "cli/commands.hpp"
+#include "cli/device_options.hpp"
 #include "engine/gpu_device.hpp"
 #include "engine/gpu_scene.hpp"
 
@@ -19,7 +20,7 @@ Action add_info_command(CLI::App& app) {
     for (size_t i = 0; i < devices.size(); ++i) {
       const GpuDeviceInfo& d = devices[i];
       std::cout << (i == chosen ? "* " : "  ") << "[" << i << "] " << d.name << " (" << d.type << ", Vulkan "
-                << d.api_version << ", " << d.driver << ")" << (d.can_compute ? "" : " - unusable: no compute queue or no subgroup vote, ballot, arithmetic and shuffle") << '\n'
+                << d.api_version << ", " << d.driver << ")" << (d.can_compute ? "" : " - unusable: " + d.unusable_reason) << '\n'
                 << "      UUID " << d.uuid << '\n';
     }
     const GpuDeviceInfo& d = devices[chosen];
@@ -40,7 +41,7 @@ Action add_info_command(CLI::App& app) {
               << '\n'
               << "  tree walk                  "
               << (d.favours_packet_walk ? "packets of 8x8 camera rays (llvmpipe from Mesa 25 on)" : "per ray") << '\n';
-    if (const std::string note = cpu_device_note(d); !note.empty()) std::cout << '\n' << note << '\n';
+    print_cpu_device_note(d);
     const GeometryLayout layout;
     std::cout << "\ngeometry on the device, bytes (render --timings gives a scene's bytes a triangle)\n"
               << "  a triangle or tree sphere  " << layout.primitive_slot << " + a normal of " << layout.normal_float32

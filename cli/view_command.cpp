@@ -45,6 +45,7 @@ int run_view(const ViewCommandOptions& options) {
   viewer.title = options.scene_path.empty() ? "built-in scene" : options.scene_path;
   viewer.device = options.device_options.device;
   viewer.transfer = options.device_options.transfer_mode();
+  viewer.on_device = print_cpu_device_note;
   viewer.vsync = !options.no_vsync;
   viewer.output = *output;
   viewer.overlay = !options.no_overlay;

@@ -51,6 +51,7 @@ struct GpuDeviceInfo {
   // the ray-casting modules declare them (the packet walk, the viewer's depth range), so a device
   // without them cannot create its pipeline. Every Vulkan 1.1 desktop driver and lavapipe have them.
   bool can_compute = false;
+  std::string unusable_reason;  // why not, where it cannot
   uint32_t max_workgroup_count[3] = {0, 0, 0};
   uint32_t max_workgroup_invocations = 0;
   uint64_t max_storage_buffer_range = 0;

@@ -116,6 +116,7 @@ Viewer::Viewer(const ViewerOptions& options)
       display_(device_.vulkan(), window_.create_surface(device_.vulkan().instance), options.vsync),
       renderer_(std::make_unique<Renderer>(device_, scene_)),
       preview_(device_.vulkan()) {
+  if (options.on_device) options.on_device(device_.info());
   resize();
   if (options.overlay) {
     // The backend needs at least 2 images, even for a window that starts minimized.
@@ -261,6 +262,8 @@ void Viewer::reload() {
     controller_.set_home(scene_.camera);
     error_.clear();
     std::printf("vkray view: reloaded %s\n", options_.watched.c_str());
+  } catch (const DeviceLostError&) {
+    throw;  // nothing more can be shown: the run ends with its one line
   } catch (const std::exception& error) {
     // The last good scene stays on screen, with the error over it.
     error_ = error.what();
@@ -282,6 +285,8 @@ void Viewer::save() {
                 extent.height);
     std::fflush(stdout);
     error_.clear();
+  } catch (const DeviceLostError&) {
+    throw;
   } catch (const std::exception& error) {
     error_ = error.what();
     std::fprintf(stderr, "vkray: %s\n", error_.c_str());

@@ -34,6 +34,8 @@ struct ViewerOptions {
   // Where to save what was presented last, as PNG, when the viewer quits.
   std::optional<std::filesystem::path> screenshot;
   bool stats = false;  // print frame and dispatch counts on exit
+  // Called once the device is chosen (the command line says there when it is a CPU implementation).
+  std::function<void(const GpuDeviceInfo&)> on_device;
 };
 
 // Runs the viewer until the window is closed (or `frames` are shown). Throws NoWindowError (a

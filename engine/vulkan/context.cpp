@@ -126,13 +126,14 @@ std::string lower(std::string_view text) {
   return result;
 }
 
-// First queue family with compute (that can also present, when `presentation` is given);
-// UINT32_MAX if none.
+// First queue family with compute (and, when `presentation` is given, graphics for the viewer's
+// overlay pass, and presentation to its window); UINT32_MAX if none.
 uint32_t compute_queue_family(const vk::raii::PhysicalDevice& physical_device,
                               const PresentationSupport* presentation = nullptr, vk::Instance instance = {}) {
   const auto families = physical_device.getQueueFamilyProperties();
   for (uint32_t i = 0; i < families.size(); ++i) {
     if (!(families[i].queueFlags & vk::QueueFlagBits::eCompute)) continue;
+    if (presentation && !(families[i].queueFlags & vk::QueueFlagBits::eGraphics)) continue;
     if (presentation && !presentation->can_present(instance, *physical_device, i)) continue;
     return i;
   }
@@ -211,6 +212,7 @@ GpuDeviceInfo describe(const vk::raii::PhysicalDevice& physical_device) {
       (subgroups.supportedOperations & vk::SubgroupFeatureFlagBits::eArithmetic) &&
       (subgroups.supportedOperations & vk::SubgroupFeatureFlagBits::eShuffle);
   info.can_compute = family != UINT32_MAX && subgroup_operations;
+  if (!info.can_compute) info.unusable_reason = "no compute queue, or no subgroup vote, ballot, arithmetic and shuffle";
   info.favours_packet_walk = llvmpipe && mesa_major >= 25 && info.subgroup_size == 8;
   if (info.can_compute && physical_device.getQueueFamilyProperties()[family].timestampValidBits > 0) {
     info.timestamp_period_ns = limits.timestampPeriod;
@@ -255,8 +257,8 @@ size_t choose_gpu_device(const std::vector<GpuDeviceInfo>& devices, std::string_
     const bool named = is_index ? std::to_string(i) == name_filter : lower(devices[i].uuid) == lower(name_filter);
     if (!named) continue;
     if (!devices[i].can_compute) {
-      throw GpuError("Vulkan device " + std::string(name_filter) + " ('" + devices[i].name +
-                     "') has no compute queue with subgroup vote, ballot, arithmetic and shuffle");
+      throw GpuError("Vulkan device " + std::string(name_filter) + " ('" + devices[i].name + "') cannot be used: " +
+                     devices[i].unusable_reason);
     }
     return i;
   }
@@ -277,12 +279,10 @@ size_t choose_gpu_device(const std::vector<GpuDeviceInfo>& devices, std::string_
     std::string names;
     for (const auto& device : devices) {
       if (!names.empty()) names += ", ";
-      names += "'" + device.name + "'";
+      names += "'" + device.name + "'" + (device.can_compute ? "" : " (" + device.unusable_reason + ")");
     }
-    throw GpuError(name_filter.empty()
-                       ? "no Vulkan device with a compute queue and subgroup vote, ballot, arithmetic and shuffle among " + names
-                       : "no Vulkan device named like '" + std::string(name_filter) +
-                             "' with a compute queue and subgroup vote, ballot, arithmetic and shuffle; found " + names);
+    throw GpuError(name_filter.empty() ? "no usable Vulkan device among " + names
+                                       : "no usable Vulkan device named like '" + std::string(name_filter) + "'; found " + names);
   }
   return best;
 }
@@ -329,8 +329,10 @@ void open_device(VulkanContext& vk_context, std::string_view name_filter, const 
     for (const auto& physical_device : physical_devices) {
       infos.push_back(describe(physical_device));
       // A device that cannot present is no candidate for a window.
-      if (presentation && compute_queue_family(physical_device, presentation, *vk_context.instance) == UINT32_MAX) {
+      if (presentation && infos.back().can_compute &&
+          compute_queue_family(physical_device, presentation, *vk_context.instance) == UINT32_MAX) {
         infos.back().can_compute = false;
+        infos.back().unusable_reason = "no queue of it presents to this display (with compute and graphics)";
       }
     }
     size_t chosen = 0;
@@ -346,6 +348,12 @@ void open_device(VulkanContext& vk_context, std::string_view name_filter, const 
     vk_context.memory_properties = vk_context.physical_device.getMemoryProperties();
     vk_context.staging = resolve_transfer(transfer, vk_context.memory_properties) == TransferMode::staging;
     vk_context.queue_family = compute_queue_family(vk_context.physical_device, presentation, *vk_context.instance);
+    // Timestamps as the queue in use has them (the viewer's may be another family than describe's).
+    if (vk_context.physical_device.getQueueFamilyProperties()[vk_context.queue_family].timestampValidBits == 0) {
+      vk_context.info.timestamp_period_ns = 0.0;
+    } else {
+      vk_context.info.timestamp_period_ns = vk_context.limits.timestampPeriod;
+    }
 
     const float priority = 1.0f;
     const vk::DeviceQueueCreateInfo queue_info({}, vk_context.queue_family, 1, &priority);
