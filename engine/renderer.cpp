@@ -493,17 +493,23 @@ struct Renderer::Impl {
   }
 };
 
-void RayHits::allocate(size_t ray_count) {
+void RayHits::allocate(size_t ray_count, bool doubles) {
   count = ray_count;
   t.assign(count, INFINITY);
   normal.assign(3 * count, 0.0f);
   object.assign(count, no_object);
   primitive.assign(count, no_object);
+  t64.assign(doubles ? count : 0, INFINITY);
+  normal64.assign(doubles ? 3 * count : 0, 0.0);
 }
 
-void RayHits::store(size_t ray, float distance, const glm::vec3& unit_normal, ObjectPrimitive source) {
-  t[ray] = distance;
-  for (int c = 0; c < 3; ++c) normal[c * count + ray] = unit_normal[c];
+void RayHits::store(size_t ray, double distance, const glm::dvec3& unit_normal, ObjectPrimitive source) {
+  t[ray] = static_cast<float>(distance);
+  for (int c = 0; c < 3; ++c) normal[c * count + ray] = static_cast<float>(unit_normal[c]);
+  if (!t64.empty()) {
+    t64[ray] = distance;
+    for (int c = 0; c < 3; ++c) normal64[c * count + ray] = unit_normal[c];
+  }
   object[ray] = source.object;
   primitive[ray] = source.primitive;
 }
@@ -684,7 +690,7 @@ RayHits Renderer::cast_rays(std::span<const GivenRay> rays) {
   check_given_rays(rays);
   Impl& r = *impl_;
   RayHits hits;
-  hits.allocate(rays.size());
+  hits.allocate(rays.size(), r.precision() == Precision::float64);
   r.reset_timings();
   if (rays.empty()) return hits;
 
@@ -726,9 +732,8 @@ RayHits Renderer::cast_rays(std::span<const GivenRay> rays) {
       auto copy = [&]<typename T>(const T* depths, const T* normals) {
         parallel_for_chunks(count, [&](size_t begin, size_t end) {
           for (size_t k = begin; k < end; ++k) {
-            const glm::vec3 normal(static_cast<float>(normals[k]), static_cast<float>(normals[plane_size + k]),
-                                   static_cast<float>(normals[2 * plane_size + k]));
-            hits.store(first + k, static_cast<float>(depths[k]), normal, r.hit_sources(slots[k]));
+            const glm::dvec3 normal(normals[k], normals[plane_size + k], normals[2 * plane_size + k]);
+            hits.store(first + k, depths[k], normal, r.hit_sources(slots[k]));
           }
         });
       };
@@ -742,7 +747,7 @@ RayHits Renderer::cast_rays(std::span<const GivenRay> rays) {
         r.finish_unfinished([&](uint32_t index) {
           const GivenRay& ray = rays[first + index];
           const ReferenceHit hit = r.reference->trace(glm::dvec3(ray[0], ray[1], ray[2]), unit_vector(glm::dvec3(ray[3], ray[4], ray[5])));
-          hits.store(first + index, static_cast<float>(hit.t), glm::vec3(hit.normal), r.reference->source(hit));
+          hits.store(first + index, hit.t, hit.normal, r.reference->source(hit));
         });
       }
     }

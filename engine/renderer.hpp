@@ -50,8 +50,11 @@ struct RayHits {
   std::vector<float> normal;      // 3 planes (all x, then y, then z): unit normal facing the ray, 0 on a miss
   std::vector<uint32_t> object;   // ObjectPrimitive::object, no_object on a miss
   std::vector<uint32_t> primitive;  // ObjectPrimitive::primitive, no_object on a miss
-  void allocate(size_t ray_count);
-  void store(size_t ray, float distance, const glm::vec3& unit_normal, ObjectPrimitive source);
+  // The float64 shader's distances and normals as it computed them, before t and normal round them;
+  // empty for the float32 shader.
+  std::vector<double> t64, normal64;
+  void allocate(size_t ray_count, bool doubles = false);
+  void store(size_t ray, double distance, const glm::dvec3& unit_normal, ObjectPrimitive source);
 };
 
 // The longest a dispatch may run, by default. A display-attached GPU is reset when one runs for

@@ -40,8 +40,10 @@ namespace {
 
 std::string item(const char* list, size_t index) { return std::string(list) + "[" + std::to_string(index) + "]"; }
 
-bool within_limits(const glm::dvec3& p) {  // false for NaN too
-  return std::max({std::abs(p.x), std::abs(p.y), std::abs(p.z)}) <= max_coordinate;
+// False for NaN too: each comparison with NaN is false (a std::max over the three would keep a
+// number over a NaN after it).
+bool within_limits(const glm::dvec3& p) {
+  return std::abs(p.x) <= max_coordinate && std::abs(p.y) <= max_coordinate && std::abs(p.z) <= max_coordinate;
 }
 
 }  // namespace

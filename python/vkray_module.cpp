@@ -84,7 +84,14 @@ Camera camera_from(py::handle camera, const Camera& base) {
     if (py::hasattr(value, "tolist")) return value.attr("tolist")();
     throw py::type_error("camera: values must be numbers or lists of three numbers");
   });
-  const std::string json = py::module_::import("json").attr("dumps")(camera, py::arg("default") = to_list).cast<std::string>();
+  std::string json;
+  try {
+    json = py::module_::import("json").attr("dumps")(camera, py::arg("default") = to_list, py::arg("allow_nan") = false)
+               .cast<std::string>();
+  } catch (const py::error_already_set& error) {
+    if (!error.matches(PyExc_ValueError)) throw;
+    throw InputError("camera: every number must be finite");
+  }
   return parse_camera_override(json, "camera", base);
 }
 
@@ -97,7 +104,23 @@ py::dict camera_dict(const Camera& camera) {
   return dict;
 }
 
-AovSet aovs_from(const std::vector<std::string>& names) {
+// Output names as a list, or one string, comma-separated as --aov takes them ("depth,normal").
+AovSet aovs_from(py::handle argument) {
+  std::vector<std::string> names;
+  if (py::isinstance<py::str>(argument)) {
+    const std::string text = argument.cast<std::string>();
+    for (size_t start = 0; start <= text.size();) {
+      const size_t comma = std::min(text.find(',', start), text.size());
+      if (comma > start) names.push_back(text.substr(start, comma - start));
+      start = comma + 1;
+    }
+  } else {
+    try {
+      names = argument.cast<std::vector<std::string>>();
+    } catch (const py::cast_error&) {
+      throw InputError("aovs: expected a list of output names or one string, as ['depth', 'normal'] or 'depth,normal'");
+    }
+  }
   AovSet aovs;
   for (const std::string& name : names) {
     const auto aov = aov_from_name(name);
@@ -126,20 +149,28 @@ Mesh mesh_from(py::handle vertices, py::handle triangles, py::handle transform, 
   if (!corners || (corners.dtype().kind() != 'i' && corners.dtype().kind() != 'u')) {
     throw InputError(path + ".triangles: expected an M x 3 array of integer vertex indices");
   }
-  auto indices = py::array_t<int64_t, py::array::c_style | py::array::forcecast>::ensure(corners);
-  if (indices.ndim() != 2 || indices.shape(1) != 3) throw InputError(path + ".triangles: expected an M x 3 array");
-  for (py::ssize_t t = 0; t < indices.shape(0); ++t) {
-    std::array<uint32_t, 3> triangle{};
-    for (py::ssize_t c = 0; c < 3; ++c) {
-      const int64_t index = indices.at(t, c);
-      if (index < 0 || index >= static_cast<int64_t>(mesh.positions.size())) {
-        throw InputError(path + ".triangles[" + std::to_string(t) + "][" + std::to_string(c) + "]: vertex index " +
-                         std::to_string(index) + " is out of range (the mesh has " + std::to_string(mesh.positions.size()) +
-                         " vertices)");
+  // Signed and unsigned indices each in their own width: an unsigned index past 2^63 must not wrap.
+  auto read_triangles = [&]<typename Index>() {
+    auto indices = py::array_t<Index, py::array::c_style | py::array::forcecast>::ensure(corners);
+    if (indices.ndim() != 2 || indices.shape(1) != 3) throw InputError(path + ".triangles: expected an M x 3 array");
+    for (py::ssize_t t = 0; t < indices.shape(0); ++t) {
+      std::array<uint32_t, 3> triangle{};
+      for (py::ssize_t c = 0; c < 3; ++c) {
+        const Index index = indices.at(t, c);
+        if (index < 0 || static_cast<uint64_t>(index) >= mesh.positions.size()) {
+          throw InputError(path + ".triangles[" + std::to_string(t) + "][" + std::to_string(c) + "]: vertex index " +
+                           std::to_string(index) + " is out of range (the mesh has " + std::to_string(mesh.positions.size()) +
+                           " vertices)");
+        }
+        triangle[static_cast<size_t>(c)] = static_cast<uint32_t>(index);
       }
-      triangle[static_cast<size_t>(c)] = static_cast<uint32_t>(index);
+      mesh.triangles.push_back(triangle);
     }
-    mesh.triangles.push_back(triangle);
+  };
+  if (corners.dtype().kind() == 'u') {
+    read_triangles.operator()<uint64_t>();
+  } else {
+    read_triangles.operator()<int64_t>();
   }
   if (!transform.is_none()) {
     const std::string affine = path + ".transform: expected a 4 x 4 affine matrix of finite numbers (last row 0, 0, 0, 1)";
@@ -226,7 +257,8 @@ class PyRenderer {
  public:
   PyRenderer(const Scene& scene, const std::optional<std::string>& device, const std::string& precision) : scene_(scene) {
     RendererOptions options;
-    if (precision == "double") {
+    double_precision_ = precision == "double";
+    if (double_precision_) {
       options.shader.precision = Precision::float64;
     } else if (precision != "float") {
       throw InputError("precision: 'float' or 'double', got '" + precision + "'");
@@ -237,7 +269,7 @@ class PyRenderer {
   }
 
   py::dict render(py::handle camera, std::optional<int64_t> width, std::optional<int64_t> height,
-                  const std::vector<std::string>& aov_names) {
+                  py::handle aov_names) {
     const View view = view_from(scene_, camera, width, height);
     const AovSet aovs = aovs_from(aov_names);
     Frame frame;
@@ -270,8 +302,10 @@ class PyRenderer {
     }
     const auto count = static_cast<py::ssize_t>(hits.count);
     py::dict result;
-    result["t"] = scalar_plane(std::move(hits.t), 0, count);
-    result["normal"] = planes_as_last_axis(std::move(hits.normal), 0, count, 3);
+    const bool doubles = !hits.t64.empty() || (hits.count == 0 && double_precision_);
+    result["t"] = doubles ? scalar_plane(std::move(hits.t64), 0, count) : scalar_plane(std::move(hits.t), 0, count);
+    result["normal"] = doubles ? planes_as_last_axis(std::move(hits.normal64), 0, count, 3)
+                               : planes_as_last_axis(std::move(hits.normal), 0, count, 3);
     result["primitive_id"] = scalar_plane(std::move(hits.primitive), 0, count);
     result["mesh_id"] = scalar_plane(std::move(hits.object), 0, count);
     return result;
@@ -294,6 +328,7 @@ class PyRenderer {
 
  private:
   Scene scene_;
+  bool double_precision_ = false;
   std::unique_ptr<GpuDevice> device_;
   std::unique_ptr<Renderer> renderer_;
   // The engine's Renderer serves one call at a time; Python threads may call it together, since
@@ -310,7 +345,7 @@ class PyReference {
   }
 
   py::dict render(py::handle camera, std::optional<int64_t> width, std::optional<int64_t> height,
-                  const std::vector<std::string>& aov_names) {
+                  py::handle aov_names) {
     const View view = view_from(scene_, camera, width, height);
     const AovSet aovs = aovs_from(aov_names);
     std::vector<ReferenceHit> hits;
@@ -427,7 +462,7 @@ PYBIND11_MODULE(vkray, m) {
       .def(py::init<const Scene&, const std::optional<std::string>&, const std::string&>(), py::arg("scene"),
            py::arg("device") = py::none(), py::arg("precision") = "float")
       .def("render", &PyRenderer::render, py::arg("camera") = py::none(), py::arg("width") = py::none(),
-           py::arg("height") = py::none(), py::arg("aovs") = std::vector<std::string>{"depth", "normal"},
+           py::arg("height") = py::none(), py::arg("aovs") = py::make_tuple("depth", "normal"),
            "A dict of arrays: depth H x W (distance along the ray, inf on a miss), normal H x W x 3, uv H x W x 2.")
       .def("cast_rays", &PyRenderer::cast_rays, py::arg("rays"),
            "rays: N x 6 (origin, direction). A dict of arrays: t (distance along the normalized direction, inf on "
@@ -438,6 +473,6 @@ PYBIND11_MODULE(vkray, m) {
   py::class_<PyReference>(m, "Reference", "The double-precision CPU reference, with the Renderer's methods (float64).")
       .def(py::init<const Scene&>(), py::arg("scene"))
       .def("render", &PyReference::render, py::arg("camera") = py::none(), py::arg("width") = py::none(),
-           py::arg("height") = py::none(), py::arg("aovs") = std::vector<std::string>{"depth", "normal"})
+           py::arg("height") = py::none(), py::arg("aovs") = py::make_tuple("depth", "normal"))
       .def("cast_rays", &PyReference::cast_rays, py::arg("rays"));
 }

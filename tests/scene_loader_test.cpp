@@ -587,6 +587,22 @@ TEST_F(SceneFileTest, ErrorInFileNamesFileAndPath) {
   expect_error(error_of([&] { vkray::load_scene_file(path); }), path.string() + ": spheres[0].radius: ", "must be > 0, got -2");
 }
 
+// Scenes built in code (Python's vkray.Scene) reach check_scene with any double: a NaN in any
+// coordinate is refused, not only in the first one.
+TEST(CheckScene, ANanInAnyCoordinateIsRefused) {
+  for (int axis = 0; axis < 3; ++axis) {
+    Scene vertex = vkray::default_scene();
+    vertex.meshes[0].positions[1][axis] = NAN;
+    expect_error(error_of([&] { vkray::check_scene(vertex); }), "meshes[0]", "finite");
+    Scene sphere = vkray::default_scene();
+    sphere.spheres[0].center[axis] = NAN;
+    expect_error(error_of([&] { vkray::check_scene(sphere); }), "spheres[0].center: ", "finite");
+    Scene up = vkray::default_scene();
+    up.camera.up[axis] = NAN;
+    expect_error(error_of([&] { vkray::check_scene(up); }), "camera.up: ", "finite");
+  }
+}
+
 }  // namespace
 
 // Finite but extreme values: directions of any magnitude normalize exactly; positions and radii

@@ -36,3 +36,15 @@ def test_every_python_example_in_the_readme_runs():
         result = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True,
                                 env=dict(os.environ, MPLBACKEND="Agg"))
         assert result.returncode == 0, f"README example failed:\n{block}\n{result.stderr}"
+
+
+def test_the_one_line_import_in_the_readme_runs():
+    """The README's `PYTHONPATH=build/python python3 -c ...` line, with this build's module."""
+    lines = [line for line in (ROOT / "README.md").read_text().splitlines()
+             if line.startswith("PYTHONPATH=build/python python3 -c ")]
+    assert lines, "the README shows no one-line import"
+    for line in lines:
+        code = line.split(" -c ", 1)[1].strip().strip("'")
+        result = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True, env=os.environ)
+        assert result.returncode == 0, f"{line}\n{result.stderr}"
+        assert result.stdout.strip() == "(600, 800)", result.stdout

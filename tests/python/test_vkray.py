@@ -4,6 +4,7 @@ import math
 import os
 import subprocess
 import threading
+import time
 
 import numpy as np
 import OpenImageIO as oiio
@@ -294,21 +295,28 @@ def test_a_device_that_does_not_exist_raises_vkray_error(default_scene):
 
 
 def test_the_gil_is_released_while_the_device_works(default_renderer):
+    """A second thread counts only while render runs: holding the GIL, render would let it count
+    nothing (C++ code gives the GIL up only where it releases it)."""
     ticks = []
+    calling = threading.Event()
     stop = threading.Event()
 
     def count():
         while not stop.is_set():
-            ticks.append(1)
+            if calling.is_set():
+                ticks.append(1)
 
     counter = threading.Thread(target=count)
     counter.start()
     try:
+        time.sleep(0.05)  # the counter is running
+        calling.set()
         default_renderer.render(width=640, height=480)
+        calling.clear()
     finally:
         stop.set()
         counter.join()
-    assert len(ticks) > 100  # the counter ran while render held no GIL
+    assert len(ticks) > 100
 
 
 def test_threads_may_share_a_renderer(default_scene, default_renderer):
@@ -334,6 +342,94 @@ def test_double_precision_rounds_to_the_command_lines_exr(tmp_path):
     expect_same_as_cli({k: v.astype(np.float32) for k, v in arrays.items()}, cli)
     with pytest.raises(ValueError, match="precision: 'float' or 'double', got 'half'"):
         vkray.Renderer(scene, precision="half")
+
+
+def test_double_precision_casts_rays_in_double():
+    scene = vkray.load("", 48, 36)
+    rays = camera_rays(scene.camera, 48, 36)
+    hits = vkray.Renderer(scene, precision="double").cast_rays(rays)
+    assert hits["t"].dtype == np.float64 and hits["normal"].dtype == np.float64
+    exact = vkray.Reference(scene).cast_rays(rays)
+    assert np.array_equal(hits["mesh_id"], exact["mesh_id"])
+    hit = np.isfinite(exact["t"])
+    assert hit.sum() > 500
+    assert np.max(np.abs(hits["t"][hit] - exact["t"][hit]) / exact["t"][hit]) < 1e-12
+    assert vkray.Renderer(scene, precision="double").cast_rays(np.zeros((0, 6)))["t"].dtype == np.float64
+
+
+def test_mesh_ids_count_meshes_then_spheres_then_planes():
+    triangle = np.array([[-0.5, -0.5, 0], [0.5, -0.5, 0], [0, 0.5, 0]])
+    meshes = [{"vertices": triangle + [4 * k, 0, 0], "triangles": [[0, 1, 2], [0, 2, 1]]} for k in range(2)]
+    spheres = np.array([[8, 0, 0, 0.5], [12, 0, 0, 0.5]])
+    planes = np.array([[0, 0, -3, 0, 0, 1]])
+    scene = vkray.Scene(meshes=meshes, spheres=spheres, planes=planes, camera={"from": [6, 0, 10], "to": [6, 0, 0], "fovy": 60})
+    targets = np.array([[0, 0, 0], [4, 0, 0], [8, 0, 0], [12, 0, 0], [20, 0, 0], [2, 0, 0]])
+    origins = targets + [0, 0, 10]
+    rays = np.concatenate([origins, targets - origins], axis=1)
+    rays[5] = [2, 0, 10, 0, 1, 0]  # away from everything
+    for tracer in (vkray.Renderer(scene), vkray.Reference(scene)):
+        hits = tracer.cast_rays(rays)
+        assert hits["mesh_id"].tolist() == [0, 1, 2, 3, 4, vkray.NO_HIT]
+        assert hits["primitive_id"].tolist()[2:5] == [0, 1, 0]  # spheres and planes by their own index
+        assert hits["primitive_id"][0] in (0, 1)  # a triangle of the first mesh (two copies, either winding)
+
+
+def test_rays_from_inside_a_closed_mesh_meet_its_walls_from_inside():
+    corners = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)], dtype=float)
+    faces = np.array([[0, 1, 3], [0, 3, 2], [4, 6, 7], [4, 7, 5], [0, 4, 5], [0, 5, 1],
+                      [2, 3, 7], [2, 7, 6], [0, 2, 6], [0, 6, 4], [1, 5, 7], [1, 7, 3]])
+    scene = vkray.Scene(corners, faces, camera={"from": [0, 0, 0.5], "to": [0, 0, 0], "fovy": 90})
+    rng = np.random.default_rng(11)
+    origins = rng.uniform(-0.9, 0.9, size=(3000, 3))
+    directions = rng.normal(size=(3000, 3))
+    rays = np.concatenate([origins, directions], axis=1)
+    hits = vkray.Renderer(scene).cast_rays(rays)
+    exact = vkray.Reference(scene).cast_rays(rays)
+    assert np.all(np.isfinite(hits["t"]))  # no ray escapes the closed cube
+    assert np.all(np.einsum("ij,ij->i", hits["normal"], directions) <= 0)  # normals face the ray: inward
+    # The wall is at most sqrt(3) * 1.9 away: float32 positions and direction rounding bound the error.
+    assert np.max(np.abs(hits["t"] - exact["t"])) < 64 * EPS * 4
+
+
+def test_uv_is_the_exrs_u_and_v(tmp_path, default_scene, default_renderer):
+    arrays = default_renderer.render(width=37, height=29, aovs="uv,depth")
+    cli = cli_render(tmp_path, "", 37, 29, "--aov", "uv,depth")
+    assert np.array_equal(arrays["uv"][..., 0], cli["U"]) and np.array_equal(arrays["uv"][..., 1], cli["V"])
+    assert np.array_equal(arrays["depth"], cli["Z"])
+
+
+@pytest.mark.parametrize("arguments, message", [
+    ({"vertices": np.eye(3), "triangles": np.array([[0, 1]])}, "meshes[0].triangles: expected an M x 3 array"),
+    ({"spheres": np.zeros((1, 3))}, "spheres: expected an N x 4 array, got shape (1, 3)"),
+    ({"planes": np.zeros((1, 5))}, "planes: expected an N x 6 array, got shape (1, 5)"),
+    ({"vertices": np.array([[0, 0, np.nan], [1, 0, 0], [0, 1, 0]]), "triangles": [[0, 1, 2]]}, "meshes[0].vertices[0]"),
+    ({"spheres": np.array([[0, 0, np.nan, 1]])}, "spheres[0].center"),
+    ({"spheres": np.array([[0, 0, 0, np.inf]])}, "spheres[0].radius"),
+    ({"planes": np.array([[0, np.nan, 0, 0, 1, 0]]), "camera": {"from": [0, 0, 5], "to": [0, 0, 0]}}, "planes[0].point"),
+    ({"meshes": [{"vertices": np.eye(3), "triangles": [[0, 1, 2]], "transform": np.full((4, 4), np.nan)}]},
+     "meshes[0].transform"),
+    ({"vertices": np.eye(3).astype(complex), "triangles": [[0, 1, 2]]}, "meshes[0].vertices: expected an array of numbers"),
+    ({"vertices": np.ones((3, 3), dtype=bool), "triangles": [[0, 1, 2]]}, "meshes[0].vertices: expected an array of numbers"),
+    ({"vertices": np.array([[object()] * 3] * 3), "triangles": [[0, 1, 2]]}, "meshes[0].vertices: expected an array of numbers"),
+    ({"vertices": np.eye(3), "triangles": np.array([[0, 1, 2**63]], dtype=np.uint64)}, "vertex index 9223372036854775808 is out of range"),
+])
+def test_more_bad_scenes_raise_value_error_with_the_place(arguments, message):
+    with pytest.raises(ValueError) as raised:
+        vkray.Scene(**arguments)
+    assert message in str(raised.value)
+
+
+@pytest.mark.parametrize("call, message", [
+    (lambda r: r.cast_rays(np.array([[0, 0, 0, np.nan, 0, 1]])), "ray 0: the direction is not finite"),
+    (lambda r: r.cast_rays(np.array([[0, 0, 0, 0, 0, 1]], dtype=complex)), "rays: expected an array of numbers"),
+    (lambda r: r.render({"from": [0, np.nan, 5]}), "camera: every number must be finite"),
+    (lambda r: r.render({"fovy": float("inf")}), "camera: every number must be finite"),
+    (lambda r: r.render(aovs=3), "aovs: expected a list of output names or one string"),
+])
+def test_more_bad_calls_raise_value_error_with_the_place(default_renderer, call, message):
+    with pytest.raises(ValueError) as raised:
+        call(default_renderer)
+    assert message in str(raised.value)
 
 
 def test_no_rays_give_empty_arrays(default_renderer):
