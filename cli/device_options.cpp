@@ -1,5 +1,7 @@
 #include "cli/device_options.hpp"
 
+#include "engine/gpu_scene.hpp"
+
 #include <cstdio>
 
 namespace vkray::cli {
@@ -21,6 +23,18 @@ CLI::Option* add_device_options(CLI::App* command, DeviceOptions& options) {
       ->check(CLI::IsMember({"auto", "staging", "direct"}))
       ->capture_default_str();
   return device;
+}
+
+void add_traversal_option(CLI::App* command, std::string& traversal) {
+  command
+      ->add_option("--traversal", traversal,
+                   std::string("How rays find the primitives: ") + traversal_names_help +
+                       " (auto: brute force for a handful, else packets on llvmpipe from Mesa 25, per ray elsewhere)")
+      ->check([](const std::string& name) {
+        return traversal_from_name(name) ? std::string()
+                                         : "unknown traversal '" + name + "' (choose from " + traversal_names_help + ")";
+      })
+      ->capture_default_str();
 }
 
 void print_cpu_device_note(const GpuDeviceInfo& device) {

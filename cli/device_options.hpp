@@ -18,6 +18,9 @@ struct DeviceOptions {
 // Adds --device and --transfer to `command`; returns --device (for options that exclude it).
 CLI::Option* add_device_options(CLI::App* command, DeviceOptions& options);
 
+// Adds --traversal (render, view): how rays find the primitives, by traversal_from_name's names.
+void add_traversal_option(CLI::App* command, std::string& traversal);
+
 // Prints cpu_device_note for `device` on stderr, when it has one.
 void print_cpu_device_note(const GpuDeviceInfo& device);
 

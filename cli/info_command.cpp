@@ -39,6 +39,8 @@ Action add_info_command(CLI::App& app) {
               << (d.main_memory_host_visible ? "direct (its main memory is host-visible)"
                                              : "staging (its main memory is not host-visible)")
               << '\n'
+              << "  ray queries                "
+              << (d.ray_query ? "yes (--traversal ray-query)" : "no") << '\n'
               << "  tree walk                  "
               << (d.favours_packet_walk ? "packets of 8x8 camera rays (llvmpipe from Mesa 25 on)" : "per ray") << '\n';
     print_cpu_device_note(d);

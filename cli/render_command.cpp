@@ -38,6 +38,7 @@ struct RenderOptions {
   bool reference = false;
   std::string compression = default_exr_compression;
   std::string precision = "float";
+  std::string traversal = "auto";
   ViewsOptions views;
   bool output_given = false;  // -o on the command line (many views default to view-{index:05}.exr)
 };
@@ -129,6 +130,7 @@ int run_render_views(const RenderOptions& options, const AovSet& aovs) {
   print_cpu_device_note(device->info());
   RendererOptions renderer_options;
   if (options.precision == "double") renderer_options.shader.precision = Precision::float64;
+  renderer_options.scene.search = *traversal_from_name(options.traversal);
   renderer_options.first_aovs = aovs;
   Renderer renderer(*device, scene, renderer_options);
   ViewsProgress progress;
@@ -209,6 +211,7 @@ int run_render(const RenderOptions& options) {
     RendererOptions renderer_options;
     renderer_options.scene.bvh.progress = progress.callback();
     if (options.precision == "double") renderer_options.shader.precision = Precision::float64;
+    renderer_options.scene.search = *traversal_from_name(options.traversal);
     renderer_options.first_aovs = aovs;
     Renderer renderer(device, scene, renderer_options);
     upload_ms = stopwatch.lap_ms();
@@ -249,6 +252,10 @@ int run_render(const RenderOptions& options) {
                    staging ? "the scene to the device, through staging buffers (--transfer)"
                            : "the scene to the device, into memory the host maps (--transfer)");
       if (scene_stats->bvh_nodes > 0) print_timing(2, "BVH build", gpu_timings->bvh_build_ms);
+      if (scene_stats->search == PrimitiveSearch::ray_query) {
+        print_timing(2, "acceleration structures", gpu_timings->structures_ms,
+                     "built and compacted by the device (--traversal ray-query)");
+      }
       if (gpu_timings->pipeline_beside_upload_ms > 0.0) {
         print_timing(2, "pipeline creation", gpu_timings->pipeline_beside_upload_ms,
                      "beside the BVH build and upload, on a second thread");
@@ -322,6 +329,7 @@ Action add_render_command(CLI::App& app) {
                       "shaderFloat64)")
       ->check(CLI::IsMember({"float", "double"}))
       ->capture_default_str();
+  add_traversal_option(command, options->traversal);
   command->add_flag("--timings", options->timings, "Print where the time went");
   add_views_options(command, options->views);
   CLI::Option* check = command->add_flag("--check", options->check,

@@ -18,6 +18,7 @@ struct ViewCommandOptions {
   std::optional<std::string> camera;
   std::string output = "depth";
   DeviceOptions device_options;
+  std::string traversal = "auto";
   bool no_vsync = false;
   bool no_overlay = false;
   uint32_t frames = 0;
@@ -45,6 +46,7 @@ int run_view(const ViewCommandOptions& options) {
   viewer.title = options.scene_path.empty() ? "built-in scene" : options.scene_path;
   viewer.device = options.device_options.device;
   viewer.transfer = options.device_options.transfer_mode();
+  viewer.traversal = *traversal_from_name(options.traversal);
   viewer.on_device = print_cpu_device_note;
   viewer.vsync = !options.no_vsync;
   viewer.output = *output;
@@ -72,6 +74,7 @@ Action add_view_command(CLI::App& app) {
   command->add_option("--output", options->output, std::string("Output shown first: ") + aov_names_help)
       ->capture_default_str();
   add_device_options(command, options->device_options);
+  add_traversal_option(command, options->traversal);
   command->add_flag("--no-vsync", options->no_vsync, "Present without waiting for the display's refresh");
   command->add_flag("--no-overlay", options->no_overlay, "Show the picture alone, without the text overlay");
   command->add_option("--frames", options->frames, "Quit after presenting N frames, each rendered anew (benchmarks, tests)");

@@ -46,7 +46,7 @@ struct BenchRow {
   bool on_gpu = true;               // false: a CPU baseline (Embree)
   SceneStats stats;                 // what the variant put on the device (GPU rows)
   double upload_ms = 0.0;           // scene conversion and upload, BVH build included; never in frame times
-  double bvh_build_ms = 0.0;        // of which the BVH build (CPU rows: Embree's scene build)
+  double bvh_build_ms = 0.0;        // of which the BVH build (ray queries: the device's structures; CPU rows: Embree's scene build)
   double pipeline_ms = 0.0;         // pipeline creation, never in frame times
   TimeStats gpu;                    // GPU time per frame, from timestamps (CPU rows: wall time of the trace)
   double frame_median_ms = 0.0;     // host wall time per frame, readback included (GPU rows)

@@ -69,6 +69,13 @@ struct GpuDeviceInfo {
   // 1920x1080: 36 against 149 ms per ray). Mesa 22.3 runs subgroup operations as loops over the
   // lanes (239 against 145 ms), and no GPU has measured it yet.
   bool favours_packet_walk = false;
+  // Ray queries from compute shaders (VK_KHR_ray_query with VK_KHR_acceleration_structure and
+  // buffer device addresses, Vulkan 1.2): what the ray-query traversal needs. With it, the largest
+  // number of triangles (or boxes) one bottom-level structure may hold, and the alignment of build
+  // scratch memory.
+  bool ray_query = false;
+  uint64_t max_structure_primitives = 0;
+  uint32_t structure_scratch_alignment = 0;
 };
 
 // Every Vulkan device, in enumeration order. Throws GpuError when Vulkan itself is unavailable.

@@ -123,6 +123,89 @@ void append_normal(std::vector<glm::vec4>& texels, const glm::dvec3& normal, Pre
 // random spheres 8: 9.3 / 11.5, 16: 13.6 / 11.4, 32: 25.7 / 16.9, 10000: 6395 / 48.6.
 constexpr size_t brute_force_max_primitives = 8;
 
+// A handful of spheres beside triangles stay out of the tree, tested one by one before its walk:
+// the walk's loop then holds the triangle test alone. On lavapipe that loop's size is its speed:
+// the built-in scene at 960x540 took 46-54 ms a frame with its sphere in the tree, 19-21 ms apart
+// (fastest of 20 frames, two runs of `vkray bench --variants default`).
+bool keeps_spheres_apart(size_t triangle_count, size_t sphere_count) {
+  return triangle_count > 0 && sphere_count <= brute_force_max_primitives;
+}
+
+// Triangle slots of the brute-force loop: whole batches.
+uint32_t batched_slots(size_t triangle_count) {
+  return static_cast<uint32_t>((triangle_count + VKRAY_TRIANGLE_BATCH - 1) / VKRAY_TRIANGLE_BATCH * VKRAY_TRIANGLE_BATCH);
+}
+
+// The order of `centres` along a Morton curve (21 bits an axis over their box).
+std::vector<size_t> morton_order(const std::vector<glm::dvec3>& centres) {
+  auto spread = [](uint64_t v) {  // 21 bits to every third of 63
+    v &= 0x1fffff;
+    v = (v | v << 32) & 0x1f00000000ffffull;
+    v = (v | v << 16) & 0x1f0000ff0000ffull;
+    v = (v | v << 8) & 0x100f00f00f00f00full;
+    v = (v | v << 4) & 0x10c30c30c30c30c3ull;
+    return (v | v << 2) & 0x1249249249249249ull;
+  };
+  Bounds bounds;
+  for (const auto& centre : centres) bounds.add(centre);
+  const glm::dvec3 extent = glm::max(bounds.upper - bounds.lower, glm::dvec3(1e-300));
+  auto cell = [](double u) { return static_cast<uint64_t>(std::clamp(u, 0.0, 1.0) * 2097151.0); };
+  std::vector<std::pair<uint64_t, size_t>> codes;
+  for (size_t k = 0; k < centres.size(); ++k) {
+    const glm::dvec3 unit = (centres[k] - bounds.lower) / extent;
+    codes.push_back({spread(cell(unit.x)) | spread(cell(unit.y)) << 1 | spread(cell(unit.z)) << 2, k});
+  }
+  std::stable_sort(codes.begin(), codes.end());
+  std::vector<size_t> order;
+  for (const auto& [code, k] : codes) order.push_back(k);
+  return order;
+}
+
+// The slots for ray queries (GpuScene::structure_meshes): the triangles by mesh, each mesh's in
+// Morton order of their boxes' centres; then the spheres not tested apart, in Morton order too,
+// with their boxes. lavapipe builds a structure by halving its input in order: ordered input makes
+// it a Morton-code tree (the bunny at 1920x1080: 0.30 s a frame, 40 s in the OBJ's order).
+void lay_out_for_ray_queries(GpuScene& gpu, const Scene& scene, std::vector<EncodedPrimitive> triangles,
+                             VertexTable& vertex_table) {
+  auto centre = [](const FloatBox& box) { return 0.5 * (glm::dvec3(box.lower) + glm::dvec3(box.upper)); };
+  for (size_t begin = 0; begin < triangles.size();) {
+    size_t end = begin;
+    while (end < triangles.size() && triangles[end].source.object == triangles[begin].source.object) ++end;
+    std::vector<glm::dvec3> centres;
+    for (size_t k = begin; k < end; ++k) centres.push_back(centre(triangles[k].box));
+    gpu.structure_meshes.push_back({static_cast<uint32_t>(gpu.primitives.size()), static_cast<uint32_t>(end - begin)});
+    for (size_t k : morton_order(centres)) {
+      const EncodedPrimitive& triangle = triangles[begin + k];
+      gpu.primitives.push_back(triangle.primitive);
+      append_normal(gpu.normal_texels, triangle.normal, gpu.precision);
+      gpu.hit_sources.slots.push_back(triangle.source);
+    }
+    begin = end;
+  }
+  const bool apart = keeps_spheres_apart(triangles.size(), scene.spheres.size());
+  gpu.tree_has_triangles = !triangles.empty();
+  gpu.tree_has_spheres = !scene.spheres.empty() && !apart;
+  if (apart) {
+    for (const auto& sphere : scene.spheres) {
+      gpu.spheres.push_back({encode_point(glm::dvec4(sphere.center - gpu.anchor, sphere.radius), gpu.precision)});
+    }
+    return;
+  }
+  std::vector<glm::dvec3> centres;
+  for (const auto& sphere : scene.spheres) centres.push_back(sphere.center);
+  gpu.structure_spheres.first = static_cast<uint32_t>(gpu.primitives.size());
+  for (size_t k : morton_order(centres)) {
+    const Sphere& sphere = scene.spheres[k];
+    const glm::dvec3 centre_offset = sphere.center - gpu.anchor;
+    gpu.primitives.push_back(gpu::GpuPrimitive{glm::uvec4(vertex_table.add(centre_offset, sphere.radius), 0, 0, VKRAY_PRIMITIVE_SPHERE)});
+    append_normal(gpu.normal_texels, glm::dvec3(0.0), gpu.precision);
+    gpu.hit_sources.slots.push_back({gpu.hit_sources.first_sphere_object + static_cast<uint32_t>(k), static_cast<uint32_t>(k)});
+    const FloatBox box = widened(outward(centre_offset - sphere.radius, centre_offset + sphere.radius));
+    gpu.sphere_boxes.push_back({box.lower.x, box.lower.y, box.lower.z, box.upper.x, box.upper.y, box.upper.z});
+  }
+  gpu.structure_spheres.count = static_cast<uint32_t>(gpu.sphere_boxes.size());
+}
+
 }  // namespace
 
 glm::dvec3 scene_anchor(const Scene& scene) {
@@ -147,22 +230,6 @@ PrimitiveSearch choose_search(size_t triangle_count, size_t sphere_count) {
                                                                      : PrimitiveSearch::bvh_per_ray;
 }
 
-namespace {
-
-// A handful of spheres beside triangles stay out of the tree, tested one by one before its walk:
-// the walk's loop then holds the triangle test alone. On lavapipe that loop's size is its speed:
-// the built-in scene at 960x540 took 46-54 ms a frame with its sphere in the tree, 19-21 ms apart
-// (fastest of 20 frames, two runs of `vkray bench --variants default`).
-bool keeps_spheres_apart(size_t triangle_count, size_t sphere_count) {
-  return triangle_count > 0 && sphere_count <= brute_force_max_primitives;
-}
-
-// Triangle slots of the brute-force loop: whole batches.
-uint32_t batched_slots(size_t triangle_count) {
-  return static_cast<uint32_t>((triangle_count + VKRAY_TRIANGLE_BATCH - 1) / VKRAY_TRIANGLE_BATCH * VKRAY_TRIANGLE_BATCH);
-}
-
-}  // namespace
 
 GpuSceneShape plan_gpu_scene(const Scene& scene, const GpuSceneOptions& options) {
   const size_t triangles = scene.triangle_count(), spheres = scene.spheres.size();
@@ -255,6 +322,11 @@ GpuScene make_gpu_scene(const Scene& scene, const GpuSceneOptions& options, cons
     return gpu;
   }
 
+  if (gpu.search == PrimitiveSearch::ray_query) {
+    lay_out_for_ray_queries(gpu, scene, std::move(triangles), vertex_table);
+    return gpu;
+  }
+
   const auto start = std::chrono::steady_clock::now();
   std::vector<EncodedPrimitive> unordered = std::move(triangles);
   const bool spheres_apart = keeps_spheres_apart(unordered.size(), scene.spheres.size());
@@ -325,12 +397,23 @@ GpuSceneShape GpuScene::shape() const {
           tree_has_spheres};
 }
 
+std::optional<PrimitiveSearch> traversal_from_name(std::string_view name) {
+  if (name == "auto") return PrimitiveSearch::automatic;
+  if (name == "brute-force") return PrimitiveSearch::brute_force;
+  if (name == "per-ray") return PrimitiveSearch::bvh_per_ray;
+  if (name == "packet") return PrimitiveSearch::bvh_packet;
+  if (name == "ray-query") return PrimitiveSearch::ray_query;
+  return std::nullopt;
+}
+
 uint32_t search_mode(PrimitiveSearch search) {
   switch (search) {
     case PrimitiveSearch::bvh_packet:
       return VKRAY_SEARCH_BVH_PACKET;
     case PrimitiveSearch::bvh_per_ray:
       return VKRAY_SEARCH_BVH_PER_RAY;
+    case PrimitiveSearch::ray_query:
+      return VKRAY_SEARCH_RAY_QUERY;
     default:
       return VKRAY_SEARCH_BRUTE_FORCE;
   }

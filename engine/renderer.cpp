@@ -5,6 +5,7 @@
 #include "engine/parallel.hpp"
 #include "engine/reference.hpp"
 #include "engine/unit_vector.hpp"
+#include "engine/vulkan/acceleration_structures.hpp"
 #include "engine/vulkan/buffer.hpp"
 #include "engine/vulkan/image.hpp"
 #include "engine/vulkan/raycast_pipeline.hpp"
@@ -38,8 +39,9 @@ constexpr vk::DeviceSize texel_bytes = 16;
 // Geometry buffers serve as uniform texel buffers or, for the storage-geometry variant, storage buffers.
 constexpr vk::BufferUsageFlags geometry_usage = vk::BufferUsageFlagBits::eUniformTexelBuffer | vk::BufferUsageFlagBits::eStorageBuffer;
 
-TexelBuffer make_texel_buffer(VulkanContext& context, const void* data, vk::DeviceSize bytes) {
-  TexelBuffer texels{upload_buffer(context, data, bytes, geometry_usage)};
+TexelBuffer make_texel_buffer(VulkanContext& context, const void* data, vk::DeviceSize bytes,
+                              vk::BufferUsageFlags extra_usage = {}) {
+  TexelBuffer texels{upload_buffer(context, data, bytes, geometry_usage | extra_usage)};
   texels.floats = create_texel_view(context, texels.buffer, vk::Format::eR32G32B32A32Sfloat);
   texels.uints = create_texel_view(context, texels.buffer, vk::Format::eR32G32B32A32Uint);
   return texels;
@@ -222,6 +224,7 @@ struct Renderer::Impl {
   GpuBuffer placeholder;
   TexelBuffer placeholder_texels;
   std::optional<TexelBuffer> spheres, planes, primitives, vertices, normals, bvh_nodes;
+  std::optional<AccelerationStructures> structures;  // the ray-query traversal's
   HitSources hit_sources;
   std::vector<gpu::GpuPlane> gpu_planes;  // what `planes` holds, its heights set per render
   std::vector<Plane> scene_planes;
@@ -331,6 +334,7 @@ struct Renderer::Impl {
     resources.buffers[VKRAY_BINDING_OVERFLOW] = output(tile.overflow);
     resources.buffers[VKRAY_BINDING_DEPTH_RANGE] = output(depth_range);
     resources.images[VKRAY_BINDING_IMAGE] = *(target ? *target : *placeholder_image).image().view;
+    if (structures) resources.top_structure = structures->top();
     pipeline->bind_resources(resources);
   }
 
@@ -385,8 +389,13 @@ struct Renderer::Impl {
   }
 
   void reset_timings() {
-    timings = RenderTimings{timings.upload_ms, timings.bvh_build_ms, 0.0, timings.pipeline_beside_upload_ms,
-                            *timestamps != vk::QueryPool(), 0.0, 0.0, 0, 0.0, 0, 0.0};
+    RenderTimings fresh;  // the constructor's figures stay
+    fresh.upload_ms = timings.upload_ms;
+    fresh.bvh_build_ms = timings.bvh_build_ms;
+    fresh.structures_ms = timings.structures_ms;
+    fresh.pipeline_beside_upload_ms = timings.pipeline_beside_upload_ms;
+    fresh.has_gpu_times = *timestamps != vk::QueryPool();
+    timings = fresh;
   }
 
   // What a render needs before its tiles: the pipeline (returned), the planes' heights above this
@@ -556,7 +565,8 @@ Renderer::Renderer(GpuDevice& device, const Scene& scene, RendererOptions option
                      std::to_string(VKRAY_STACK_REGISTERS_MAX) + " deep; this one is " + std::to_string(gpu_scene.bvh_depth));
     }
     const vk::DeviceSize buffer_limit = r.binding_limit();
-    auto upload = [&]<typename T>(const std::vector<T>& items, const char* what) -> std::optional<TexelBuffer> {
+    auto upload = [&]<typename T>(const std::vector<T>& items, const char* what,
+                                  vk::BufferUsageFlags extra_usage = {}) -> std::optional<TexelBuffer> {
       static_assert(sizeof(T) % texel_bytes == 0);
       if (items.empty()) return std::nullopt;
       const vk::DeviceSize bytes = items.size() * sizeof(T);
@@ -565,7 +575,7 @@ Renderer::Renderer(GpuDevice& device, const Scene& scene, RendererOptions option
                        r.context.info.name + " can bind as one buffer (" + std::to_string(buffer_limit >> 20) +
                        " MiB)");
       }
-      return make_texel_buffer(r.context, items.data(), bytes);
+      return make_texel_buffer(r.context, items.data(), bytes, extra_usage);
     };
     r.spheres = upload(gpu_scene.spheres, "spheres");
     if (!gpu_scene.planes.empty()) {  // host-visible: their heights above the camera change every render
@@ -577,13 +587,37 @@ Renderer::Renderer(GpuDevice& device, const Scene& scene, RendererOptions option
       r.scene_planes = scene.planes;
     }
     r.primitives = upload(gpu_scene.primitives, "triangles and spheres");
-    r.vertices = upload(gpu_scene.vertices, "vertices");
+    const bool ray_query = gpu_scene.search == PrimitiveSearch::ray_query;
+    // The ray-query traversal's structures are built from the vertex buffer itself.
+    r.vertices = upload(gpu_scene.vertices, "vertices",
+                        ray_query ? vk::BufferUsageFlagBits::eAccelerationStructureBuildInputReadOnlyKHR |
+                                        vk::BufferUsageFlagBits::eShaderDeviceAddress
+                                  : vk::BufferUsageFlags{});
     r.normals = upload(gpu_scene.normal_texels, "triangle normals");
     r.bvh_nodes = upload(gpu_scene.bvh_nodes, "BVH nodes");
     r.hit_sources = gpu_scene.hit_sources;
     r.stats = SceneStats{gpu_scene.triangle_count, static_cast<uint32_t>(scene.spheres.size()),
                          gpu_scene.geometry_bytes(), static_cast<uint32_t>(gpu_scene.bvh_nodes.size()),
                          gpu_scene.bvh_depth, gpu_scene.search, 0};
+    double structures_ms = 0.0;
+    if (ray_query) {
+      StructureInput input;
+      input.vertices = &r.vertices->buffer;
+      input.vertex_count = static_cast<uint32_t>(gpu_scene.vertices.size());
+      input.vertex_stride = sizeof(gpu::GpuPoint);
+      for (const auto& mesh : gpu_scene.structure_meshes) {
+        input.meshes.push_back({mesh.first, mesh.count});
+        for (uint32_t slot = mesh.first; slot < mesh.first + mesh.count; ++slot) {
+          const glm::uvec4& record = gpu_scene.primitives[slot].indices;
+          input.triangles.push_back({record.x, record.y, record.z});
+        }
+      }
+      input.sphere_boxes = gpu_scene.sphere_boxes;
+      input.first_sphere_slot = gpu_scene.structure_spheres.first;
+      r.structures.emplace(r.context, input);
+      r.stats.geometry_bytes += r.structures->bytes();
+      structures_ms = r.structures->build_ms();
+    }
 
     r.stats.loop_budget = tree_loop_budget(gpu_scene.shape(), r.context.info, options.loop_budget);
     if (r.stats.loop_budget > 0) r.scene_for_unfinished = scene;
@@ -623,6 +657,7 @@ Renderer::Renderer(GpuDevice& device, const Scene& scene, RendererOptions option
       r.timestamps = vk::raii::QueryPool(r.context.device, vk::QueryPoolCreateInfo({}, vk::QueryType::eTimestamp, 3));
     }
     r.timings.bvh_build_ms = gpu_scene.bvh_build_ms;
+    r.timings.structures_ms = structures_ms;
     r.timings.upload_ms = elapsed_ms(start);
   });
 }

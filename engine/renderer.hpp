@@ -19,6 +19,7 @@ namespace vkray {
 struct RenderTimings {
   double upload_ms = 0.0;          // scene conversion and upload (once, in the constructor), BVH build included
   double bvh_build_ms = 0.0;       // of which building the BVH
+  double structures_ms = 0.0;      // of which the device building its acceleration structures (ray queries)
   double pipeline_ms = 0.0;        // pipeline creation (first render with a given set of outputs)
   // The pipeline made on a second thread while the tree was built and the scene uploaded
   // (RendererOptions::first_aovs), in the constructor: its creation time; 0 where none was.

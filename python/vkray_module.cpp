@@ -255,7 +255,9 @@ View view_from(const Scene& scene, py::handle camera, std::optional<int64_t> wid
 
 class PyRenderer {
  public:
-  PyRenderer(const Scene& scene, const std::optional<std::string>& device, const std::string& precision) : scene_(scene) {
+  PyRenderer(const Scene& scene, const std::optional<std::string>& device, const std::string& precision,
+             const std::string& traversal)
+      : scene_(scene) {
     RendererOptions options;
     double_precision_ = precision == "double";
     if (double_precision_) {
@@ -263,6 +265,9 @@ class PyRenderer {
     } else if (precision != "float") {
       throw InputError("precision: 'float' or 'double', got '" + precision + "'");
     }
+    const std::optional<PrimitiveSearch> search = traversal_from_name(traversal);
+    if (!search) throw InputError("traversal: one of " + std::string(traversal_names_help) + ", got '" + traversal + "'");
+    options.scene.search = *search;
     py::gil_scoped_release released;
     device_ = std::make_unique<GpuDevice>(device.value_or(""));
     renderer_ = std::make_unique<Renderer>(*device_, scene_, options);
@@ -458,9 +463,11 @@ PYBIND11_MODULE(vkray, m) {
   py::class_<PyRenderer>(m, "Renderer",
                          "Opens the device, uploads the scene and makes the pipeline once; then renders and casts "
                          "rays any number of times. device: part of a device name (`vkray info`); precision: "
-                         "'float' or 'double'.")
-      .def(py::init<const Scene&, const std::optional<std::string>&, const std::string&>(), py::arg("scene"),
-           py::arg("device") = py::none(), py::arg("precision") = "float")
+                         "'float' or 'double'; traversal: as `vkray render --traversal` (auto, brute-force, per-ray, "
+                         "packet, ray-query).")
+      .def(py::init<const Scene&, const std::optional<std::string>&, const std::string&, const std::string&>(),
+           py::arg("scene"), py::arg("device") = py::none(), py::arg("precision") = "float",
+           py::arg("traversal") = "auto")
       .def("render", &PyRenderer::render, py::arg("camera") = py::none(), py::arg("width") = py::none(),
            py::arg("height") = py::none(), py::arg("aovs") = py::make_tuple("depth", "normal"),
            "A dict of arrays: depth H x W (distance along the ray, inf on a miss), normal H x W x 3, uv H x W x 2.")

@@ -47,13 +47,17 @@ using uvec4 = glm::uvec4;
 // and what each ray hit (VKRAY_HIT_*).
 #define VKRAY_BINDING_RAYS 13        // texels, RGBA32F
 #define VKRAY_BINDING_HITS 14        // storage buffer
-#define VKRAY_BINDING_COUNT 15
+// The ray-query traversal's top-level acceleration structure (VKRAY_SEARCH_RAY_QUERY): in its
+// pipelines' descriptor sets alone, the last binding.
+#define VKRAY_BINDING_TOP_STRUCTURE 15
+#define VKRAY_BINDING_COUNT 16
 
 // How the shader finds the nearest triangle or sphere (VKRAY_SPEC_SEARCH_MODE). Planes are
 // infinite: they stay outside the tree, in their own loop.
 #define VKRAY_SEARCH_BRUTE_FORCE 0  // every primitive in a loop; no tree (a handful of them)
 #define VKRAY_SEARCH_BVH_PER_RAY 1  // each ray walks the tree with its own stack
 #define VKRAY_SEARCH_BVH_PACKET 2   // a subgroup's camera rays walk the tree together (packet_walk.glsl)
+#define VKRAY_SEARCH_RAY_QUERY 3    // the device's acceleration structures (ray_query_walk.glsl)
 
 // The packet walk's pixels: each invocation traces a column of VKRAY_PACKET_ROWS pixels, and the
 // 64 invocations of a workgroup (8x8, in index order) cover VKRAY_PACKET_GROUP_WIDTH columns of

@@ -310,22 +310,4 @@ PrimitiveHit nearest_primitive_in_tree(RayFrame frame, Origin origin, real3 dir,
   return result;
 }
 
-// `counts`: RayGenParams.counts, read only by the generic variant.
-// With the tree, a handful of spheres beside many triangles are tested one by one first (see
-// make_gpu_scene): the tree's loop then holds the triangle test alone, and their nearest hit
-// bounds the walk.
-PrimitiveHit nearest_primitive(Origin origin, real3 dir, real t_max, uvec4 counts) {
-  RayFrame frame = make_ray_frame(dir);
-  uint search_mode = GENERIC ? counts.w : SEARCH_MODE;
-  uint sphere_count = GENERIC ? counts.x : SPHERE_COUNT;
-  if (search_mode == VKRAY_SEARCH_BRUTE_FORCE) {
-    return nearest_primitive_brute_force(frame, origin, dir, t_max, sphere_count, GENERIC ? counts.z : TRIANGLE_SLOTS);
-  }
-  PrimitiveHit sphere_hit = nearest_primitive_brute_force(frame, origin, dir, t_max, sphere_count, 0u);
-  PrimitiveHit tree_hit = nearest_primitive_in_tree(frame, origin, dir, sphere_hit.t);
-  if (tree_hit.t < sphere_hit.t) return tree_hit;
-  sphere_hit.unfinished = tree_hit.unfinished;
-  return sphere_hit;
-}
-
 #endif  // VKRAY_PRIMITIVES_GLSL

@@ -60,12 +60,39 @@ uint compact_even_bits(uint bits) {
   return (bits | (bits >> 2)) & 0x0fu;
 }
 
-#ifdef VKRAY_DOUBLE_EDGES
+#ifdef VKRAY_RAY_QUERY
+#include "ray_query_walk.glsl"
+#endif
+#if defined(VKRAY_DOUBLE_EDGES) && !defined(VKRAY_RAY_QUERY)
 #include "packet_walk.glsl"
 const bool PACKET_WALK = SEARCH_MODE == VKRAY_SEARCH_BVH_PACKET && !RAY_INPUT;
 #else
 const bool PACKET_WALK = false;
 #endif
+
+// `counts`: RayGenParams.counts, read only by the generic variant.
+// With the tree, a handful of spheres beside many triangles are tested one by one first (see
+// make_gpu_scene): the tree's loop then holds the triangle test alone, and their nearest hit
+// bounds the walk.
+PrimitiveHit nearest_primitive(Origin origin, real3 dir, real t_max, uvec4 counts) {
+  RayFrame frame = make_ray_frame(dir);
+  uint search_mode = GENERIC ? counts.w : SEARCH_MODE;
+  uint sphere_count = GENERIC ? counts.x : SPHERE_COUNT;
+  if (search_mode == VKRAY_SEARCH_BRUTE_FORCE) {
+    return nearest_primitive_brute_force(frame, origin, dir, t_max, sphere_count, GENERIC ? counts.z : TRIANGLE_SLOTS);
+  }
+  PrimitiveHit sphere_hit = nearest_primitive_brute_force(frame, origin, dir, t_max, sphere_count, 0u);
+#ifdef VKRAY_RAY_QUERY
+  PrimitiveHit tree_hit = nearest_primitive_ray_query(frame, origin, dir, sphere_hit.t);
+#else
+  PrimitiveHit tree_hit = nearest_primitive_in_tree(frame, origin, dir, sphere_hit.t);
+#endif
+  if (tree_hit.t < sphere_hit.t) return tree_hit;
+  sphere_hit.unfinished = tree_hit.unfinished;
+  return sphere_hit;
+}
+
+
 // The rays this invocation traces: one, or a column of a packet (see VKRAY_PACKET_ROWS).
 const uint RAYS = PACKET_WALK ? VKRAY_PACKET_ROWS : 1u;
 
@@ -195,7 +222,7 @@ void main() {
 
   // Spheres and triangles: each ray on its own, or the packet's rays together.
   PrimitiveHit hits[VKRAY_PACKET_ROWS];
-#ifdef VKRAY_DOUBLE_EDGES
+#if defined(VKRAY_DOUBLE_EDGES) && !defined(VKRAY_RAY_QUERY)
   if (PACKET_WALK) {
     // Spheres tested one by one (a handful beside the tree's triangles) bound each ray's walk.
     float t_max[VKRAY_PACKET_ROWS];

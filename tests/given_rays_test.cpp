@@ -51,11 +51,15 @@ void expect_given_rays_match_reference(const Scene& scene, RendererOptions optio
 
 // Spheres, planes and a mesh, in every search mode and both precisions. Given rays walk the tree per
 // ray, also in a renderer whose camera rays take the packet walk (which the float64 shader lacks).
+// Ray queries, where the device has them, in float32 (their only precision).
 TEST(GivenRays, DefaultSceneInEverySearchAndPrecision) {
   const Scene scene = sized(default_scene(), 64, 48);
-  for (const PrimitiveSearch search : {PrimitiveSearch::brute_force, PrimitiveSearch::bvh_per_ray, PrimitiveSearch::bvh_packet}) {
+  std::vector<PrimitiveSearch> searches = {PrimitiveSearch::brute_force, PrimitiveSearch::bvh_per_ray, PrimitiveSearch::bvh_packet};
+  if (ray_queries()) searches.push_back(PrimitiveSearch::ray_query);
+  for (const PrimitiveSearch search : searches) {
     for (const Precision precision : {Precision::float32, Precision::float64}) {
-      if (search == PrimitiveSearch::bvh_packet && precision == Precision::float64) continue;
+      const bool float32_only = search == PrimitiveSearch::bvh_packet || search == PrimitiveSearch::ray_query;
+      if (float32_only && precision == Precision::float64) continue;
       SCOPED_TRACE(testing::Message() << "search " << int(search) << ", precision " << int(precision));
       RendererOptions options;
       options.scene.search = search;

@@ -51,6 +51,15 @@ TEST_P(StiffCaseTest, DefaultWithinTheEnvelopeTextbookVariantNot) {
     const test::EnvelopeReport float_report = test::check_against_reference(stiff.scene, float_edges, row_step);
     EXPECT_EQ(float_report.failures, 0u) << "float-edges: " << float_report.describe();
   }
+  // The device's own structures propose the candidates; vkray's tests decide (ray_query_walk.glsl).
+  if (test::ray_queries() && (stiff.scene.triangle_count() > 0 || !stiff.scene.spheres.empty())) {
+    RendererOptions options;
+    options.scene.search = PrimitiveSearch::ray_query;
+    const Frame queried = render_with(stiff.scene, options);
+    const test::EnvelopeReport queried_report = test::check_against_reference(stiff.scene, queried, row_step);
+    EXPECT_EQ(queried_report.failures, 0u) << "ray queries: " << queried_report.describe();
+    std::printf("    ray queries: %s\n", queried_report.stats.summary().c_str());
+  }
 
   if (stiff.fails_with.empty()) {
     EXPECT_FALSE(stiff.why.empty()) << "a case no variant fails must say why";

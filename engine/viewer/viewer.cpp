@@ -21,6 +21,12 @@
 namespace vkray {
 namespace {
 
+RendererOptions renderer_options(const ViewerOptions& options) {
+  RendererOptions renderer;
+  renderer.scene.search = options.traversal;
+  return renderer;
+}
+
 using Clock = std::chrono::steady_clock;
 
 double seconds_since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
@@ -114,7 +120,7 @@ Viewer::Viewer(const ViewerOptions& options)
       presentation_(window_.presentation()),
       device_(options.device, presentation_, options.transfer),
       display_(device_.vulkan(), window_.create_surface(device_.vulkan().instance), options.vsync),
-      renderer_(std::make_unique<Renderer>(device_, scene_)),
+      renderer_(std::make_unique<Renderer>(device_, scene_, renderer_options(options))),
       preview_(device_.vulkan()) {
   if (options.on_device) options.on_device(device_.info());
   resize();
@@ -256,7 +262,7 @@ void Viewer::handle(const WindowInput& input, double dt) {
 void Viewer::reload() {
   try {
     Scene scene = options_.load_scene();
-    auto renderer = std::make_unique<Renderer>(device_, scene);
+    auto renderer = std::make_unique<Renderer>(device_, scene, renderer_options(options_));
     renderer_ = std::move(renderer);
     scene_ = std::move(scene);
     controller_.set_home(scene_.camera);

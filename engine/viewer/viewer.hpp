@@ -5,6 +5,7 @@
 #include "engine/camera.hpp"
 #include "engine/frame.hpp"
 #include "engine/gpu_device.hpp"
+#include "engine/gpu_scene.hpp"
 #include "engine/scene.hpp"
 
 #include <cstdint>
@@ -24,6 +25,7 @@ struct ViewerOptions {
   uint32_t width = 0, height = 0;  // the window's first size; 0: the scene's image size
   std::string device;              // as --device
   TransferMode transfer = TransferMode::automatic;
+  PrimitiveSearch traversal = PrimitiveSearch::automatic;  // as --traversal
   bool vsync = true;
   Aov output = Aov::depth;  // shown first; keys 1, 2, 3 switch
   bool overlay = true;

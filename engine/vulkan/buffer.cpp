@@ -33,7 +33,12 @@ GpuBuffer create_buffer(VulkanContext& context, vk::DeviceSize size, vk::BufferU
   result.buffer = vk::raii::Buffer(context.device, vk::BufferCreateInfo({}, size, usage));
   const vk::MemoryRequirements requirements = result.buffer.getMemoryRequirements();
   const uint32_t type = find_memory_type(context, requirements.memoryTypeBits, required, preferred);
-  result.memory = vk::raii::DeviceMemory(context.device, vk::MemoryAllocateInfo(requirements.size, type));
+  // Buffers the device finds by address (acceleration structures and what builds them) need memory
+  // allocated for that.
+  const vk::MemoryAllocateFlagsInfo addressable(vk::MemoryAllocateFlagBits::eDeviceAddress);
+  const bool by_address = static_cast<bool>(usage & vk::BufferUsageFlagBits::eShaderDeviceAddress);
+  result.memory = vk::raii::DeviceMemory(context.device,
+                                         vk::MemoryAllocateInfo(requirements.size, type, by_address ? &addressable : nullptr));
   result.buffer.bindMemory(*result.memory, 0);
   const bool host_visible = (context.memory_properties.memoryTypes[type].propertyFlags & host_access) == host_access;
   if (host_visible && (side == Side::host || !context.staging)) {
@@ -47,6 +52,14 @@ GpuBuffer create_buffer(VulkanContext& context, vk::DeviceSize size, vk::BufferU
 GpuBuffer create_storage_buffer(VulkanContext& context, vk::DeviceSize size, vk::BufferUsageFlags extra_usage) {
   return create_buffer(context, size, vk::BufferUsageFlagBits::eStorageBuffer | extra_usage, {},
                        vk::MemoryPropertyFlagBits::eDeviceLocal, Side::device);
+}
+
+vk::DeviceAddress device_address(const VulkanContext& context, const GpuBuffer& buffer) {
+  return context.device.getBufferAddress(vk::BufferDeviceAddressInfo(*buffer.buffer));
+}
+
+GpuBuffer create_device_buffer(VulkanContext& context, vk::DeviceSize size, vk::BufferUsageFlags usage) {
+  return create_buffer(context, size, usage, {}, vk::MemoryPropertyFlagBits::eDeviceLocal, Side::device);
 }
 
 GpuBuffer create_readback_buffer(VulkanContext& context, vk::DeviceSize size) {

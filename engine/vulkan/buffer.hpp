@@ -23,6 +23,13 @@ uint32_t find_memory_type(const VulkanContext& context, uint32_t type_bits, vk::
 // buffer is mapped, so uploads and readbacks skip the staging copy; with staging it never is.
 GpuBuffer create_storage_buffer(VulkanContext& context, vk::DeviceSize size, vk::BufferUsageFlags extra_usage = {});
 
+// A buffer in device-local memory where the device has it, for `usage`, mapped as storage buffers
+// are (for the acceleration structures and the buffers that build them).
+GpuBuffer create_device_buffer(VulkanContext& context, vk::DeviceSize size, vk::BufferUsageFlags usage);
+
+// The device address of a buffer made with eShaderDeviceAddress usage.
+vk::DeviceAddress device_address(const VulkanContext& context, const GpuBuffer& buffer);
+
 // A host-visible, coherent buffer (cached where possible) to copy results into for reading.
 GpuBuffer create_readback_buffer(VulkanContext& context, vk::DeviceSize size);
 

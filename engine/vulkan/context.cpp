@@ -159,6 +159,31 @@ bool main_memory_is_host_visible(const vk::PhysicalDeviceMemoryProperties& memor
   return false;
 }
 
+bool has_device_extension(const vk::raii::PhysicalDevice& physical_device, std::string_view name) {
+  const auto extensions = physical_device.enumerateDeviceExtensionProperties();
+  return std::any_of(extensions.begin(), extensions.end(),
+                     [&](const vk::ExtensionProperties& extension) { return extension.extensionName.data() == name; });
+}
+
+// The device extensions the ray-query traversal takes, and whether the device has each feature it
+// needs: checked, not assumed, so that a device without them walks vkray's own tree.
+constexpr const char* ray_query_extensions[] = {VK_KHR_ACCELERATION_STRUCTURE_EXTENSION_NAME,
+                                                VK_KHR_RAY_QUERY_EXTENSION_NAME,
+                                                VK_KHR_DEFERRED_HOST_OPERATIONS_EXTENSION_NAME};
+
+bool has_ray_queries(const vk::raii::PhysicalDevice& physical_device) {
+  if (physical_device.getProperties().apiVersion < VK_API_VERSION_1_2) return false;
+  for (const char* name : ray_query_extensions) {
+    if (!has_device_extension(physical_device, name)) return false;
+  }
+  const auto features = physical_device.getFeatures2<vk::PhysicalDeviceFeatures2, vk::PhysicalDeviceVulkan12Features,
+                                                     vk::PhysicalDeviceAccelerationStructureFeaturesKHR,
+                                                     vk::PhysicalDeviceRayQueryFeaturesKHR>();
+  return features.get<vk::PhysicalDeviceVulkan12Features>().bufferDeviceAddress &&
+         features.get<vk::PhysicalDeviceAccelerationStructureFeaturesKHR>().accelerationStructure &&
+         features.get<vk::PhysicalDeviceRayQueryFeaturesKHR>().rayQuery;
+}
+
 GpuDeviceInfo describe(const vk::raii::PhysicalDevice& physical_device) {
   const auto chain = physical_device.getProperties2<vk::PhysicalDeviceProperties2, vk::PhysicalDeviceSubgroupProperties,
                                                     vk::PhysicalDeviceMaintenance3Properties>();
@@ -214,6 +239,14 @@ GpuDeviceInfo describe(const vk::raii::PhysicalDevice& physical_device) {
   info.can_compute = family != UINT32_MAX && subgroup_operations;
   if (!info.can_compute) info.unusable_reason = "no compute queue, or no subgroup vote, ballot, arithmetic and shuffle";
   info.favours_packet_walk = llvmpipe && mesa_major >= 25 && info.subgroup_size == 8;
+  info.ray_query = has_ray_queries(physical_device);
+  if (info.ray_query) {
+    const auto structures = physical_device
+                                .getProperties2<vk::PhysicalDeviceProperties2, vk::PhysicalDeviceAccelerationStructurePropertiesKHR>()
+                                .get<vk::PhysicalDeviceAccelerationStructurePropertiesKHR>();
+    info.max_structure_primitives = structures.maxPrimitiveCount;
+    info.structure_scratch_alignment = structures.minAccelerationStructureScratchOffsetAlignment;
+  }
   if (info.can_compute && physical_device.getQueueFamilyProperties()[family].timestampValidBits > 0) {
     info.timestamp_period_ns = limits.timestampPeriod;
   }
@@ -312,11 +345,6 @@ TransferMode resolve_transfer(TransferMode requested, const vk::PhysicalDeviceMe
   return main_memory_is_host_visible(memory) ? TransferMode::direct : TransferMode::staging;
 }
 
-bool has_device_extension(const vk::raii::PhysicalDevice& physical_device, std::string_view name) {
-  const auto extensions = physical_device.enumerateDeviceExtensionProperties();
-  return std::any_of(extensions.begin(), extensions.end(),
-                     [&](const vk::ExtensionProperties& extension) { return extension.extensionName.data() == name; });
-}
 
 void open_device(VulkanContext& vk_context, std::string_view name_filter, const PresentationSupport* presentation,
                  TransferMode transfer) {
@@ -363,11 +391,26 @@ void open_device(VulkanContext& vk_context, std::string_view name_filter, const 
     if (has_device_extension(vk_context.physical_device, "VK_KHR_portability_subset")) {
       device_extensions.push_back("VK_KHR_portability_subset");
     }
-    // float64 arithmetic, where the device has it, for the `--precision double` shader.
-    vk::PhysicalDeviceFeatures features;
-    features.shaderFloat64 = vk_context.physical_device.getFeatures().shaderFloat64;
-    vk_context.device = vk::raii::Device(vk_context.physical_device,
-                                         vk::DeviceCreateInfo({}, queue_info, {}, device_extensions, &features));
+    // float64 arithmetic, where the device has it, for the `--precision double` shader; ray queries
+    // where it has them, for the ray-query traversal.
+    vk::StructureChain<vk::PhysicalDeviceFeatures2, vk::PhysicalDeviceVulkan12Features,
+                       vk::PhysicalDeviceAccelerationStructureFeaturesKHR, vk::PhysicalDeviceRayQueryFeaturesKHR>
+        features;
+    features.get<vk::PhysicalDeviceFeatures2>().features.shaderFloat64 = vk_context.physical_device.getFeatures().shaderFloat64;
+    if (vk_context.info.ray_query) {
+      device_extensions.insert(device_extensions.end(), std::begin(ray_query_extensions), std::end(ray_query_extensions));
+      features.get<vk::PhysicalDeviceVulkan12Features>().bufferDeviceAddress = VK_TRUE;
+      features.get<vk::PhysicalDeviceAccelerationStructureFeaturesKHR>().accelerationStructure = VK_TRUE;
+      features.get<vk::PhysicalDeviceRayQueryFeaturesKHR>().rayQuery = VK_TRUE;
+    } else {
+      features.unlink<vk::PhysicalDeviceAccelerationStructureFeaturesKHR>();
+      features.unlink<vk::PhysicalDeviceRayQueryFeaturesKHR>();
+      // Vulkan 1.1 devices know no Vulkan12Features structure.
+      features.unlink<vk::PhysicalDeviceVulkan12Features>();
+    }
+    vk_context.device = vk::raii::Device(
+        vk_context.physical_device,
+        vk::DeviceCreateInfo({}, queue_info, {}, device_extensions, nullptr, &features.get<vk::PhysicalDeviceFeatures2>()));
     vk_context.queue = vk::raii::Queue(vk_context.device, vk_context.queue_family, 0);
     vk_context.command_pool = vk::raii::CommandPool(
         vk_context.device, vk::CommandPoolCreateInfo(vk::CommandPoolCreateFlagBits::eTransient, vk_context.queue_family));

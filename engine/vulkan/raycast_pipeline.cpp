@@ -2,6 +2,8 @@
 
 #include "raycast.comp.VKRAY_DOUBLE_EDGES.spv.h"
 #include "raycast.comp.VKRAY_FLOAT64.spv.h"
+#include "raycast.comp.VKRAY_RAY_QUERY.VKRAY_DOUBLE_EDGES.spv.h"
+#include "raycast.comp.VKRAY_RAY_QUERY.spv.h"
 #include "raycast.comp.VKRAY_STORAGE_GEOMETRY.VKRAY_DOUBLE_EDGES.spv.h"
 #include "raycast.comp.VKRAY_STORAGE_GEOMETRY.spv.h"
 #include "raycast.comp.spv.h"
@@ -17,10 +19,10 @@ EdgeArithmetic resolve_edges(const GpuDeviceInfo& device, EdgeArithmetic request
 
 RaycastPipeline::RaycastPipeline(VulkanContext& context, PipelineSpecialization specialization)
     : context_(context), specialization_(specialization) {
-  std::array<vk::DescriptorSetLayoutBinding, VKRAY_BINDING_COUNT> bindings;
+  std::vector<vk::DescriptorSetLayoutBinding> bindings;
   std::map<vk::DescriptorType, uint32_t> descriptors;  // of each type
-  for (uint32_t i = 0; i < bindings.size(); ++i) {
-    bindings[i] = vk::DescriptorSetLayoutBinding(i, binding_type(i), 1, vk::ShaderStageFlagBits::eCompute);
+  for (uint32_t i = 0; i < binding_count(); ++i) {
+    bindings.emplace_back(i, binding_type(i), 1, vk::ShaderStageFlagBits::eCompute);
     ++descriptors[binding_type(i)];
   }
   set_layout_ = vk::raii::DescriptorSetLayout(context.device, vk::DescriptorSetLayoutCreateInfo({}, bindings));
@@ -38,11 +40,17 @@ RaycastPipeline::RaycastPipeline(VulkanContext& context, PipelineSpecialization 
   if (float64 && specialization.variant.storage_geometry) {
     throw std::invalid_argument("storage-buffer geometry exists for float32 shaders only");
   }
+  if (ray_query() && (float64 || specialization.variant.storage_geometry || specialization.variant.generic)) {
+    throw GpuError("the ray-query traversal exists for the float32 shader, with texel buffers, specialized");
+  }
   auto module = [&](const auto& spirv) {
     return vk::raii::ShaderModule(context.device, vk::ShaderModuleCreateInfo({}, sizeof(spirv), spirv));
   };
   const bool storage = specialization.variant.storage_geometry;
-  if (float64) {
+  if (ray_query()) {
+    shader_ = edges == EdgeArithmetic::double_products ? module(raycast_comp_VKRAY_RAY_QUERY_VKRAY_DOUBLE_EDGES)
+                                                       : module(raycast_comp_VKRAY_RAY_QUERY);
+  } else if (float64) {
     shader_ = module(raycast_comp_VKRAY_FLOAT64);
   } else if (edges == EdgeArithmetic::double_products) {
     shader_ = storage ? module(raycast_comp_VKRAY_STORAGE_GEOMETRY_VKRAY_DOUBLE_EDGES) : module(raycast_comp_VKRAY_DOUBLE_EDGES);
@@ -98,8 +106,16 @@ const vk::raii::Pipeline& RaycastPipeline::pipeline(AovSet aovs, bool lo_parts, 
   return entry->second;
 }
 
+bool RaycastPipeline::ray_query() const { return specialization_.search_mode == VKRAY_SEARCH_RAY_QUERY; }
+
+uint32_t RaycastPipeline::binding_count() const {
+  return ray_query() ? VKRAY_BINDING_COUNT : VKRAY_BINDING_TOP_STRUCTURE;
+}
+
 vk::DescriptorType RaycastPipeline::binding_type(uint32_t binding) const {
   switch (binding) {
+    case VKRAY_BINDING_TOP_STRUCTURE:
+      return vk::DescriptorType::eAccelerationStructureKHR;
     case VKRAY_BINDING_DEPTH:
     case VKRAY_BINDING_NORMAL:
     case VKRAY_BINDING_UV:
@@ -118,10 +134,14 @@ vk::DescriptorType RaycastPipeline::binding_type(uint32_t binding) const {
 void RaycastPipeline::bind_resources(const Resources& resources) {
   std::array<vk::DescriptorBufferInfo, VKRAY_BINDING_COUNT> buffer_infos;
   std::array<vk::DescriptorImageInfo, VKRAY_BINDING_COUNT> image_infos;
-  std::array<vk::WriteDescriptorSet, VKRAY_BINDING_COUNT> writes;
-  for (uint32_t i = 0; i < VKRAY_BINDING_COUNT; ++i) {
+  std::vector<vk::WriteDescriptorSet> writes(binding_count());
+  const vk::WriteDescriptorSetAccelerationStructureKHR top_structure(resources.top_structure);
+  for (uint32_t i = 0; i < binding_count(); ++i) {
     writes[i] = vk::WriteDescriptorSet(*set_, i, 0, 1, binding_type(i));
     switch (binding_type(i)) {
+      case vk::DescriptorType::eAccelerationStructureKHR:
+        writes[i].setPNext(&top_structure);
+        break;
       case vk::DescriptorType::eStorageBuffer:
         buffer_infos[i] = vk::DescriptorBufferInfo(resources.buffers[i], 0, VK_WHOLE_SIZE);
         writes[i].setPBufferInfo(&buffer_infos[i]);

@@ -53,10 +53,14 @@ class RaycastPipeline {
     std::array<vk::Buffer, VKRAY_BINDING_COUNT> buffers;
     std::array<vk::BufferView, VKRAY_BINDING_COUNT> texel_views;
     std::array<vk::ImageView, VKRAY_BINDING_COUNT> images;
+    vk::AccelerationStructureKHR top_structure;  // the ray-query traversal's
   };
   // The descriptor type of each binding (see gpu_layout.h): geometry as texel or storage buffers,
   // as the variant reads it.
   vk::DescriptorType binding_type(uint32_t binding) const;
+  // The ray-query traversal's pipelines have one binding more: its top-level structure.
+  bool ray_query() const;
+  uint32_t binding_count() const;
   // Points every binding of the descriptor set at its resource.
   void bind_resources(const Resources& resources);
 

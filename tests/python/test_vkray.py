@@ -357,6 +357,25 @@ def test_double_precision_casts_rays_in_double():
     assert vkray.Renderer(scene, precision="double").cast_rays(np.zeros((0, 6)))["t"].dtype == np.float64
 
 
+@pytest.mark.parametrize("traversal", ["brute-force", "per-ray", "packet", "ray-query"])
+def test_each_traversal_matches_the_command_lines_exr(tmp_path, traversal):
+    scene = vkray.load("", 48, 36)
+    try:
+        renderer = vkray.Renderer(scene, traversal=traversal)
+    except vkray.Error as error:
+        # Only a device without ray queries may refuse, and not lavapipe where the suite requires
+        # them (tests/CMakeLists.txt; the Mesa that cmake/install-deps.sh installs has them).
+        assert traversal == "ray-query" and "has no ray queries" in str(error)
+        assert not ("VKRAY_REQUIRE_RAY_QUERY" in os.environ and "llvmpipe" in str(error)), str(error)
+        pytest.skip(str(error))
+    expect_same_as_cli(renderer.render(), cli_render(tmp_path, "", 48, 36, "--traversal", traversal))
+
+
+def test_an_unknown_traversal_raises_value_error():
+    with pytest.raises(ValueError, match="traversal: one of auto, brute-force, per-ray, packet, ray-query, got 'bvh'"):
+        vkray.Renderer(vkray.load("", 8, 8), traversal="bvh")
+
+
 def test_mesh_ids_count_meshes_then_spheres_then_planes():
     triangle = np.array([[-0.5, -0.5, 0], [0.5, -0.5, 0], [0, 0.5, 0]])
     meshes = [{"vertices": triangle + [4 * k, 0, 0], "triangles": [[0, 1, 2], [0, 2, 1]]} for k in range(2)]

@@ -1,0 +1,66 @@
+// The ray-query traversal (VKRAY_SEARCH_RAY_QUERY): the device walks its own acceleration
+// structures (GL_EXT_ray_query; ray-tracing hardware where the GPU has it) and hands every
+// candidate it finds to this shader, which tests the candidate itself with vkray's watertight
+// triangle test or its sphere test on the camera-relative positions. The device's float32
+// arithmetic on anchor-relative positions only proposes; depth and normal are vkray's, with the
+// default's error contract, except at edges, where the device's own tests decide what is
+// proposed (see below). A triangle the device's test misses is never proposed: docs/accuracy.md
+// measures how often that changes a pixel.
+// Compiled into the modules with VKRAY_RAY_QUERY (SPIR-V 1.4 and up, Vulkan 1.2).
+#ifndef VKRAY_RAY_QUERY_WALK_GLSL
+#define VKRAY_RAY_QUERY_WALK_GLSL
+
+#extension GL_EXT_ray_query : require
+
+#include "gpu_layout.h"
+#include "primitives.glsl"  // test_primitive, primitive_normal
+
+layout(binding = VKRAY_BINDING_TOP_STRUCTURE) uniform accelerationStructureEXT top_structure;
+
+PrimitiveHit nearest_primitive_ray_query(RayFrame frame, Origin origin, vec3 dir, float t_max) {
+  SlotHit hit = SlotHit(t_max, no_primitive);
+  bool unfinished = false;
+  rayQueryEXT query;
+  // The structures hold the hi parts of positions relative to the anchor, as float32: the query's
+  // ray starts at the origin rounded to them. Its far end stays finite (3.4e38 for no hit yet).
+  rayQueryInitializeEXT(query, top_structure, gl_RayFlagsNoneEXT, 0xffu, origin.hi + origin.lo, 0.0, dir,
+                        min(t_max, 3.4e38));
+  uint iterations = 0;
+  while (rayQueryProceedEXT(query)) {
+    if (LOOP_BUDGET > 0 && iterations == LOOP_BUDGET) {
+      unfinished = true;
+      rayQueryTerminateEXT(query);
+      break;
+    }
+    ++iterations;
+    // The instance carries its structure's first slot (engine/vulkan/acceleration_structures.hpp).
+    uint slot = uint(rayQueryGetIntersectionInstanceCustomIndexEXT(query, false)) +
+                uint(rayQueryGetIntersectionPrimitiveIndexEXT(query, false));
+    float before = hit.t;
+    test_primitive(frame, origin, dir, slot, hit);
+    const bool triangle = rayQueryGetIntersectionTypeEXT(query, false) == gl_RayQueryCandidateIntersectionTriangleEXT;
+    if (triangle && hit.t == before) {
+      // The device's triangle test hit what vkray's rejects: the ray passes within rounding of an
+      // edge. At an edge shared with a triangle vkray's test would take, the device may never
+      // propose that one (its own tie-break, or none: lavapipe's is not watertight), so the
+      // proposal is taken at the device's distance, one rounding away from the shared edge's
+      // point; a pixel there lies on the boundary the error envelope allows either side of.
+      const float device_t = rayQueryGetIntersectionTEXT(query, false);
+      if (device_t < hit.t) hit = SlotHit(device_t, slot);
+    }
+    if (hit.t < before) {
+      // Committing it lets the device cull what lies beyond: at its own distance for a triangle,
+      // at vkray's for a sphere's box.
+      if (triangle) {
+        rayQueryConfirmIntersectionEXT(query);
+      } else {
+        rayQueryGenerateIntersectionEXT(query, hit.t);
+      }
+    }
+  }
+  PrimitiveHit result = PrimitiveHit(hit.t, vec3(0.0), unfinished, hit.slot);
+  if (hit.slot != no_primitive) result.normal = primitive_normal(hit.slot, origin, dir);
+  return result;
+}
+
+#endif  // VKRAY_RAY_QUERY_WALK_GLSL
