@@ -43,6 +43,9 @@ Action add_info_command(CLI::App& app) {
               << (d.ray_query ? "yes (--traversal ray-query)" : "no") << '\n'
               << "  tree walk                  "
               << (d.favours_packet_walk ? "packets of 8x8 camera rays (llvmpipe from Mesa 25 on)" : "per ray") << '\n';
+    const std::filesystem::path cache = pipeline_cache_folder();
+    std::cout << "  pipeline cache folder      "
+              << (cache.empty() ? std::string("none (VKRAY_CACHE_DIR=off)") : cache.string()) << '\n';
     print_cpu_device_note(d);
     const GeometryLayout layout;
     std::cout << "\ngeometry on the device, bytes (render --timings gives a scene's bytes a triangle)\n"

@@ -183,6 +183,7 @@ int run_render(const RenderOptions& options) {
   double reference_ms = 0.0;
   double device_ms = 0.0, device_wait_ms = 0.0, upload_ms = 0.0, render_ms = 0.0;
   std::string device_name = "CPU reference (double precision)";
+  std::string pipeline_cache;  // what --timings says of the device's pipeline cache
   bool staging = false;
   std::optional<std::vector<ReferenceHit>> reference_hits;
   auto reference = [&]() -> const std::vector<ReferenceHit>& {
@@ -204,6 +205,10 @@ int run_render(const RenderOptions& options) {
     GpuDevice& device = *opened.device;
     device_name = device.info().name;
     staging = device.transfer() == TransferMode::staging;
+    pipeline_cache = device.pipeline_cache_file().empty()
+                         ? std::string("none (VKRAY_CACHE_DIR=off, or no home folder)")
+                         : std::to_string(device.pipeline_cache_bytes_read()) + " bytes read from " +
+                               device.pipeline_cache_file().string();
     print_cpu_device_note(device.info());
     device_ms = opened.open_ms;
     device_wait_ms = stopwatch.lap_ms();
@@ -294,6 +299,7 @@ int run_render(const RenderOptions& options) {
       }
       std::printf("\n");
     }
+    if (!pipeline_cache.empty()) std::printf("pipeline cache: %s\n", pipeline_cache.c_str());
     std::printf("peak host memory: %.1f MiB\n", static_cast<double>(peak_host_memory_bytes()) / (1 << 20));
   }
   return 0;

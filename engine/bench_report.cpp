@@ -1,5 +1,7 @@
 #include "engine/bench_report.hpp"
 
+#include "engine/fnv1a.hpp"
+
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
@@ -88,16 +90,6 @@ std::string csv_quoted(const std::string& text) {
   return quoted + "\"";
 }
 
-struct Fnv1a {
-  uint64_t hash = 0xcbf29ce484222325ull;
-  void add_bytes(const void* data, size_t bytes) {
-    const auto* p = static_cast<const unsigned char*>(data);
-    for (size_t i = 0; i < bytes; ++i) hash = (hash ^ p[i]) * 0x100000001b3ull;
-  }
-  void add(double value) { add_bytes(&value, sizeof value); }
-  void add(const glm::dvec3& v) { add(v.x), add(v.y), add(v.z); }
-  void add(uint64_t value) { add_bytes(&value, sizeof value); }
-};
 
 std::string format(const char* pattern, auto... values) {
   char line[512];

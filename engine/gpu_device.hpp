@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstdint>
+#include <filesystem>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -93,6 +94,11 @@ size_t choose_gpu_device(const std::vector<GpuDeviceInfo>& devices, std::string_
 // the graphics capability). Empty for any other device.
 std::string cpu_device_note(const GpuDeviceInfo& device);
 
+// Where pipelines compiled by the driver are kept between runs (engine/vulkan/pipeline_cache.hpp):
+// VKRAY_CACHE_DIR when set ("off": nowhere), else $XDG_CACHE_HOME/vkray, else $HOME/.cache/vkray
+// (the XDG base directory rule); empty when none can be named.
+std::filesystem::path pipeline_cache_folder();
+
 struct VulkanContext;        // engine/vulkan/context.hpp
 struct PresentationSupport;  // engine/vulkan/context.hpp
 
@@ -113,6 +119,10 @@ class GpuDevice {
   // staging or direct, as chosen when the device opened.
   TransferMode transfer() const;
   VulkanContext& vulkan() { return *context_; }
+  // The device's pipeline cache file (empty: none), and how many bytes of it the driver was given
+  // when the device opened (0: every pipeline is compiled from scratch).
+  std::filesystem::path pipeline_cache_file() const;
+  size_t pipeline_cache_bytes_read() const;
 
  private:
   std::unique_ptr<VulkanContext> context_;

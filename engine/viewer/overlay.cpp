@@ -34,11 +34,13 @@ Overlay::Overlay(VulkanContext& context, GLFWwindow* window, vk::RenderPass pass
     info.QueueFamily = context.queue_family;
     info.Queue = *context.queue;
     info.DescriptorPool = *pool_;
+    info.PipelineCache = *context.pipeline_cache->handle();
     info.MinImageCount = min_images;
     info.ImageCount = images;
     info.MSAASamples = VK_SAMPLE_COUNT_1_BIT;
     info.CheckVkResultFn = check_imgui_vulkan;
     ImGui_ImplVulkan_Init(&info, pass);
+    context.pipeline_cache->save();
     context.submit_and_wait([](const vk::raii::CommandBuffer& commands) { ImGui_ImplVulkan_CreateFontsTexture(*commands); });
     ImGui_ImplVulkan_DestroyFontUploadObjects();
   });

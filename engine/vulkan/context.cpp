@@ -418,6 +418,8 @@ void open_device(VulkanContext& vk_context, std::string_view name_filter, const 
         vk_context.device,
         vk::CommandBufferAllocateInfo(*vk_context.command_pool, vk::CommandBufferLevel::ePrimary, 1))[0]);
     vk_context.fence = vk::raii::Fence(vk_context.device, vk::FenceCreateInfo());
+    vk_context.pipeline_cache = std::make_unique<PipelineCache>(
+        vk_context.device, vk_context.physical_device.getProperties(), pipeline_cache_folder());
   });
 }
 
@@ -437,5 +439,9 @@ TransferMode GpuDevice::transfer() const { return context_->staging ? TransferMo
 GpuDevice::~GpuDevice() = default;
 
 const GpuDeviceInfo& GpuDevice::info() const { return context_->info; }
+
+std::filesystem::path GpuDevice::pipeline_cache_file() const { return context_->pipeline_cache->file(); }
+
+size_t GpuDevice::pipeline_cache_bytes_read() const { return context_->pipeline_cache->bytes_read(); }
 
 }  // namespace vkray

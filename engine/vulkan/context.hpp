@@ -3,10 +3,12 @@
 #pragma once
 
 #include "engine/gpu_device.hpp"
+#include "engine/vulkan/pipeline_cache.hpp"
 
 #include <vulkan/vulkan_raii.hpp>
 
 #include <functional>
+#include <memory>
 #include <vector>
 
 namespace vkray {
@@ -37,6 +39,8 @@ struct VulkanContext {
   vk::raii::CommandPool command_pool{nullptr};
   vk::raii::CommandBuffer command_buffer{nullptr};
   vk::raii::Fence fence{nullptr};
+  // Every pipeline is made with it, and saves it (engine/vulkan/pipeline_cache.hpp).
+  std::unique_ptr<PipelineCache> pipeline_cache;
 
   // Records commands into the context's command buffer, submits them and waits for completion.
   void submit_and_wait(const std::function<void(const vk::raii::CommandBuffer&)>& record);

@@ -40,7 +40,9 @@ PreviewPass::PreviewPass(VulkanContext& context) : context_(context) {
     layout_ = vk::raii::PipelineLayout(context_.device, vk::PipelineLayoutCreateInfo({}, set_layout, push_range));
     const vk::raii::ShaderModule shader(context_.device, vk::ShaderModuleCreateInfo({}, sizeof(preview_comp), preview_comp));
     const vk::PipelineShaderStageCreateInfo stage({}, vk::ShaderStageFlagBits::eCompute, *shader, "main");
-    pipeline_ = vk::raii::Pipeline(context_.device, nullptr, vk::ComputePipelineCreateInfo({}, stage, *layout_));
+    pipeline_ = vk::raii::Pipeline(context_.device, context_.pipeline_cache->handle(),
+                                   vk::ComputePipelineCreateInfo({}, stage, *layout_));
+    context_.pipeline_cache->save();
     const std::array pool_sizes{vk::DescriptorPoolSize(vk::DescriptorType::eStorageImage, 2),
                                 vk::DescriptorPoolSize(vk::DescriptorType::eUniformBuffer, 1)};
     pool_ = vk::raii::DescriptorPool(

@@ -101,7 +101,9 @@ const vk::raii::Pipeline& RaycastPipeline::pipeline(AovSet aovs, bool lo_parts, 
   const vk::SpecializationInfo specialization(entries, vk::ArrayProxyNoTemporaries<const uint32_t>(values));
   const vk::PipelineShaderStageCreateInfo stage({}, vk::ShaderStageFlagBits::eCompute, *shader_, "main", &specialization);
   auto [entry, inserted] = pipelines_.emplace(
-      key, vk::raii::Pipeline(context_.device, nullptr, vk::ComputePipelineCreateInfo({}, stage, *layout_)));
+      key, vk::raii::Pipeline(context_.device, context_.pipeline_cache->handle(),
+                              vk::ComputePipelineCreateInfo({}, stage, *layout_)));
+  context_.pipeline_cache->save();
   created_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   return entry->second;
 }
