@@ -1,6 +1,6 @@
 // Every vkray command the README shows in a ```sh block runs and exits 0, in the README's order,
-// in a temporary copy of the layout the README assumes (build/vkray, ../shared/models, docs/, a
-// scene.json made of the README's own scene example). So an option renamed, removed or misspelt in
+// in a temporary copy of the layout the README assumes (build/vkray, ../shared/models, docs/ with
+// its bench scenes, a scene.json made of the README's own scene example). So an option renamed, removed or misspelt in
 // the README fails here. To keep the suite short, image sizes are cut to 64x36 and the bench to one
 // frame: what this checks is that each command is accepted and works, not the figures beside it
 // (those come from the commands as printed, re-run by hand). `view` commands run under xvfb-run for
@@ -96,6 +96,8 @@ TEST_F(ReadmeExamplesTest, EveryVkrayCommandRuns) {
   const fs::path repo = dir_ / "repo";
   fs::create_directories(repo / "build");
   fs::create_directories(repo / "docs");
+  // The bench's scene files, which name the models as ../../../shared/models from there.
+  fs::copy(readme_path.parent_path() / "docs" / "bench-scenes", repo / "docs" / "bench-scenes");
   fs::create_directories(repo / "models");
   fs::create_directories(dir_ / "shared");
   fs::create_symlink(VKRAY_BINARY, repo / "build" / "vkray");
