@@ -2,10 +2,10 @@
 #include "cli/device_options.hpp"
 #include "cli/progress.hpp"
 #include "cli/scene_argument.hpp"
-#include "engine/accuracy_report.hpp"
-#include "engine/bench.hpp"
-#include "engine/bench_plot.hpp"
-#include "engine/bench_report.hpp"
+#include "engine/bench/accuracy_report.hpp"
+#include "engine/bench/bench.hpp"
+#include "engine/bench/bench_plot.hpp"
+#include "engine/bench/bench_report.hpp"
 #include "engine/image_io.hpp"
 
 #include <unistd.h>

@@ -1,6 +1,6 @@
 // Choices compiled into the ray-casting shader that trade accuracy, generality or memory order for
 // time. The defaults are what vkray renders with; the others exist so that `vkray bench` can show,
-// measured, what each choice buys (engine/bench.cpp).
+// measured, what each choice buys (engine/bench/bench.cpp).
 #pragma once
 
 #include "shaders/gpu_layout.h"

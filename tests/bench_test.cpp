@@ -1,7 +1,7 @@
 // The bench's figures: error metrics on synthetic image pairs with known answers, the Pareto front,
 // the report's JSON (round trip, errors), CSV and comparison, scene hashes and suites. Host only.
-#include "engine/accuracy_report.hpp"
-#include "engine/bench_report.hpp"
+#include "engine/bench/accuracy_report.hpp"
+#include "engine/bench/bench_report.hpp"
 #include "engine/reference.hpp"
 #include "tests/temp_dir_test.hpp"
 

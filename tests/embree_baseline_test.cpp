@@ -1,7 +1,7 @@
 // The Embree baseline traces the same rays as vkray: its answers agree with the double-precision
 // reference up to float32 rounding, so the bench compares times of the same work.
 #include "engine/compare.hpp"
-#include "engine/embree_baseline.hpp"
+#include "engine/bench/embree_baseline.hpp"
 #include "engine/mesh_generators.hpp"
 #include "engine/reference.hpp"
 #include "engine/scene_loader.hpp"

@@ -1,8 +1,8 @@
 // The shader variants the bench compares (engine/shader_variant.hpp): those that must not change a
 // single bit (workgroup shape and order, the generic pipeline) do not, and the precision variants
 // differ from the defaults where the numerical analysis says they must.
-#include "engine/bench.hpp"
-#include "engine/bench_suites.hpp"
+#include "engine/bench/bench.hpp"
+#include "engine/bench/bench_suites.hpp"
 #include "engine/scene_loader.hpp"
 #include "tests/gpu_test_support.hpp"
 

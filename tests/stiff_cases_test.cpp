@@ -1,9 +1,9 @@
-// The numerically hard cases (engine/stiff_cases.hpp), each a test: the default shader writes no
+// The numerically hard cases (engine/bench/stiff_cases.hpp), each a test: the default shader writes no
 // NaN and stays within the reference envelope (tests/reference_envelope.cpp) on every pixel; the
 // textbook variant the case is about (StiffCase::fails_with) leaves it, so the test would notice
 // the fix being undone. Cases no variant fails say why in StiffCase::why.
-#include "engine/bench.hpp"
-#include "engine/stiff_cases.hpp"
+#include "engine/bench/bench.hpp"
+#include "engine/bench/stiff_cases.hpp"
 #include "tests/gpu_test_support.hpp"
 
 #include <cmath>

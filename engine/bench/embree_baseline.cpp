@@ -1,4 +1,4 @@
-#include "engine/embree_baseline.hpp"
+#include "engine/bench/embree_baseline.hpp"
 
 #include "engine/camera.hpp"
 #include "engine/gpu_scene.hpp"

@@ -1,9 +1,9 @@
-#include "engine/bench_suites.hpp"
+#include "engine/bench/bench_suites.hpp"
 
 #include "engine/framing.hpp"
 #include "engine/mesh_generators.hpp"
 #include "engine/scene_loader.hpp"
-#include "engine/stiff_cases.hpp"
+#include "engine/bench/stiff_cases.hpp"
 
 #include <algorithm>
 
@@ -61,7 +61,7 @@ std::vector<BenchScene> scaling_suite(uint32_t width, uint32_t height) {
   return scenes;
 }
 
-// The numerically hard cases (engine/stiff_cases.hpp).
+// The numerically hard cases (engine/bench/stiff_cases.hpp).
 std::vector<BenchScene> stiff_suite(uint32_t width, uint32_t height) {
   std::vector<BenchScene> scenes;
   for (auto& stiff : stiff_cases(width, height)) scenes.push_back({std::move(stiff.name), std::move(stiff.scene)});

@@ -1,4 +1,4 @@
-#include "engine/bench_report.hpp"
+#include "engine/bench/bench_report.hpp"
 
 #include "engine/fnv1a.hpp"
 

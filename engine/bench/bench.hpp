@@ -3,7 +3,7 @@
 // run; Embree on the CPU is timed on the same rays as a baseline.
 #pragma once
 
-#include "engine/bench_suites.hpp"
+#include "engine/bench/bench_suites.hpp"
 #include "engine/compare.hpp"
 #include "engine/gpu_device.hpp"
 #include "engine/renderer.hpp"

@@ -15,7 +15,7 @@ struct StiffCase {
   std::string name;
   std::string what;  // one line: what is hard about it
   Scene scene;       // at the size asked for, unless the size is the point of the case
-  // The `vkray bench` variant (engine/bench.cpp) that leaves the envelope on this case: the
+  // The `vkray bench` variant (engine/bench/bench.cpp) that leaves the envelope on this case: the
   // textbook choice the default replaces. Empty where no variant does; `why` then says why.
   std::string fails_with;
   std::string why;

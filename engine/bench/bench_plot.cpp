@@ -1,4 +1,4 @@
-#include "engine/bench_plot.hpp"
+#include "engine/bench/bench_plot.hpp"
 
 #include <spawn.h>
 #include <sys/wait.h>

@@ -23,7 +23,7 @@ inline constexpr const char* accuracy_model = "stanford-bunny.obj";
 // The scenes of one suite at width x height:
 // - basic: the built-in scene, one sphere, spheres on a ground plane, a closed mesh;
 // - scaling: closed meshes of 1k to 4M triangles, sphere fields of 1 to 10k spheres;
-// - stiff: the numerically hard cases of engine/stiff_cases.hpp (cases about image sizes keep
+// - stiff: the numerically hard cases of engine/bench/stiff_cases.hpp (cases about image sizes keep
 //   theirs);
 // - accuracy: the stiff cases, then the basic suite and the Stanford bunny (accuracy_model, when
 //   `models_dir` has it): what docs/accuracy.md tabulates;

@@ -1,4 +1,4 @@
-// The plot of a bench report (engine/bench_plot.py, run with the system's python3 and matplotlib).
+// The plot of a bench report (engine/bench/bench_plot.py, run with the system's python3 and matplotlib).
 #pragma once
 
 #include <filesystem>

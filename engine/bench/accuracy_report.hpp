@@ -2,7 +2,7 @@
 // scenes, written from a bench report (`vkray bench --suite accuracy --markdown FILE`), never typed.
 #pragma once
 
-#include "engine/bench_report.hpp"
+#include "engine/bench/bench_report.hpp"
 
 #include <string>
 

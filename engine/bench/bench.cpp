@@ -1,7 +1,7 @@
-#include "engine/bench.hpp"
+#include "engine/bench/bench.hpp"
 
-#include "engine/bench_report.hpp"
-#include "engine/embree_baseline.hpp"
+#include "engine/bench/bench_report.hpp"
+#include "engine/bench/embree_baseline.hpp"
 #include "engine/image_io.hpp"
 #include "engine/views/view_batch.hpp"
 #include "engine/views/view_list.hpp"

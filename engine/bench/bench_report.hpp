@@ -3,7 +3,7 @@
 // in this one file so the schema cannot drift between them.
 #pragma once
 
-#include "engine/bench.hpp"
+#include "engine/bench/bench.hpp"
 
 #include <filesystem>
 #include <string>

@@ -1,6 +1,6 @@
-#include "engine/accuracy_report.hpp"
+#include "engine/bench/accuracy_report.hpp"
 
-#include "engine/stiff_cases.hpp"
+#include "engine/bench/stiff_cases.hpp"
 
 #include <algorithm>
 #include <cstdarg>
@@ -100,7 +100,7 @@ std::string accuracy_markdown(const BenchReport& report, const std::string& comm
           "pixels where one says hit and the other miss. **depth**: relative error |z - z_ref| / z_ref; **ulp**: "
           "the same in float32 ulps of z_ref (a correctly rounded float32 is within 0.5). **normal**: angle in "
           "degrees, atan2(|n x m|, n.m) in double. **ms/frame**: median GPU time. The stiff cases are "
-          "engine/stiff_cases.cpp; each is also a test (tests/stiff_cases_test.cpp) that holds the default to the "
+          "engine/bench/stiff_cases.cpp; each is also a test (tests/stiff_cases_test.cpp) that holds the default to the "
           "error envelope of tests/reference_envelope.cpp and, where a textbook variant is named, shows that "
           "variant leaving it.\n\n";
 

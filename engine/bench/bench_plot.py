@@ -4,7 +4,7 @@ log-log, one panel per scene, one colour per variant; rows on the Pareto front (
 flips, depth p99, normal p99) are ringed in black and joined by a dashed line.
 
 vkray runs this itself for `vkray bench --plot OUT.png`; by hand:
-    python3 engine/bench_plot.py BENCH.json OUT.png
+    python3 engine/bench/bench_plot.py BENCH.json OUT.png
 Needs Debian's python3-matplotlib.
 """
 import json

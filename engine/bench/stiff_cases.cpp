@@ -1,4 +1,4 @@
-#include "engine/stiff_cases.hpp"
+#include "engine/bench/stiff_cases.hpp"
 
 #include "engine/camera.hpp"
 #include "engine/framing.hpp"
