@@ -4,7 +4,7 @@
 #include "engine/gpu_device.hpp"
 #include "engine/image_io.hpp"
 #include "engine/nearest_name.hpp"
-#include "engine/scene.hpp"
+#include "engine/scene/scene.hpp"
 
 #include <unistd.h>
 

@@ -8,8 +8,8 @@
 #include "engine/image_io.hpp"
 #include "engine/reference.hpp"
 #include "engine/renderer.hpp"
-#include "engine/scene_loader.hpp"
-#include "engine/scene_or_model.hpp"
+#include "engine/scene/scene_loader.hpp"
+#include "engine/scene/scene_or_model.hpp"
 
 #include <algorithm>
 #include <cctype>

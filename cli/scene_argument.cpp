@@ -1,8 +1,8 @@
 #include "cli/scene_argument.hpp"
 
 #include "engine/nearest_name.hpp"
-#include "engine/scene_loader.hpp"
-#include "engine/scene_or_model.hpp"
+#include "engine/scene/scene_loader.hpp"
+#include "engine/scene/scene_or_model.hpp"
 
 #include <glm/geometric.hpp>
 

@@ -1,7 +1,7 @@
 // What a user names on the command line: the scene to render and the camera to render it with.
 #pragma once
 
-#include "engine/scene.hpp"
+#include "engine/scene/scene.hpp"
 
 #include <optional>
 #include <string>

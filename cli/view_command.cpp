@@ -1,7 +1,7 @@
 #include "cli/commands.hpp"
 #include "cli/device_options.hpp"
 #include "cli/scene_argument.hpp"
-#include "engine/scene_or_model.hpp"
+#include "engine/scene/scene_or_model.hpp"
 #include "engine/image_io.hpp"
 #include "engine/viewer/viewer.hpp"
 

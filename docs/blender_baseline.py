@@ -9,7 +9,7 @@
 # from above), each to OUT with "#####" standing for k zero-padded (out/view-#####.exr). Cycles
 # keeps its scene between them (persistent data): Blender's fastest way to render many views.
 #
-# The framing repeats engine/framing.cpp: the centre of the vertices' bounding box, the radius of
+# The framing repeats engine/scene/framing.cpp: the centre of the vertices' bounding box, the radius of
 # the farthest vertex from it, seen from the direction (0, 0.25, 1), up +y, 40 degrees across the
 # shorter side, at the distance where that sphere touches the shorter borders. The model keeps its
 # own coordinates (the importer's axes set to Blender's own), so the camera is vkray's.

@@ -2,8 +2,8 @@
 #pragma once
 
 #include "engine/bvh.hpp"
-#include "engine/camera.hpp"
-#include "engine/scene.hpp"
+#include "engine/scene/camera.hpp"
+#include "engine/scene/scene.hpp"
 #include "engine/shader_variant.hpp"
 #include "shaders/gpu_layout.h"
 

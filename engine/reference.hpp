@@ -5,9 +5,9 @@
 #pragma once
 
 #include "engine/bvh.hpp"
-#include "engine/camera.hpp"
+#include "engine/scene/camera.hpp"
 #include "engine/frame.hpp"
-#include "engine/scene.hpp"
+#include "engine/scene/scene.hpp"
 
 #include <glm/vec3.hpp>
 

@@ -1,6 +1,6 @@
 #include "engine/renderer.hpp"
 
-#include "engine/camera.hpp"
+#include "engine/scene/camera.hpp"
 #include "engine/gpu_scene.hpp"
 #include "engine/parallel.hpp"
 #include "engine/reference.hpp"

@@ -6,7 +6,7 @@
 #include "engine/gpu_device.hpp"
 #include "engine/gpu_scene.hpp"
 #include "engine/image_target.hpp"
-#include "engine/scene.hpp"
+#include "engine/scene/scene.hpp"
 #include "engine/shader_variant.hpp"
 
 #include <array>

@@ -2,12 +2,12 @@
 // it converts arguments and results and maps errors; scenes are checked, rendered and traced by the
 // engine. Bad input raises ValueError (the engine's InputError, with its one-line message), device
 // failures vkray.Error. The GIL is released while the engine works.
-#include "engine/framing.hpp"
+#include "engine/scene/framing.hpp"
 #include "engine/gpu_device.hpp"
 #include "engine/reference.hpp"
 #include "engine/renderer.hpp"
-#include "engine/scene_loader.hpp"
-#include "engine/scene_or_model.hpp"
+#include "engine/scene/scene_loader.hpp"
+#include "engine/scene/scene_or_model.hpp"
 
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>

@@ -3,7 +3,7 @@
 // generated soups, the shared models, the flat alligator face-on and edge-on, and a closed mesh of
 // a million triangles seen from inside: every pixel within the error envelope, every ray finished
 // by the GPU itself, and the walks hit exactly where brute force over every triangle hits.
-#include "engine/mesh_generators.hpp"
+#include "engine/scene/mesh_generators.hpp"
 #include "engine/reference.hpp"
 #include "tests/gpu_test_support.hpp"
 

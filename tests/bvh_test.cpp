@@ -3,8 +3,8 @@
 // shader's stack), and the double-precision reference finds, through its tree, exactly what brute
 // force over every triangle finds: the same triangle and the same bits of t on every pixel.
 #include "engine/bvh.hpp"
-#include "engine/camera.hpp"
-#include "engine/mesh_generators.hpp"
+#include "engine/scene/camera.hpp"
+#include "engine/scene/mesh_generators.hpp"
 #include "engine/reference.hpp"
 #include "shaders/gpu_layout.h"
 #include "tests/test_scenes.hpp"

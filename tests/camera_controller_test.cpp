@@ -16,7 +16,7 @@ const Camera course_camera{{0, 1.8, 6}, {0, 0.7, 0}, {0, 1, 0}, 45};
 
 bool finite(const glm::dvec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
 
-// Image-plane coordinates where `point` appears, through the camera model of engine/camera.hpp.
+// Image-plane coordinates where `point` appears, through the camera model of engine/scene/camera.hpp.
 glm::dvec2 project(const Camera& camera, const glm::dvec3& point, uint32_t width, uint32_t height) {
   const CameraBasis basis = make_camera_basis(camera, width, height);
   const glm::dvec3 offset = point - basis.origin;

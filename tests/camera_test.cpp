@@ -1,5 +1,5 @@
-// The course's image-plane and camera model (engine/camera.hpp) against hand-computed values.
-#include "engine/camera.hpp"
+// The course's image-plane and camera model (engine/scene/camera.hpp) against hand-computed values.
+#include "engine/scene/camera.hpp"
 
 #include <glm/geometric.hpp>
 #include <gtest/gtest.h>

@@ -2,9 +2,9 @@
 // reference up to float32 rounding, so the bench compares times of the same work.
 #include "engine/compare.hpp"
 #include "engine/bench/embree_baseline.hpp"
-#include "engine/mesh_generators.hpp"
+#include "engine/scene/mesh_generators.hpp"
 #include "engine/reference.hpp"
-#include "engine/scene_loader.hpp"
+#include "engine/scene/scene_loader.hpp"
 
 #include <gtest/gtest.h>
 

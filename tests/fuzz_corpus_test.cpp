@@ -1,8 +1,8 @@
 // Every input in the fuzzers' corpus (tests/fuzz/corpus: seeds, and each finding of a fuzz run,
 // added there as a regression test) goes through the loaders in the ordinary suite too: it must be
 // accepted or rejected with InputError, nothing else.
-#include "engine/obj_loader.hpp"
-#include "engine/scene_loader.hpp"
+#include "engine/scene/obj_loader.hpp"
+#include "engine/scene/scene_loader.hpp"
 
 #include <gtest/gtest.h>
 

@@ -2,9 +2,9 @@
 // pixel rays, given one by one, must land in the same error envelope as the camera's image (their
 // float32 directions are rounded once, inside the camera path's bound) and hit the same object and
 // primitive as the reference wherever that is stable under the envelope's perturbations.
-#include "engine/camera.hpp"
+#include "engine/scene/camera.hpp"
 #include "engine/renderer.hpp"
-#include "engine/scene_loader.hpp"
+#include "engine/scene/scene_loader.hpp"
 #include "tests/gpu_test_support.hpp"
 
 #include <gtest/gtest.h>

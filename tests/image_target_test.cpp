@@ -5,7 +5,7 @@
 #include "engine/image_target.hpp"
 #include "engine/preview.hpp"
 #include "engine/renderer.hpp"
-#include "engine/scene_loader.hpp"
+#include "engine/scene/scene_loader.hpp"
 #include "engine/vulkan/context.hpp"
 #include "engine/vulkan/preview_pass.hpp"
 #include "tests/gpu_test_support.hpp"

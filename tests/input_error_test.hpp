@@ -2,7 +2,7 @@
 // message is one line naming the file and the place.
 #pragma once
 
-#include "engine/scene.hpp"
+#include "engine/scene/scene.hpp"
 
 #include <gtest/gtest.h>
 

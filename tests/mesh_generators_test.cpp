@@ -1,7 +1,7 @@
 // The generated meshes are what they claim: the sphere is closed and outward-facing at every size,
 // the soups stay in their box with the promised mix of hard cases, and the same arguments give the
 // same bits (the random mapping is our own, not the standard library's).
-#include "engine/mesh_generators.hpp"
+#include "engine/scene/mesh_generators.hpp"
 
 #include <glm/geometric.hpp>
 #include <gtest/gtest.h>

@@ -3,8 +3,8 @@
 // line, and the truncated Crytek Sponza is reported with its line. When the folder is absent (it is
 // never part of the repository), the tests skip.
 #include "engine/gpu_scene.hpp"
-#include "engine/mesh_generators.hpp"
-#include "engine/obj_loader.hpp"
+#include "engine/scene/mesh_generators.hpp"
+#include "engine/scene/obj_loader.hpp"
 
 #include <glm/common.hpp>
 #include <gtest/gtest.h>

@@ -2,7 +2,7 @@
 // name the file and the line for every malformed input.
 #include "tests/input_error_test.hpp"
 #include "tests/temp_dir_test.hpp"
-#include "engine/obj_loader.hpp"
+#include "engine/scene/obj_loader.hpp"
 
 #include <gtest/gtest.h>
 #include <glm/geometric.hpp>

@@ -2,7 +2,7 @@
 // device reads what the first saved, that damaged or foreign files are ignored and replaced, that
 // a folder it cannot write costs nothing, and that processes saving at once leave one whole file.
 #include "engine/fnv1a.hpp"
-#include "engine/scene_loader.hpp"
+#include "engine/scene/scene_loader.hpp"
 #include "tests/gpu_test_support.hpp"
 #include "tests/temp_dir_test.hpp"
 

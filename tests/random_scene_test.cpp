@@ -9,7 +9,7 @@
 // cannot hold both (ulp 1e-3 at 1e4); positions split into hi and lo parts, relative to the camera,
 // can: their ~48 bits cover the eight decades and float32's seven below the smallest primitive.
 // Sixteen decades per primitive would need more than 48 bits.
-#include "engine/mesh_generators.hpp"
+#include "engine/scene/mesh_generators.hpp"
 #include "tests/gpu_test_support.hpp"
 
 #include <glm/geometric.hpp>

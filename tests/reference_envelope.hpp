@@ -4,7 +4,7 @@
 
 #include "engine/compare.hpp"
 #include "engine/frame.hpp"
-#include "engine/scene.hpp"
+#include "engine/scene/scene.hpp"
 
 #include <string>
 #include <vector>

@@ -3,8 +3,8 @@
 // and mesh transforms applied in the order scale -> rotate -> translate.
 #include "tests/input_error_test.hpp"
 #include "tests/temp_dir_test.hpp"
-#include "engine/obj_loader.hpp"
-#include "engine/scene_loader.hpp"
+#include "engine/scene/obj_loader.hpp"
+#include "engine/scene/scene_loader.hpp"
 
 #include <gtest/gtest.h>
 

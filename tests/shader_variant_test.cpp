@@ -3,7 +3,7 @@
 // differ from the defaults where the numerical analysis says they must.
 #include "engine/bench/bench.hpp"
 #include "engine/bench/bench_suites.hpp"
-#include "engine/scene_loader.hpp"
+#include "engine/scene/scene_loader.hpp"
 #include "tests/gpu_test_support.hpp"
 
 #include <cstring>

@@ -3,9 +3,9 @@
 #pragma once
 
 #include "engine/bvh.hpp"
-#include "engine/mesh_generators.hpp"
-#include "engine/obj_loader.hpp"
-#include "engine/scene.hpp"
+#include "engine/scene/mesh_generators.hpp"
+#include "engine/scene/obj_loader.hpp"
+#include "engine/scene/scene.hpp"
 
 #include <glm/common.hpp>
 #include <glm/geometric.hpp>

@@ -1,6 +1,6 @@
 // Many views, the parts the command line builds on (engine/views): views files, output names with
 // the view's index, the manifest's records and their merging, and the generated cameras.
-#include "engine/camera.hpp"
+#include "engine/scene/camera.hpp"
 #include "engine/views/manifest.hpp"
 #include "engine/views/output_pattern.hpp"
 #include "engine/views/view_list.hpp"

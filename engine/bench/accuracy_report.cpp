@@ -108,7 +108,7 @@ std::string accuracy_markdown(const BenchReport& report, const std::string& comm
   text += format("Goals: no NaN, depth p99 within %.0f float32 ulps, normal p99 within %.2f degrees; the float64 "
                  "shader within %.0e relative depth. A float32 shader starts from a float32 ray, whose rounding "
                  "alone moves the hit: the columns *float32 ray* trace the GPU's rounded ray directions in double "
-                 "(engine/camera.hpp, float32_ray_direction). Where that alone exceeds a goal (grazing planes, "
+                 "(engine/scene/camera.hpp, float32_ray_direction). Where that alone exceeds a goal (grazing planes, "
                  "horizons, silhouettes, where the hit moves by the direction's error over cos(theta)), a case "
                  "meets it when the shader adds no more than the goal on top.\n\n",
                  accuracy_goal_depth_ulps, accuracy_goal_normal_deg, accuracy_goal_float64_depth);

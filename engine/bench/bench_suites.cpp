@@ -1,8 +1,8 @@
 #include "engine/bench/bench_suites.hpp"
 
-#include "engine/framing.hpp"
-#include "engine/mesh_generators.hpp"
-#include "engine/scene_loader.hpp"
+#include "engine/scene/framing.hpp"
+#include "engine/scene/mesh_generators.hpp"
+#include "engine/scene/scene_loader.hpp"
 #include "engine/bench/stiff_cases.hpp"
 
 #include <algorithm>

@@ -2,7 +2,7 @@
 // runs, on two machines, time the same geometry: their scene hashes match (bench_report.hpp).
 #pragma once
 
-#include "engine/scene.hpp"
+#include "engine/scene/scene.hpp"
 
 #include <filesystem>
 #include <string>

@@ -1,6 +1,6 @@
 #include "engine/bench/embree_baseline.hpp"
 
-#include "engine/camera.hpp"
+#include "engine/scene/camera.hpp"
 #include "engine/gpu_scene.hpp"
 #include "engine/reference.hpp"
 #include "engine/unit_vector.hpp"

@@ -3,7 +3,7 @@
 #pragma once
 
 #include "engine/frame.hpp"
-#include "engine/scene.hpp"
+#include "engine/scene/scene.hpp"
 #include "engine/statistics.hpp"
 
 #include <cstdint>

@@ -1,9 +1,9 @@
 #include "engine/bench/stiff_cases.hpp"
 
-#include "engine/camera.hpp"
-#include "engine/framing.hpp"
-#include "engine/mesh_generators.hpp"
-#include "engine/scene_loader.hpp"
+#include "engine/scene/camera.hpp"
+#include "engine/scene/framing.hpp"
+#include "engine/scene/mesh_generators.hpp"
+#include "engine/scene/scene_loader.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -156,7 +156,7 @@ void add_translations(std::vector<StiffCase>& cases, uint32_t width, uint32_t he
 
 void add_vertical_cameras(std::vector<StiffCase>& cases, uint32_t width, uint32_t height) {
   const std::string why =
-      "the camera frame is built once, in double, on the host (engine/camera.cpp), for every variant; the course "
+      "the camera frame is built once, in double, on the host (engine/scene/camera.cpp), for every variant; the course "
       "formula without its fallback gives NaN (tests/camera_test.cpp)";
   Scene up = empty_scene(width, height);
   up.spheres = make_sphere_field(50, 3, {glm::dvec3(-3.0, 4.0, -3.0), glm::dvec3(3.0, 8.0, 3.0)});

@@ -4,7 +4,7 @@
 // them (vkray bench --suite accuracy --markdown docs/accuracy.md).
 #pragma once
 
-#include "engine/scene.hpp"
+#include "engine/scene/scene.hpp"
 
 #include <string>
 #include <vector>

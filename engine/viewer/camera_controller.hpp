@@ -2,7 +2,7 @@
 // device, so every move is unit-tested (tests/camera_controller_test.cpp).
 #pragma once
 
-#include "engine/camera.hpp"
+#include "engine/scene/camera.hpp"
 
 #include <string>
 

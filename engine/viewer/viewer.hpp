@@ -2,11 +2,11 @@
 // camera moved by mouse and keys. No Vulkan or GLFW type appears here: the CLI calls run_viewer.
 #pragma once
 
-#include "engine/camera.hpp"
+#include "engine/scene/camera.hpp"
 #include "engine/frame.hpp"
 #include "engine/gpu_device.hpp"
 #include "engine/gpu_scene.hpp"
-#include "engine/scene.hpp"
+#include "engine/scene/scene.hpp"
 
 #include <cstdint>
 #include <filesystem>

@@ -1,7 +1,7 @@
 #include "engine/views/manifest.hpp"
 
 #include "engine/image_io.hpp"
-#include "engine/scene.hpp"
+#include "engine/scene/scene.hpp"
 
 #include <fcntl.h>
 #include <unistd.h>

@@ -7,10 +7,10 @@
 //    "world_to_camera": [[...], [...], [...], [0, 0, 0, 1]]}
 //
 // "png" only where previews are written; file names relative to the manifest's folder; intrinsics
-// and world_to_camera in OpenCV's pinhole convention (engine/camera.hpp, README "Many views").
+// and world_to_camera in OpenCV's pinhole convention (engine/scene/camera.hpp, README "Many views").
 #pragma once
 
-#include "engine/camera.hpp"
+#include "engine/scene/camera.hpp"
 
 #include <cstdint>
 #include <filesystem>

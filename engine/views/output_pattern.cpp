@@ -1,6 +1,6 @@
 #include "engine/views/output_pattern.hpp"
 
-#include "engine/scene.hpp"
+#include "engine/scene/scene.hpp"
 
 #include <cstdio>
 

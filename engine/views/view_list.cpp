@@ -1,6 +1,6 @@
 #include "engine/views/view_list.hpp"
 
-#include "engine/scene_loader.hpp"
+#include "engine/scene/scene_loader.hpp"
 
 #include <glm/geometric.hpp>
 #include <nlohmann/json.hpp>

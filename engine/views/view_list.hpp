@@ -1,7 +1,7 @@
 // Many views of one scene (`vkray render --views/--orbit/--sphere`): where their cameras come from.
 #pragma once
 
-#include "engine/scene.hpp"
+#include "engine/scene/scene.hpp"
 
 #include <cstdint>
 #include <filesystem>

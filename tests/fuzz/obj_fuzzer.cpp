@@ -1,7 +1,7 @@
 // libFuzzer target: the OBJ loader on arbitrary bytes. Bad input must end in InputError; any other
 // exception, a crash, a hang or a sanitizer report is a finding. An accepted mesh must keep the
 // loader's promises: finite positions within the coordinate bound, indices in range.
-#include "engine/obj_loader.hpp"
+#include "engine/scene/obj_loader.hpp"
 
 #include <cmath>
 #include <cstdint>

@@ -2,8 +2,8 @@
 // line, exit 2); any other exception, a crash, a hang or a sanitizer report is a finding. OBJ
 // files a scene names are served from one fixed in-memory cube, so the fuzzer reaches the transform
 // code without touching the disk.
-#include "engine/obj_loader.hpp"
-#include "engine/scene_loader.hpp"
+#include "engine/scene/obj_loader.hpp"
+#include "engine/scene/scene_loader.hpp"
 
 #include <cstdint>
 #include <cstdlib>

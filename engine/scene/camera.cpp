@@ -1,4 +1,4 @@
-#include "engine/camera.hpp"
+#include "engine/scene/camera.hpp"
 
 #include "engine/unit_vector.hpp"
 

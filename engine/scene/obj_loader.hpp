@@ -5,7 +5,7 @@
 // else tinyobjloader parses the file again to triangulate its polygons.
 #pragma once
 
-#include "engine/scene.hpp"
+#include "engine/scene/scene.hpp"
 
 #include <filesystem>
 #include <string>

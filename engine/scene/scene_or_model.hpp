@@ -2,7 +2,7 @@
 // command line and Python's vkray.load take it.
 #pragma once
 
-#include "engine/scene.hpp"
+#include "engine/scene/scene.hpp"
 
 #include <filesystem>
 #include <optional>
@@ -14,7 +14,7 @@ namespace vkray {
 std::string lower_extension(const std::filesystem::path& path);
 
 // A scene file (.json), or a model (.obj) alone in a scene with a camera that frames it
-// (engine/framing.hpp); the built-in scene for an empty path. `width`/`height` override the image
+// (engine/scene/framing.hpp); the built-in scene for an empty path. `width`/`height` override the image
 // size, and the framing is done at the final size. Throws InputError naming the file.
 Scene load_scene_or_model(const std::filesystem::path& path, std::optional<uint32_t> width = {},
                           std::optional<uint32_t> height = {});

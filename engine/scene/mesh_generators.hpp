@@ -5,7 +5,7 @@
 #pragma once
 
 #include "engine/bvh.hpp"
-#include "engine/scene.hpp"
+#include "engine/scene/scene.hpp"
 
 #include <cstddef>
 #include <cstdint>

@@ -1,7 +1,7 @@
-#include "engine/scene_or_model.hpp"
+#include "engine/scene/scene_or_model.hpp"
 
-#include "engine/framing.hpp"
-#include "engine/scene_loader.hpp"
+#include "engine/scene/framing.hpp"
+#include "engine/scene/scene_loader.hpp"
 
 #include <algorithm>
 #include <cctype>

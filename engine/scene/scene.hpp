@@ -2,7 +2,7 @@
 // layout happens once, relative to an anchor point, in gpu_scene.cpp.
 #pragma once
 
-#include "engine/camera.hpp"
+#include "engine/scene/camera.hpp"
 
 #include <glm/vec3.hpp>
 

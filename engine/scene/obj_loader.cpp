@@ -1,4 +1,4 @@
-#include "engine/obj_loader.hpp"
+#include "engine/scene/obj_loader.hpp"
 
 #include <tiny_obj_loader.h>
 

@@ -1,4 +1,4 @@
-#include "engine/scene.hpp"
+#include "engine/scene/scene.hpp"
 
 #include "engine/unit_vector.hpp"
 

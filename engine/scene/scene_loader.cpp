@@ -1,7 +1,7 @@
-#include "engine/scene_loader.hpp"
+#include "engine/scene/scene_loader.hpp"
 
 #include "engine/nearest_name.hpp"
-#include "engine/obj_loader.hpp"
+#include "engine/scene/obj_loader.hpp"
 #include "engine/unit_vector.hpp"
 
 #include <glm/geometric.hpp>

@@ -1,7 +1,7 @@
 // A camera for a scene nobody wrote a camera for: `vkray render MODEL.obj` and the bench's models.
 #pragma once
 
-#include "engine/scene.hpp"
+#include "engine/scene/scene.hpp"
 
 #include <filesystem>
 

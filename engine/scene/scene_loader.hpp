@@ -3,7 +3,7 @@
 // must be > 0, got -1".
 #pragma once
 
-#include "engine/scene.hpp"
+#include "engine/scene/scene.hpp"
 
 #include <filesystem>
 #include <functional>

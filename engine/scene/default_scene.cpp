@@ -1,7 +1,7 @@
 // The built-in course scene. It is written as a scene file and an OBJ file and goes through the
 // same loaders as user files, so `vkray render` with no arguments exercises the whole input path.
-#include "engine/obj_loader.hpp"
-#include "engine/scene_loader.hpp"
+#include "engine/scene/obj_loader.hpp"
+#include "engine/scene/scene_loader.hpp"
 
 namespace vkray {
 namespace {

@@ -1,6 +1,6 @@
-#include "engine/framing.hpp"
+#include "engine/scene/framing.hpp"
 
-#include "engine/obj_loader.hpp"
+#include "engine/scene/obj_loader.hpp"
 #include "engine/unit_vector.hpp"
 
 #include <glm/geometric.hpp>
@@ -43,7 +43,7 @@ Scene load_model_file(const std::filesystem::path& path) {
   Scene scene;
   scene.meshes.push_back(load_obj_file(path));
   if (scene.meshes[0].triangles.empty()) throw InputError(path.string() + ": no faces to render");
-  // The same bound a scene file's meshes get (engine/scene.hpp, max_coordinate).
+  // The same bound a scene file's meshes get (engine/scene/scene.hpp, max_coordinate).
   const auto& positions = scene.meshes[0].positions;
   for (size_t i = 0; i < positions.size(); ++i) {
     const glm::dvec3& p = positions[i];

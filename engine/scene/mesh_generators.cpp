@@ -1,4 +1,4 @@
-#include "engine/mesh_generators.hpp"
+#include "engine/scene/mesh_generators.hpp"
 
 #include <glm/common.hpp>
 #include <glm/geometric.hpp>
