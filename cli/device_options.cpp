@@ -1,6 +1,6 @@
 #include "cli/device_options.hpp"
 
-#include "engine/gpu_scene.hpp"
+#include "engine/render/gpu_scene.hpp"
 
 #include <cstdio>
 

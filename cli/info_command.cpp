@@ -1,7 +1,7 @@
 #include "cli/commands.hpp"
 #include "cli/device_options.hpp"
 #include "engine/gpu_device.hpp"
-#include "engine/gpu_scene.hpp"
+#include "engine/render/gpu_scene.hpp"
 
 #include <iostream>
 #include <memory>

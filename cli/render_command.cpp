@@ -7,7 +7,7 @@
 #include "engine/host_memory.hpp"
 #include "engine/image_io.hpp"
 #include "engine/reference.hpp"
-#include "engine/renderer.hpp"
+#include "engine/render/renderer.hpp"
 #include "engine/scene/scene_loader.hpp"
 #include "engine/scene/scene_or_model.hpp"
 

@@ -2,7 +2,7 @@
 // to its timings (render --check) and the tests' summary statistics.
 #pragma once
 
-#include "engine/frame.hpp"
+#include "engine/render/frame.hpp"
 #include "engine/reference.hpp"
 
 #include <string>

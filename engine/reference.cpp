@@ -34,7 +34,7 @@ double intersect_sphere(const glm::dvec3& f, double radius, const glm::dvec3& di
 }
 
 // In double the plane's point is subtracted first, which keeps large world coordinates exact; the
-// GPU receives the offset relative to the scene anchor instead (engine/gpu_scene.cpp).
+// GPU receives the offset relative to the scene anchor instead (engine/render/gpu_scene.cpp).
 double intersect_plane(const glm::dvec3& normal, const glm::dvec3& point, const glm::dvec3& origin,
                        const glm::dvec3& dir, double t_max) {
   const double denom = glm::dot(normal, dir);

@@ -5,7 +5,7 @@
 #include "engine/scene/framing.hpp"
 #include "engine/gpu_device.hpp"
 #include "engine/reference.hpp"
-#include "engine/renderer.hpp"
+#include "engine/render/renderer.hpp"
 #include "engine/scene/scene_loader.hpp"
 #include "engine/scene/scene_or_model.hpp"
 

@@ -79,12 +79,12 @@ using uvec4 = glm::uvec4;
 // Iterations the tree walk of one ray may take; 0: unlimited. llvmpipe (lavapipe) silently ends
 // every loop of a shader invocation after 65535 iterations in total (LP_MAX_TGSI_LOOP_ITERATIONS);
 // a ray that would need more stops at this budget instead, lists its pixel in the overflow
-// buffer, and the host finishes that pixel (see engine/renderer.cpp): no geometry goes missing.
+// buffer, and the host finishes that pixel (see engine/render/renderer.cpp): no geometry goes missing.
 #define VKRAY_SPEC_LOOP_BUDGET 7
 #define VKRAY_SPEC_TREE_HAS_TRIANGLES 8
 #define VKRAY_SPEC_TREE_HAS_SPHERES 9
 // Variants that trade error or generality for time, so `vkray bench` can show what each choice buys;
-// the defaults are what vkray renders with (engine/shader_variant.hpp).
+// the defaults are what vkray renders with (engine/render/shader_variant.hpp).
 #define VKRAY_SPEC_SPHERE_FORMULA 10        // VKRAY_SPHERE_*
 #define VKRAY_SPEC_TRIANGLE_TEST 11         // VKRAY_TRIANGLE_*
 #define VKRAY_SPEC_WORKGROUP_X 12           // local_size_x
@@ -95,7 +95,7 @@ using uvec4 = glm::uvec4;
 #define VKRAY_SPEC_GENERIC 15
 #define VKRAY_SPEC_COORDINATES 16           // VKRAY_COORDINATES_* (float32 shaders)
 // Camera-relative coordinates add the lo parts of positions only while the camera is near the
-// scene (engine/gpu_scene.cpp, needs_lo_parts): two pipelines, chosen per render, since on lavapipe
+// scene (engine/render/gpu_scene.cpp, needs_lo_parts): two pipelines, chosen per render, since on lavapipe
 // a run-time branch costs as much as the code it skips.
 #define VKRAY_SPEC_LO_PARTS 17
 // Write the one requested output into the storage image (VKRAY_BINDING_IMAGE) rather than buffers.
@@ -124,7 +124,7 @@ using uvec4 = glm::uvec4;
 #define VKRAY_COORDINATES_ABSOLUTE 2        // hi parts alone, anchor at the world origin: plain float32
 
 // Positions. Every position on the GPU is stored relative to the scene's anchor (the centre of its
-// box; see engine/gpu_scene.cpp) as a GpuPoint: the position and one more number in two texels. How
+// box; see engine/render/gpu_scene.cpp) as a GpuPoint: the position and one more number in two texels. How
 // the shader reads them depends on its precision:
 // - float32 shaders: `first` is the position (xyz, w) rounded to float ("hi"), `second` what that
 //   rounding left out, rounded to float ("lo"): together ~48 significant bits. The camera comes in

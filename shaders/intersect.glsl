@@ -365,7 +365,7 @@ real intersect_triangle(RayFrame frame, real3 dir, real3 v0, real3 v1, real3 v2,
 // 1 / dir, with components below 1e-37 in magnitude (in practice: exactly 0, a ray parallel to a
 // slab) replaced by the largest float of the same sign: never the NaN of 0 * inf (GLSL's min and
 // max are undefined on NaN), and the slab interval is still right. Box faces lie at least
-// VKRAY_BOX_MARGIN from anything inside (engine/gpu_scene.cpp), so when the origin is inside the
+// VKRAY_BOX_MARGIN from anything inside (engine/render/gpu_scene.cpp), so when the origin is inside the
 // slab both ends are at least 1e-20 * 3.4e38 away, beyond any hit (coordinates stay within 1e15);
 // when it lies outside, the interval is empty or starts beyond any hit; and a ray exactly in the
 // plane of a face can meet nothing in the box.

@@ -3,7 +3,7 @@
 // float32 directions are rounded once, inside the camera path's bound) and hit the same object and
 // primitive as the reference wherever that is stable under the envelope's perturbations.
 #include "engine/scene/camera.hpp"
-#include "engine/renderer.hpp"
+#include "engine/render/renderer.hpp"
 #include "engine/scene/scene_loader.hpp"
 #include "tests/gpu_test_support.hpp"
 

@@ -1,7 +1,7 @@
 // GPU output against the double-precision reference, pixel by pixel, on lavapipe (or any device).
 #include "engine/scene/camera.hpp"
 #include "engine/scene/obj_loader.hpp"
-#include "engine/renderer.hpp"
+#include "engine/render/renderer.hpp"
 #include "engine/scene/scene_loader.hpp"
 #include "shaders/gpu_layout.h"
 #include "tests/gpu_test_support.hpp"

@@ -2,7 +2,7 @@
 // reference within the error envelope (tests/reference_envelope.hpp). Shared by the GPU tests.
 #pragma once
 
-#include "engine/renderer.hpp"
+#include "engine/render/renderer.hpp"
 #include "tests/reference_envelope.hpp"
 #include "tests/test_scenes.hpp"
 

@@ -2,9 +2,9 @@
 // (PreviewPass): on the device they must give the bytes the host's PNG preview gives from the
 // buffer target's Frame, pixel for pixel, on every output and through every path a ray can take
 // (tiles, rays the CPU finishes), and the depth range the host would find.
-#include "engine/image_target.hpp"
+#include "engine/render/image_target.hpp"
 #include "engine/preview.hpp"
-#include "engine/renderer.hpp"
+#include "engine/render/renderer.hpp"
 #include "engine/scene/scene_loader.hpp"
 #include "engine/vulkan/context.hpp"
 #include "engine/vulkan/preview_pass.hpp"

@@ -2,7 +2,7 @@
 // MODELS.md): each loads with the triangle count of fan triangulation and one position per `v `
 // line, and the truncated Crytek Sponza is reported with its line. When the folder is absent (it is
 // never part of the repository), the tests skip.
-#include "engine/gpu_scene.hpp"
+#include "engine/render/gpu_scene.hpp"
 #include "engine/scene/mesh_generators.hpp"
 #include "engine/scene/obj_loader.hpp"
 

@@ -17,7 +17,7 @@
 //   the distance from the camera of the farthest point that defines it: a sphere's far side
 //   (|c - o| + r), a triangle's farthest vertex, a plane's foot point (its height, computed with
 //   Dot2). We take 16 eps E + 2^-44 R. (Beyond two radii of the anchor the shader leaves the lo
-//   parts out, engine/gpu_scene.cpp needs_lo_parts: positions are then within 1.5 eps of their
+//   parts out, engine/render/gpu_scene.cpp needs_lo_parts: positions are then within 1.5 eps of their
 //   distance from the camera, inside the same bound.)
 //
 // The reference therefore traces five rays per pixel: the exact one and four turned towards +-right
@@ -40,7 +40,7 @@
 // between grazes it: its normal is across the ray, asin |n.d| from a sample's).
 #include "tests/reference_envelope.hpp"
 
-#include "engine/gpu_scene.hpp"
+#include "engine/render/gpu_scene.hpp"
 #include "engine/reference.hpp"
 
 #include <glm/geometric.hpp>

@@ -3,7 +3,7 @@
 #pragma once
 
 #include "engine/compare.hpp"
-#include "engine/frame.hpp"
+#include "engine/render/frame.hpp"
 #include "engine/scene/scene.hpp"
 
 #include <string>

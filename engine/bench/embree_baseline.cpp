@@ -1,7 +1,7 @@
 #include "engine/bench/embree_baseline.hpp"
 
 #include "engine/scene/camera.hpp"
-#include "engine/gpu_scene.hpp"
+#include "engine/render/gpu_scene.hpp"
 #include "engine/reference.hpp"
 #include "engine/unit_vector.hpp"
 

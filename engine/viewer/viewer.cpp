@@ -1,7 +1,7 @@
 #include "engine/viewer/viewer.hpp"
 
 #include "engine/image_io.hpp"
-#include "engine/renderer.hpp"
+#include "engine/render/renderer.hpp"
 #include "engine/vulkan/preview_pass.hpp"
 #include "engine/viewer/camera_controller.hpp"
 #include "engine/viewer/display.hpp"

@@ -3,9 +3,9 @@
 #pragma once
 
 #include "engine/scene/camera.hpp"
-#include "engine/frame.hpp"
+#include "engine/render/frame.hpp"
 #include "engine/gpu_device.hpp"
-#include "engine/gpu_scene.hpp"
+#include "engine/render/gpu_scene.hpp"
 #include "engine/scene/scene.hpp"
 
 #include <cstdint>

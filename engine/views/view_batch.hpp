@@ -5,7 +5,7 @@
 // moment and started again ends with the same files.
 #pragma once
 
-#include "engine/renderer.hpp"
+#include "engine/render/renderer.hpp"
 #include "engine/views/output_pattern.hpp"
 
 #include <cstdint>

@@ -1,4 +1,4 @@
-#include "engine/bvh.hpp"
+#include "engine/render/bvh.hpp"
 
 #include <embree3/rtcore.h>
 #include <glm/common.hpp>

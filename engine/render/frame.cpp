@@ -1,4 +1,4 @@
-#include "engine/frame.hpp"
+#include "engine/render/frame.hpp"
 
 #include <algorithm>
 #include <cmath>

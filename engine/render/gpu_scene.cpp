@@ -1,4 +1,4 @@
-#include "engine/gpu_scene.hpp"
+#include "engine/render/gpu_scene.hpp"
 
 #include "engine/unit_vector.hpp"
 

@@ -1,7 +1,7 @@
-#include "engine/renderer.hpp"
+#include "engine/render/renderer.hpp"
 
 #include "engine/scene/camera.hpp"
-#include "engine/gpu_scene.hpp"
+#include "engine/render/gpu_scene.hpp"
 #include "engine/parallel.hpp"
 #include "engine/reference.hpp"
 #include "engine/unit_vector.hpp"
