@@ -1,7 +1,7 @@
 // The options every command that opens a device shares: which device, and how data reaches it.
 #pragma once
 
-#include "engine/gpu_device.hpp"
+#include "engine/device/gpu_device.hpp"
 
 #include <CLI/CLI.hpp>
 

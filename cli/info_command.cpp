@@ -1,6 +1,6 @@
 #include "cli/commands.hpp"
 #include "cli/device_options.hpp"
-#include "engine/gpu_device.hpp"
+#include "engine/device/gpu_device.hpp"
 #include "engine/render/gpu_scene.hpp"
 
 #include <iostream>

@@ -3,7 +3,7 @@
 // engine. Bad input raises ValueError (the engine's InputError, with its one-line message), device
 // failures vkray.Error. The GIL is released while the engine works.
 #include "engine/scene/framing.hpp"
-#include "engine/gpu_device.hpp"
+#include "engine/device/gpu_device.hpp"
 #include "engine/reference.hpp"
 #include "engine/render/renderer.hpp"
 #include "engine/scene/scene_loader.hpp"

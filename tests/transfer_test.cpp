@@ -1,7 +1,7 @@
 // The suite runs every GPU test twice (tests/CMakeLists.txt): once as the device chooses, once with
 // VKRAY_TRANSFER=staging. This proves the second run really takes the staging path; the setting
 // once got lost in a ctest property list and both runs took the direct one unnoticed.
-#include "engine/gpu_device.hpp"
+#include "engine/device/gpu_device.hpp"
 
 #include <gtest/gtest.h>
 

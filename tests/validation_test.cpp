@@ -1,7 +1,7 @@
 // The suite runs under the Khronos validation layer (VKRAY_VALIDATION=1, tests/CMakeLists.txt). These
 // tests prove the harness catches what it is there for: a misuse of the API and a synchronization
 // hazard each abort with the layer's message. They skip when the layer is not installed.
-#include "engine/gpu_device.hpp"
+#include "engine/device/gpu_device.hpp"
 #include "engine/vulkan/buffer.hpp"
 #include "engine/vulkan/context.hpp"
 

@@ -5,7 +5,7 @@
 
 #include "engine/bench/bench_suites.hpp"
 #include "engine/compare.hpp"
-#include "engine/gpu_device.hpp"
+#include "engine/device/gpu_device.hpp"
 #include "engine/render/renderer.hpp"
 #include "engine/statistics.hpp"
 

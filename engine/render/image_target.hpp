@@ -4,7 +4,7 @@
 // Nothing is read back. No Vulkan type appears here: the CLI never touches Vulkan.
 #pragma once
 
-#include "engine/gpu_device.hpp"
+#include "engine/device/gpu_device.hpp"
 
 #include <cstdint>
 #include <memory>

@@ -3,7 +3,7 @@
 #pragma once
 
 #include "engine/render/frame.hpp"
-#include "engine/gpu_device.hpp"
+#include "engine/device/gpu_device.hpp"
 #include "engine/render/gpu_scene.hpp"
 #include "engine/render/image_target.hpp"
 #include "engine/scene/scene.hpp"

@@ -4,7 +4,7 @@
 
 #include "engine/scene/camera.hpp"
 #include "engine/render/frame.hpp"
-#include "engine/gpu_device.hpp"
+#include "engine/device/gpu_device.hpp"
 #include "engine/render/gpu_scene.hpp"
 #include "engine/scene/scene.hpp"
 

@@ -2,7 +2,7 @@
 // last look. Nothing here knows about cameras or rendering.
 #pragma once
 
-#include "engine/gpu_device.hpp"
+#include "engine/device/gpu_device.hpp"
 #include "engine/vulkan/context.hpp"
 
 #include <string>

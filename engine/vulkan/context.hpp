@@ -2,7 +2,7 @@
 // one-shot command submission. Only engine/ code includes this file.
 #pragma once
 
-#include "engine/gpu_device.hpp"
+#include "engine/device/gpu_device.hpp"
 #include "engine/vulkan/pipeline_cache.hpp"
 
 #include <vulkan/vulkan_raii.hpp>

@@ -1,7 +1,7 @@
 #include "engine/vulkan/pipeline_cache.hpp"
 
 #include "engine/fnv1a.hpp"
-#include "engine/gpu_device.hpp"
+#include "engine/device/gpu_device.hpp"
 
 #include <unistd.h>
 

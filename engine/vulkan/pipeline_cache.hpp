@@ -1,6 +1,6 @@
 // The driver's pipeline cache, kept on disk between runs: a second run on the same device and
 // driver hands the driver what it compiled before. One file per device and driver version, in the
-// user's cache folder (pipeline_cache_folder, engine/gpu_device.hpp). Only engine/ code includes this file.
+// user's cache folder (pipeline_cache_folder, engine/device/gpu_device.hpp). Only engine/ code includes this file.
 #pragma once
 
 #include <vulkan/vulkan_raii.hpp>

@@ -2,7 +2,7 @@
 // seems present. The signs are the ones a user can act on: a GPU device node with no Vulkan driver
 // listed for it, or an NVIDIA container started without the graphics capability (its compute-only
 // default hides the Vulkan driver, so the loader finds llvmpipe alone).
-#include "engine/gpu_device.hpp"
+#include "engine/device/gpu_device.hpp"
 
 #include <cstdlib>
 #include <filesystem>
