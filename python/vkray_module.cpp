@@ -4,7 +4,7 @@
 // failures vkray.Error. The GIL is released while the engine works.
 #include "engine/scene/framing.hpp"
 #include "engine/device/gpu_device.hpp"
-#include "engine/reference.hpp"
+#include "engine/reference/reference.hpp"
 #include "engine/render/renderer.hpp"
 #include "engine/scene/scene_loader.hpp"
 #include "engine/scene/scene_or_model.hpp"

@@ -234,7 +234,7 @@ VKRAY_CHECK_SIZE(GpuBvhNode, 64);
 // lies off the plane by more than VKRAY_COINCIDENT_GAP of its own distance: where a triangle lies in
 // a plane or a sphere touches one, the two distances differ only by rounding, and without this
 // rule whichever rounding favours would win, pixel by pixel. The shader and the reference
-// (engine/reference.cpp) both apply it, so the plane wins on every pixel in both. The rounding of
+// (engine/reference/reference.cpp) both apply it, so the plane wins on every pixel in both. The rounding of
 // either hit point off the plane is within a few float32 ulps of the distance at any angle (the
 // error of n.d scales t, not the height), so 2^-20 (16 ulps) separates rounding from real gaps.
 // VKRAY_PRIMITIVE_T_MAX is then the bound for spheres and triangles behind a plane hit at t with

@@ -1,7 +1,7 @@
 // Ray/primitive intersection. Each routine returns the ray parameter t of the nearest hit with
 // 0 < t < t_max, or t_max when there is none. Rays are normalized, so t is a distance.
 // float32 shaders evaluate the formulas below with the compensations each explains; float64 shaders
-// (VKRAY_FLOAT64, `--precision double`) evaluate the reference's formulas (engine/reference.cpp) in
+// (VKRAY_FLOAT64, `--precision double`) evaluate the reference's formulas (engine/reference/reference.cpp) in
 // double: the exact, slow end of the error-against-time curve.
 #ifndef VKRAY_INTERSECT_GLSL
 #define VKRAY_INTERSECT_GLSL

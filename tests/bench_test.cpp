@@ -2,7 +2,7 @@
 // the report's JSON (round trip, errors), CSV and comparison, scene hashes and suites. Host only.
 #include "engine/bench/accuracy_report.hpp"
 #include "engine/bench/bench_report.hpp"
-#include "engine/reference.hpp"
+#include "engine/reference/reference.hpp"
 #include "tests/temp_dir_test.hpp"
 
 #include <gtest/gtest.h>

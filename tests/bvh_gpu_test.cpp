@@ -4,7 +4,7 @@
 // a million triangles seen from inside: every pixel within the error envelope, every ray finished
 // by the GPU itself, and the walks hit exactly where brute force over every triangle hits.
 #include "engine/scene/mesh_generators.hpp"
-#include "engine/reference.hpp"
+#include "engine/reference/reference.hpp"
 #include "tests/gpu_test_support.hpp"
 
 #include <gtest/gtest.h>

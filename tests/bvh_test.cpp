@@ -5,7 +5,7 @@
 #include "engine/render/bvh.hpp"
 #include "engine/scene/camera.hpp"
 #include "engine/scene/mesh_generators.hpp"
-#include "engine/reference.hpp"
+#include "engine/reference/reference.hpp"
 #include "shaders/gpu_layout.h"
 #include "tests/test_scenes.hpp"
 
@@ -367,7 +367,7 @@ TEST(ReferenceTree, MatchesBruteForceOnFlatGrid) {
 
 // A bug this test found, now fixed (enter_box shrinks near by 1 - 2 gamma(3) before comparing it
 // with t_max): among triangles hit at exactly the same t the tree did not always return the lowest index, as reference.hpp promises. enter_box
-// (engine/reference.cpp) widens the far distance by 2 gamma(3) but compares the rounded near
+// (engine/reference/reference.cpp) widens the far distance by 2 gamma(3) but compares the rounded near
 // distance with t_max exactly; where the ray enters a box at the hit itself (flat boxes, a hit on a
 // box face), the rounded near can be one ulp beyond the rounded triangle t, so once the tied
 // triangle of the higher index is found, the box of the lower one is culled.
@@ -386,7 +386,7 @@ TEST(ReferenceTree, MatchesBruteForceOnSharedEdgesFaceOn) {
 // largest double/float; see safe_inverse in shaders/intersect.glsl): a ray with an exactly zero
 // direction component
 // that lies in the plane of a box's face is treated as outside that box when the box is on the
-// side opposite the zero's sign. enter_box (engine/reference.cpp) replaces 1/0 by 1/(+-1e-300),
+// side opposite the zero's sign. enter_box (engine/reference/reference.cpp) replaces 1/0 by 1/(+-1e-300),
 // and shaders/intersect.glsl's safe_inverse does the same with 1e-30, so for dir.x == +0 and
 // origin.x == box.upper.x the x slab becomes [-huge, 0] and the box is culled, although the ray
 // runs along its face and can hit the triangles' edges there. Brute force does hit them.

@@ -1,9 +1,9 @@
 // The Embree baseline traces the same rays as vkray: its answers agree with the double-precision
 // reference up to float32 rounding, so the bench compares times of the same work.
-#include "engine/compare.hpp"
+#include "engine/reference/compare.hpp"
 #include "engine/bench/embree_baseline.hpp"
 #include "engine/scene/mesh_generators.hpp"
-#include "engine/reference.hpp"
+#include "engine/reference/reference.hpp"
 #include "engine/scene/scene_loader.hpp"
 
 #include <gtest/gtest.h>

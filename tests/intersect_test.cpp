@@ -1,6 +1,6 @@
 // The reference intersectors against closed-form answers, including the cases where the textbook
 // formulas fail.
-#include "engine/reference.hpp"
+#include "engine/reference/reference.hpp"
 
 #include <glm/geometric.hpp>
 #include <gtest/gtest.h>

@@ -41,7 +41,7 @@
 #include "tests/reference_envelope.hpp"
 
 #include "engine/render/gpu_scene.hpp"
-#include "engine/reference.hpp"
+#include "engine/reference/reference.hpp"
 
 #include <glm/geometric.hpp>
 

@@ -2,7 +2,7 @@
 // derived from float32 error bounds (see reference_envelope.cpp for the derivation).
 #pragma once
 
-#include "engine/compare.hpp"
+#include "engine/reference/compare.hpp"
 #include "engine/render/frame.hpp"
 #include "engine/scene/scene.hpp"
 

@@ -4,7 +4,7 @@
 #pragma once
 
 #include "engine/bench/bench_suites.hpp"
-#include "engine/compare.hpp"
+#include "engine/reference/compare.hpp"
 #include "engine/device/gpu_device.hpp"
 #include "engine/render/renderer.hpp"
 #include "engine/statistics.hpp"

@@ -2,7 +2,7 @@
 
 #include "engine/scene/camera.hpp"
 #include "engine/render/gpu_scene.hpp"
-#include "engine/reference.hpp"
+#include "engine/reference/reference.hpp"
 #include "engine/unit_vector.hpp"
 
 #include <embree3/rtcore.h>

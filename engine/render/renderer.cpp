@@ -3,7 +3,7 @@
 #include "engine/scene/camera.hpp"
 #include "engine/render/gpu_scene.hpp"
 #include "engine/parallel.hpp"
-#include "engine/reference.hpp"
+#include "engine/reference/reference.hpp"
 #include "engine/unit_vector.hpp"
 #include "engine/vulkan/acceleration_structures.hpp"
 #include "engine/vulkan/buffer.hpp"

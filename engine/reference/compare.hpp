@@ -3,7 +3,7 @@
 #pragma once
 
 #include "engine/render/frame.hpp"
-#include "engine/reference.hpp"
+#include "engine/reference/reference.hpp"
 
 #include <string>
 #include <vector>

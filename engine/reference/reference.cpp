@@ -1,4 +1,4 @@
-#include "engine/reference.hpp"
+#include "engine/reference/reference.hpp"
 
 #include "engine/parallel.hpp"
 #include "engine/unit_vector.hpp"

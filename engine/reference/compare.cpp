@@ -1,4 +1,4 @@
-#include "engine/compare.hpp"
+#include "engine/reference/compare.hpp"
 
 #include "engine/statistics.hpp"
 
