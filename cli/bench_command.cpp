@@ -6,7 +6,7 @@
 #include "engine/bench/bench.hpp"
 #include "engine/bench/bench_plot.hpp"
 #include "engine/bench/bench_report.hpp"
-#include "engine/image_io.hpp"
+#include "engine/io/image_io.hpp"
 
 #include <unistd.h>
 

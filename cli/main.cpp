@@ -2,7 +2,7 @@
 // Exit codes: 0 success, 2 usage or input errors, 1 runtime failures (no Vulkan device, I/O).
 #include "cli/commands.hpp"
 #include "engine/device/gpu_device.hpp"
-#include "engine/image_io.hpp"
+#include "engine/io/image_io.hpp"
 #include "engine/nearest_name.hpp"
 #include "engine/scene/scene.hpp"
 

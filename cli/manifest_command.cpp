@@ -1,5 +1,5 @@
 #include "cli/commands.hpp"
-#include "engine/image_io.hpp"
+#include "engine/io/image_io.hpp"
 #include "engine/views/manifest.hpp"
 
 #include <cstdio>

@@ -5,7 +5,7 @@
 #include "cli/views_options.hpp"
 #include "engine/reference/compare.hpp"
 #include "engine/host_memory.hpp"
-#include "engine/image_io.hpp"
+#include "engine/io/image_io.hpp"
 #include "engine/reference/reference.hpp"
 #include "engine/render/renderer.hpp"
 #include "engine/scene/scene_loader.hpp"

@@ -2,7 +2,7 @@
 #include "cli/device_options.hpp"
 #include "cli/scene_argument.hpp"
 #include "engine/scene/scene_or_model.hpp"
-#include "engine/image_io.hpp"
+#include "engine/io/image_io.hpp"
 #include "engine/viewer/viewer.hpp"
 
 #include <memory>

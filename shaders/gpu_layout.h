@@ -266,7 +266,7 @@ struct DepthRangeBits {
 };
 VKRAY_CHECK_SIZE(DepthRangeBits, 16);
 
-// The 8-bit preview of an output (engine/preview.hpp), as shaders/preview.comp applies it. A ramp
+// The 8-bit preview of an output (engine/io/preview.hpp), as shaders/preview.comp applies it. A ramp
 // maps a float to a byte: the byte of v is the largest k with thresholds[k] <= v (thresholds[0] is
 // -infinity, thresholds ascend), found by a binary search of 8 comparisons. Comparisons are exact,
 // so the GPU picks the same byte as the host for the same float, whatever its arithmetic.

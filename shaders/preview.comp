@@ -1,6 +1,6 @@
 #version 460
 // The 8-bit picture of one output the ray cast wrote into a storage image (the viewer's frame):
-// the ramps of engine/preview.cpp, uploaded by the host, applied by exact comparisons so each byte
+// the ramps of engine/io/preview.cpp, uploaded by the host, applied by exact comparisons so each byte
 // is the one the PNG preview of `vkray render` holds. Written in the swapchain's channel order.
 #extension GL_GOOGLE_include_directive : require
 

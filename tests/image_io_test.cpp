@@ -1,6 +1,6 @@
 // Output files are replaced only by complete ones: written under a temporary name, renamed into
-// place when done (engine/image_io.cpp).
-#include "engine/image_io.hpp"
+// place when done (engine/io/image_io.cpp).
+#include "engine/io/image_io.hpp"
 #include "tests/temp_dir_test.hpp"
 
 #include <gtest/gtest.h>

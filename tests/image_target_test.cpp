@@ -3,7 +3,7 @@
 // buffer target's Frame, pixel for pixel, on every output and through every path a ray can take
 // (tiles, rays the CPU finishes), and the depth range the host would find.
 #include "engine/render/image_target.hpp"
-#include "engine/preview.hpp"
+#include "engine/io/preview.hpp"
 #include "engine/render/renderer.hpp"
 #include "engine/scene/scene_loader.hpp"
 #include "engine/vulkan/context.hpp"

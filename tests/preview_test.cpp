@@ -1,8 +1,8 @@
-// The 8-bit preview's ramps (engine/preview.hpp): the thresholds reproduce the mapping they stand
+// The 8-bit preview's ramps (engine/io/preview.hpp): the thresholds reproduce the mapping they stand
 // for, round(255 * clamp(f(v), 0, 1)), to within the float rounding of a threshold, and keep its
 // fixed points: the nearest hit white, the farthest at the 10% floor, misses black, the disk drawn.
 #include "engine/scene/camera.hpp"
-#include "engine/preview.hpp"
+#include "engine/io/preview.hpp"
 
 #include <gtest/gtest.h>
 

@@ -2,7 +2,7 @@
 
 #include "engine/bench/bench_report.hpp"
 #include "engine/bench/embree_baseline.hpp"
-#include "engine/image_io.hpp"
+#include "engine/io/image_io.hpp"
 #include "engine/views/view_batch.hpp"
 #include "engine/views/view_list.hpp"
 

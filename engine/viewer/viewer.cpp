@@ -1,6 +1,6 @@
 #include "engine/viewer/viewer.hpp"
 
-#include "engine/image_io.hpp"
+#include "engine/io/image_io.hpp"
 #include "engine/render/renderer.hpp"
 #include "engine/vulkan/preview_pass.hpp"
 #include "engine/viewer/camera_controller.hpp"

@@ -1,6 +1,6 @@
 #include "engine/views/manifest.hpp"
 
-#include "engine/image_io.hpp"
+#include "engine/io/image_io.hpp"
 #include "engine/scene/scene.hpp"
 
 #include <fcntl.h>

@@ -1,6 +1,6 @@
 #include "engine/views/view_batch.hpp"
 
-#include "engine/image_io.hpp"
+#include "engine/io/image_io.hpp"
 #include "engine/views/manifest.hpp"
 
 #include <chrono>

@@ -1,6 +1,6 @@
 #include "engine/vulkan/preview_pass.hpp"
 
-#include "engine/preview.hpp"
+#include "engine/io/preview.hpp"
 #include "preview.comp.spv.h"
 
 #include <cstring>

@@ -1,5 +1,5 @@
 // The viewer's picture, made on the device: shaders/preview.comp maps one output in a storage-image
-// target to 8-bit RGBA through the PNG preview's ramps (engine/preview.hpp), so the bytes are the
+// target to 8-bit RGBA through the PNG preview's ramps (engine/io/preview.hpp), so the bytes are the
 // ones `vkray render` writes, and nothing goes through the host.
 #pragma once
 

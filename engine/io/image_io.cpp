@@ -1,6 +1,6 @@
-#include "engine/image_io.hpp"
+#include "engine/io/image_io.hpp"
 
-#include "engine/preview.hpp"
+#include "engine/io/preview.hpp"
 
 #include <OpenEXR/ImfChannelList.h>
 #include <OpenEXR/ImfFrameBuffer.h>

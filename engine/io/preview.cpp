@@ -1,4 +1,4 @@
-#include "engine/preview.hpp"
+#include "engine/io/preview.hpp"
 
 #include <algorithm>
 #include <cmath>
