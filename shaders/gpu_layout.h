@@ -84,7 +84,7 @@ using uvec4 = glm::uvec4;
 #define VKRAY_SPEC_TREE_HAS_TRIANGLES 8
 #define VKRAY_SPEC_TREE_HAS_SPHERES 9
 // Variants that trade error or generality for time, so `vkray bench` can show what each choice buys;
-// the defaults are what vkray renders with (engine/render/shader_variant.hpp).
+// the defaults are what vkray renders with (engine/vulkan/shader_variant.hpp).
 #define VKRAY_SPEC_SPHERE_FORMULA 10        // VKRAY_SPHERE_*
 #define VKRAY_SPEC_TRIANGLE_TEST 11         // VKRAY_TRIANGLE_*
 #define VKRAY_SPEC_WORKGROUP_X 12           // local_size_x

@@ -2,7 +2,7 @@
 // exactly one leaf, boxes that hold their subtrees, children after parents, depth within the
 // shader's stack), and the double-precision reference finds, through its tree, exactly what brute
 // force over every triangle finds: the same triangle and the same bits of t on every pixel.
-#include "engine/render/bvh.hpp"
+#include "engine/scene/bvh.hpp"
 #include "engine/scene/camera.hpp"
 #include "engine/scene/mesh_generators.hpp"
 #include "engine/reference/reference.hpp"

@@ -2,7 +2,7 @@
 // (PreviewPass): on the device they must give the bytes the host's PNG preview gives from the
 // buffer target's Frame, pixel for pixel, on every output and through every path a ray can take
 // (tiles, rays the CPU finishes), and the depth range the host would find.
-#include "engine/render/image_target.hpp"
+#include "engine/vulkan/image_target.hpp"
 #include "engine/io/preview.hpp"
 #include "engine/render/renderer.hpp"
 #include "engine/scene/scene_loader.hpp"

@@ -3,7 +3,7 @@
 #pragma once
 
 #include "engine/reference/compare.hpp"
-#include "engine/render/frame.hpp"
+#include "engine/frame.hpp"
 #include "engine/scene/scene.hpp"
 
 #include <string>

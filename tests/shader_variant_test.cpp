@@ -1,4 +1,4 @@
-// The shader variants the bench compares (engine/render/shader_variant.hpp): those that must not change a
+// The shader variants the bench compares (engine/vulkan/shader_variant.hpp): those that must not change a
 // single bit (workgroup shape and order, the generic pipeline) do not, and the precision variants
 // differ from the defaults where the numerical analysis says they must.
 #include "engine/bench/bench.hpp"

@@ -2,7 +2,7 @@
 // from random cameras. Host only (no Vulkan).
 #pragma once
 
-#include "engine/render/bvh.hpp"
+#include "engine/scene/bvh.hpp"
 #include "engine/scene/mesh_generators.hpp"
 #include "engine/scene/obj_loader.hpp"
 #include "engine/scene/scene.hpp"

@@ -2,7 +2,7 @@
 // cores, one ray at a time (rtcIntersect1) and in packets of 8 (rtcIntersect8).
 #pragma once
 
-#include "engine/render/frame.hpp"
+#include "engine/frame.hpp"
 #include "engine/scene/scene.hpp"
 #include "engine/statistics.hpp"
 

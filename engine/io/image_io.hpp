@@ -1,7 +1,7 @@
 // Writing results: OpenEXR with the output contract's channels, a PNG preview, and text files.
 #pragma once
 
-#include "engine/render/frame.hpp"
+#include "engine/frame.hpp"
 
 #include <filesystem>
 #include <string_view>

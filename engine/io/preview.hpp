@@ -4,7 +4,7 @@
 // comparisons are exact on any device, where the arithmetic of a formula would round differently.
 #pragma once
 
-#include "engine/render/frame.hpp"
+#include "engine/frame.hpp"
 #include "shaders/gpu_layout.h"
 
 #include <array>

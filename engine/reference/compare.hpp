@@ -2,7 +2,7 @@
 // to its timings (render --check) and the tests' summary statistics.
 #pragma once
 
-#include "engine/render/frame.hpp"
+#include "engine/frame.hpp"
 #include "engine/reference/reference.hpp"
 
 #include <string>

@@ -4,9 +4,9 @@
 // tests can check the tree against it. Parallel over image rows.
 #pragma once
 
-#include "engine/render/bvh.hpp"
+#include "engine/scene/bvh.hpp"
 #include "engine/scene/camera.hpp"
-#include "engine/render/frame.hpp"
+#include "engine/frame.hpp"
 #include "engine/scene/scene.hpp"
 
 #include <glm/vec3.hpp>
@@ -70,7 +70,7 @@ class ReferenceScene {
   std::vector<Triangle> triangles_;  // zero-area triangles left out: no ray can hit them
   // The BVH over triangles and spheres (planes are infinite: always tested one by one).
   std::vector<TreeEntry> tree_entries_;           // in leaf order
-  std::vector<std::array<uint32_t, 2>> nodes_;    // child references (engine/render/bvh.hpp)
+  std::vector<std::array<uint32_t, 2>> nodes_;    // child references (engine/scene/bvh.hpp)
   std::vector<std::array<Box, 2>> child_boxes_;   // their boxes, exact in double
 };
 

@@ -1,10 +1,10 @@
 // Conversion of the double-precision scene into the float32 arrays the shader reads.
 #pragma once
 
-#include "engine/render/bvh.hpp"
+#include "engine/scene/bvh.hpp"
 #include "engine/scene/camera.hpp"
 #include "engine/scene/scene.hpp"
-#include "engine/render/shader_variant.hpp"
+#include "engine/vulkan/shader_variant.hpp"
 #include "shaders/gpu_layout.h"
 
 #include <optional>

@@ -2,12 +2,12 @@
 // rendered any number of times with a new camera, image size or set of outputs.
 #pragma once
 
-#include "engine/render/frame.hpp"
+#include "engine/frame.hpp"
 #include "engine/device/gpu_device.hpp"
 #include "engine/render/gpu_scene.hpp"
-#include "engine/render/image_target.hpp"
+#include "engine/vulkan/image_target.hpp"
 #include "engine/scene/scene.hpp"
-#include "engine/render/shader_variant.hpp"
+#include "engine/vulkan/shader_variant.hpp"
 
 #include <array>
 #include <memory>

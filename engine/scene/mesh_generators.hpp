@@ -4,7 +4,7 @@
 // by our own code (std::uniform_real_distribution differs between standard libraries).
 #pragma once
 
-#include "engine/render/bvh.hpp"
+#include "engine/scene/bvh.hpp"
 #include "engine/scene/scene.hpp"
 
 #include <cstddef>

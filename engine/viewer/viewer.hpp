@@ -3,7 +3,7 @@
 #pragma once
 
 #include "engine/scene/camera.hpp"
-#include "engine/render/frame.hpp"
+#include "engine/frame.hpp"
 #include "engine/device/gpu_device.hpp"
 #include "engine/render/gpu_scene.hpp"
 #include "engine/scene/scene.hpp"

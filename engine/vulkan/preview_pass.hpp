@@ -3,8 +3,8 @@
 // ones `vkray render` writes, and nothing goes through the host.
 #pragma once
 
-#include "engine/render/frame.hpp"
-#include "engine/render/image_target.hpp"
+#include "engine/frame.hpp"
+#include "engine/vulkan/image_target.hpp"
 #include "engine/vulkan/buffer.hpp"
 #include "engine/vulkan/image.hpp"
 

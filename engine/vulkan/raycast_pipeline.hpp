@@ -2,8 +2,8 @@
 // pipeline per set of requested outputs, specialized on the scene (PipelineSpecialization).
 #pragma once
 
-#include "engine/render/frame.hpp"
-#include "engine/render/shader_variant.hpp"
+#include "engine/frame.hpp"
+#include "engine/vulkan/shader_variant.hpp"
 #include "engine/vulkan/context.hpp"
 #include "shaders/gpu_layout.h"
 

@@ -1,4 +1,4 @@
-#include "engine/render/frame.hpp"
+#include "engine/frame.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -1,4 +1,4 @@
-#include "engine/render/image_target.hpp"
+#include "engine/vulkan/image_target.hpp"
 
 #include "engine/vulkan/image.hpp"
 

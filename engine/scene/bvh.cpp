@@ -1,4 +1,4 @@
-#include "engine/render/bvh.hpp"
+#include "engine/scene/bvh.hpp"
 
 #include <embree3/rtcore.h>
 #include <glm/common.hpp>
