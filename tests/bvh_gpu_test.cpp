@@ -34,9 +34,12 @@ Searches with_structures(Searches searches) {
   if (ray_queries()) searches.push_back(PrimitiveSearch::ray_query);
   return searches;
 }
-const Searches tree_walks = with_structures({PrimitiveSearch::bvh_per_ray, PrimitiveSearch::bvh_packet});
-const Searches all_searches =
-    with_structures({PrimitiveSearch::brute_force, PrimitiveSearch::bvh_per_ray, PrimitiveSearch::bvh_packet});
+// Functions, not globals: asked inside a test, so listing the tests (gtest_discover_tests at build
+// time) never opens the device.
+Searches tree_walks() { return with_structures({PrimitiveSearch::bvh_per_ray, PrimitiveSearch::bvh_packet}); }
+Searches all_searches() {
+  return with_structures({PrimitiveSearch::brute_force, PrimitiveSearch::bvh_per_ray, PrimitiveSearch::bvh_packet});
+}
 
 // Renders the scene's camera with `search` and checks that this search is what ran, that the GPU
 // finished every ray itself (a ray handed to the CPU is traced by the reference, which would hide
@@ -96,18 +99,18 @@ void expect_searches_match(Scene scene, const std::vector<Camera>& cameras, cons
 
 TEST(BvhGpu, UniformSoup) {
   const Mesh mesh = make_uniform_soup(soup(3000, 21));
-  expect_searches_match(sized(mesh_scene(mesh), 64, 48), cameras_around(mesh_bounds(mesh), 201, 1), all_searches);
+  expect_searches_match(sized(mesh_scene(mesh), 64, 48), cameras_around(mesh_bounds(mesh), 201, 1), all_searches());
 }
 
 TEST(BvhGpu, ClusteredSoup) {
   const Mesh mesh = make_clustered_soup(soup(3000, 22), 4);
-  expect_searches_match(sized(mesh_scene(mesh), 64, 48), cameras_at_triangles(mesh, 202, 2, 0.3), all_searches);
+  expect_searches_match(sized(mesh_scene(mesh), 64, 48), cameras_at_triangles(mesh, 202, 2, 0.3), all_searches());
 }
 
 TEST(BvhGpu, DegenerateAndHugeSoup) {
   const SoupOptions options = soup(3000, 23);
   const Mesh mesh = make_degenerate_soup(options);
-  expect_searches_match(sized(mesh_scene(mesh), 64, 48), cameras_around(options.box, 203, 2), all_searches);
+  expect_searches_match(sized(mesh_scene(mesh), 64, 48), cameras_around(options.box, 203, 2), all_searches());
 }
 
 // A tree holding spheres and triangles (the walk tells them apart by the sphere mark), and one
@@ -116,9 +119,9 @@ TEST(BvhGpu, SpheresAndTrianglesInOneTree) {
   Scene scene = sized(mesh_scene(make_uniform_soup(soup(500, 25))), 64, 48);
   scene.spheres = make_sphere_field(500, 26);
   const std::vector<Camera> cameras = cameras_around(Box{glm::dvec3(-1.0), glm::dvec3(1.0)}, 205, 1);
-  expect_searches_match(scene, cameras, all_searches);
+  expect_searches_match(scene, cameras, all_searches());
   scene.meshes.clear();
-  expect_searches_match(scene, cameras, all_searches);
+  expect_searches_match(scene, cameras, all_searches());
 }
 
 // Image sizes that leave workgroups and subgroups partly outside the image: the packet walk's
@@ -130,7 +133,7 @@ TEST(BvhGpu, OddImageSizes) {
     SCOPED_TRACE(std::to_string(width) + "x" + std::to_string(height));
     Scene scene = sized(mesh_scene(mesh), width, height);
     scene.camera = cameras[0];
-    for (PrimitiveSearch search : tree_walks) render_and_check(scene, search);
+    for (PrimitiveSearch search : tree_walks()) render_and_check(scene, search);
   }
 }
 
@@ -139,7 +142,7 @@ TEST(BvhGpu, SharedModels) {
   for (const char* name : {"stanford-bunny.obj", "stanford-dragon-100k.obj", "alligator.obj", "cruiser.obj"}) {
     SCOPED_TRACE(name);
     const Scene scene = sized(mesh_scene(load_obj_file(models_dir / name)), 64, 48);
-    expect_searches_match(scene, cameras_around(mesh_bounds(scene.meshes[0]), 205, 1), tree_walks);
+    expect_searches_match(scene, cameras_around(mesh_bounds(scene.meshes[0]), 205, 1), tree_walks());
   }
 }
 
@@ -159,7 +162,7 @@ TEST(BvhGpu, FlatAlligatorFaceOnAndEdgeOn) {
   const glm::dvec3 centre = 0.5 * (box.lower + box.upper);
   Scene scene = sized(mesh_scene(mesh), 80, 60);
 
-  expect_searches_match(scene, {{centre + glm::dvec3(0, 0, 900), centre, {0, 1, 0}, 60}}, tree_walks);
+  expect_searches_match(scene, {{centre + glm::dvec3(0, 0, 900), centre, {0, 1, 0}, 60}}, tree_walks());
 
   scene = sized(scene, 63, 47);
   const ReferenceScene reference(scene);
@@ -184,7 +187,7 @@ TEST(BvhGpu, FlatAlligatorFaceOnAndEdgeOn) {
   };
   for (const Camera& camera : edge_on) {
     scene.camera = camera;
-    for (PrimitiveSearch search : tree_walks) EXPECT_EQ(count_hits(render_and_check(scene, search)), 0u) << name_of(search);
+    for (PrimitiveSearch search : tree_walks()) EXPECT_EQ(count_hits(render_and_check(scene, search)), 0u) << name_of(search);
     size_t reference_hits = 0;
     for (const ReferenceHit& hit : render_reference_hits(reference, make_camera_basis(camera, 63, 47), 63, 47)) {
       reference_hits += hit.kind != PrimitiveKind::none;
@@ -193,7 +196,7 @@ TEST(BvhGpu, FlatAlligatorFaceOnAndEdgeOn) {
   }
 
   scene.camera = {{box.lower.x - 100, centre.y, 10.0}, {centre.x, centre.y, 0}, {0, 0, 1}, 4};
-  for (PrimitiveSearch search : tree_walks) {
+  for (PrimitiveSearch search : tree_walks()) {
     EXPECT_GT(count_hits(render_and_check(scene, search)), scene.width * scene.height / 10) << name_of(search);
   }
 }
@@ -217,7 +220,7 @@ TEST(BvhGpu, CameraInsideMillionTriangleSphere) {
     scene.camera = camera;
     scene.width = size.first;
     scene.height = size.second;
-    for (PrimitiveSearch search : tree_walks) {
+    for (PrimitiveSearch search : tree_walks()) {
       const Frame frame = render_and_check(scene, search);
       EXPECT_EQ(count_hits(frame), frame.pixel_count()) << name_of(search) << ": rays leak through the closed mesh";
     }
@@ -238,7 +241,7 @@ TEST(BvhGpu, CameraInsideMillionTriangleSphere) {
 // edge along the middle column (pixel (16, 12) at t = 4); both tree walks miss that whole column.
 // The envelope check cannot see it: its reference walks a tree with the same flaw.
 TEST(BvhGpu, TreeWalkAgreesWithBruteForceInABoxFacePlane) {
-  expect_searches_match(sized(cube_scene(), 33, 25), {{{1, 0, 5}, {1, 0, 0}, {0, 1, 0}, 40}}, all_searches,
+  expect_searches_match(sized(cube_scene(), 33, 25), {{{1, 0, 5}, {1, 0, 0}, {0, 1, 0}, 40}}, all_searches(),
                         Percentiles::ill_conditioned);
 }
 
