@@ -199,6 +199,7 @@ int run_render(const RenderOptions& options) {
 
   if (options.reference) {
     frame = reference_frame(reference(), scene.width, scene.height, aovs);
+    frame.camera = scene.camera;
     stopwatch.lap_ms();
   } else {
     const OpenedDevice opened = opening.get();
@@ -244,6 +245,8 @@ int run_render(const RenderOptions& options) {
 
   std::printf("vkray: wrote %s (%ux%u, %s) on %s\n", written.c_str(), scene.width, scene.height,
               aovs.names().c_str(), device_name.c_str());
+  // A model is framed by vkray: say from where, ready to paste (to render it again, or a neighbour).
+  if (lower_extension(options.scene_path) == ".obj") std::printf("camera: %s\n", camera_option(scene.camera).c_str());
   if (error) std::printf("error vs. double-precision reference: %s\n", error->summary().c_str());
   if (options.timings) {
     std::printf("timings (wall clock unless said; an indented line is a part of the line above it, and a line "

@@ -131,4 +131,15 @@ void apply_camera_option(const std::string& text, Camera& camera) {
   camera = parse_camera_override(given.starts_with("{") ? given : camera_json(given), "--camera", camera);
 }
 
+std::string camera_option(const Camera& camera) {
+  auto number = [](double value) {
+    char text[32];
+    const auto end = std::to_chars(text, text + sizeof text, value).ptr;  // shortest round trip
+    return std::string(text, end);
+  };
+  auto vector = [&](const glm::dvec3& v) { return number(v.x) + "," + number(v.y) + "," + number(v.z); };
+  return "--camera 'from=" + vector(camera.from) + " to=" + vector(camera.to) + " up=" + vector(camera.up) +
+         " fovy=" + number(camera.fovy_degrees) + "'";
+}
+
 }  // namespace vkray::cli

@@ -22,4 +22,8 @@ std::pair<uint32_t, uint32_t> parse_size(const std::string& text);
 // that work when the text has none of them.
 void apply_camera_option(const std::string& text, Camera& camera);
 
+// The camera as a --camera option, "--camera 'from=X,Y,Z to=X,Y,Z up=X,Y,Z fovy=DEGREES'", each
+// number in the fewest digits that read back as the same double: pasted, it renders the same pixels.
+std::string camera_option(const Camera& camera);
+
 }  // namespace vkray::cli

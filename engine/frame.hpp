@@ -1,6 +1,8 @@
 // Per-pixel outputs ("AOVs") of one render, on the host, row-major from the top row.
 #pragma once
 
+#include "engine/scene/camera.hpp"
+
 #include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
 
@@ -48,6 +50,8 @@ struct Frame {
   uint32_t width = 0;
   uint32_t height = 0;
   AovSet aovs;
+  // The camera whose primary rays made the frame (none for given rays): the EXR header describes it.
+  std::optional<Camera> camera;
   std::vector<float> depth;   // distance along the primary ray, +inf on a miss
   std::vector<float> normal;  // 3 planes: unit geometric normal facing the ray, 0 on a miss
   std::vector<float> uv;      // 2 planes: image-plane coordinates of the pixel centre

@@ -800,6 +800,32 @@ TEST_F(CliTest, ModelIsFramedToItsBoundingSphere) {
   }
 }
 
+// The camera that frames a model is printed as a --camera option; pasted back, it renders the same
+// pixels (the numbers read back as the same doubles). A model off the origin, so that no coordinate
+// is round.
+TEST_F(CliTest, FramedCameraIsPrintedReadyToPaste) {
+  write("tetra.obj", "v 0.1234567 -3.3 7.01\nv 1.9 -2.2 7.3\nv 0.7 -1.05 6.4\nv 0.8 -2.9 8.9\nf 1 2 3\nf 1 3 4\nf 2 4 3\nf 1 4 2\n");
+  const RunResult framed = vkray({"render", "tetra.obj", "--width", "48", "--height", "40", "--no-preview", "-o", "framed.exr"});
+  ASSERT_EQ(framed.exit_code, 0) << framed.err;
+  const std::string prefix = "camera: --camera '";
+  const size_t start = framed.out.find(prefix);
+  ASSERT_NE(start, std::string::npos) << framed.out;
+  const size_t end = framed.out.find("'\n", start + prefix.size());
+  ASSERT_NE(end, std::string::npos) << framed.out;
+  const std::string camera = framed.out.substr(start + prefix.size(), end - start - prefix.size());
+  const RunResult pasted = vkray({"render", "tetra.obj", "--width", "48", "--height", "40", "--no-preview", "-o",
+                                  "pasted.exr", "--camera", camera});
+  ASSERT_EQ(pasted.exit_code, 0) << pasted.err;
+  EXPECT_NE(pasted.out.find(prefix + camera + "'"), std::string::npos) << pasted.out;
+  Image first, second;
+  ASSERT_NO_FATAL_FAILURE(read_image(path("framed.exr"), first, true));
+  ASSERT_NO_FATAL_FAILURE(read_image(path("pasted.exr"), second, true));
+  for (const char* channel : {"Z", "N.X", "N.Y", "N.Z", "A"}) EXPECT_EQ(first.channels.at(channel), second.channels.at(channel)) << channel;
+  size_t hits = 0;
+  for (float a : first.channels.at("A")) hits += a == 1.0f;
+  EXPECT_GT(hits, 100u) << "the model should fill much of the image";
+}
+
 TEST_F(CliTest, ModelBeyondTheCoordinateLimitExitsTwo) {
   {
     std::ofstream(path("huge.obj")) << "v 0 0 0\nv 1 0 0\nv 0 2e16 0\nf 1 2 3\n";

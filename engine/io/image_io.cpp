@@ -1,11 +1,13 @@
 #include "engine/io/image_io.hpp"
 
 #include "engine/io/preview.hpp"
+#include "engine/scene/camera_description.hpp"
 
 #include <OpenEXR/ImfChannelList.h>
 #include <OpenEXR/ImfFrameBuffer.h>
 #include <OpenEXR/ImfHeader.h>
 #include <OpenEXR/ImfOutputFile.h>
+#include <OpenEXR/ImfStandardAttributes.h>
 #include <OpenEXR/ImfStringAttribute.h>
 #include <OpenEXR/ImfThreading.h>
 #include <png.h>
@@ -231,6 +233,23 @@ std::once_flag exr_threads_started;
 
 // OpenEXR compresses blocks of rows on its own thread pool, one thread a core, unless
 // use_exr_threads said otherwise first.
+// Imath's matrices act on row vectors (p' = p M): the transpose of a matrix for column vectors.
+Imath::M44f row_vector_matrix(const Matrix4& m) {
+  Imath::M44f transposed;
+  for (int r = 0; r < 4; ++r) {
+    for (int c = 0; c < 4; ++c) transposed[c][r] = static_cast<float>(m[r][c]);
+  }
+  return transposed;
+}
+
+// The camera in OpenEXR's standard attributes worldToCamera and worldToNDC (float32, as the
+// standard defines them) and, exactly, as vkray:camera (engine/scene/camera_description.hpp).
+void describe_camera(Imf::Header& header, const Camera& camera, uint32_t width, uint32_t height) {
+  Imf::addWorldToCamera(header, row_vector_matrix(world_to_openexr_camera(camera, width, height)));
+  Imf::addWorldToNDC(header, row_vector_matrix(world_to_openexr_ndc(camera, width, height)));
+  header.insert("vkray:camera", Imf::StringAttribute(camera_description(camera, width, height).dump()));
+}
+
 void start_exr_threads(unsigned count = std::max(1u, std::thread::hardware_concurrency())) {
   std::call_once(exr_threads_started, [count] { Imf::setGlobalThreadCount(static_cast<int>(count)); });
 }
@@ -247,6 +266,7 @@ void write_exr_to(const PartialFile& file, const std::filesystem::path& path, co
   header.compression() = method;
   if (level > 0) header.zipCompressionLevel() = level;
   header.insert("software", Imf::StringAttribute("vkray"));
+  if (frame.camera) describe_camera(header, *frame.camera, frame.width, frame.height);
   // OpenEXR reads each channel from the frame's own planes (a slice with its strides): no copy.
   Imf::FrameBuffer slices;
   auto add_channel = [&](const char* name, const float* plane) {

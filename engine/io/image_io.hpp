@@ -45,7 +45,9 @@ void remove_stale_partial_files(const std::filesystem::path& target);
 void use_exr_threads(unsigned count);
 
 // float32 channels, by output: depth -> Z; normal -> N.X N.Y N.Z; uv -> U V; and A (1 on a hit,
-// 0 on a miss) whenever depth or normal is present. Throws std::runtime_error naming the file.
+// 0 on a miss) whenever depth or normal is present. A frame with a camera has it in the header:
+// OpenEXR's worldToCamera and worldToNDC (engine/scene/camera.hpp) and vkray:camera, JSON
+// (engine/scene/camera_description.hpp). Throws std::runtime_error naming the file.
 void write_exr(const std::filesystem::path& path, const Frame& frame, std::string_view compression = default_exr_compression);
 
 // 8-bit RGB preview, one panel per output side by side in the order depth, normal, uv: depth as

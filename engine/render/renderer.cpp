@@ -673,6 +673,7 @@ Frame Renderer::render(const Camera& camera, uint32_t width, uint32_t height, Ao
   Impl& r = *impl_;
   if (r.options.shader.generic) aovs = AovSet{Aov::depth, Aov::normal, Aov::uv};  // it writes them all
   Frame frame(width, height, aovs);
+  frame.camera = camera;
   frame.allocate(r.precision() == Precision::float64);
   r.reset_timings();
   if (aovs.empty()) return frame;

@@ -68,12 +68,36 @@ PinholeIntrinsics pinhole_intrinsics(const Camera& camera, uint32_t width, uint3
   return {focal, focal, (width - 1.0) / 2.0, (height - 1.0) / 2.0};
 }
 
-std::array<std::array<double, 4>, 4> world_to_camera(const Camera& camera, uint32_t width, uint32_t height) {
+Matrix4 world_to_camera(const Camera& camera, uint32_t width, uint32_t height) {
   const CameraBasis basis = make_camera_basis(camera, width, height);
   const glm::dvec3 rows[3] = {basis.right, -basis.up, -basis.forward};
-  std::array<std::array<double, 4>, 4> matrix{};
+  Matrix4 matrix{};
   for (int r = 0; r < 3; ++r) matrix[r] = {rows[r].x, rows[r].y, rows[r].z, -glm::dot(rows[r], basis.origin)};
   matrix[3] = {0.0, 0.0, 0.0, 1.0};
+  return matrix;
+}
+
+Matrix4 world_to_openexr_camera(const Camera& camera, uint32_t width, uint32_t height) {
+  Matrix4 matrix = world_to_camera(camera, width, height);
+  for (double& entry : matrix[1]) entry = -entry;  // y up, not down
+  return matrix;
+}
+
+Matrix4 world_to_openexr_ndc(const Camera& camera, uint32_t width, uint32_t height) {
+  // The pinhole model's (u + 0.5) / W = (fx x + (cx + 0.5) z) / (W z), and so for y, with (x, y, z)
+  // its camera coordinates: P [R t] with P's rows giving X, Y, then Z = 1 and W = z.
+  const PinholeIntrinsics k = pinhole_intrinsics(camera, width, height);
+  const Matrix4 projection = {{{k.fx / width, 0.0, (k.cx + 0.5) / width, 0.0},
+                               {0.0, k.fy / height, (k.cy + 0.5) / height, 0.0},
+                               {0.0, 0.0, 0.0, 1.0},
+                               {0.0, 0.0, 1.0, 0.0}}};
+  const Matrix4 rigid = world_to_camera(camera, width, height);
+  Matrix4 matrix{};
+  for (int r = 0; r < 4; ++r) {
+    for (int c = 0; c < 4; ++c) {
+      for (int k_index = 0; k_index < 4; ++k_index) matrix[r][c] += projection[r][k_index] * rigid[k_index][c];
+    }
+  }
   return matrix;
 }
 

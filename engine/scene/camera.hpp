@@ -54,8 +54,21 @@ struct PinholeIntrinsics {
 };
 PinholeIntrinsics pinhole_intrinsics(const Camera& camera, uint32_t width, uint32_t height);
 
+// A 4x4 matrix by rows, for column vectors (p' = M p).
+using Matrix4 = std::array<std::array<double, 4>, 4>;
+
 // [R t; 0 0 0 1] of the pinhole model above, by rows: rows of R are right, -up and -forward of the
 // camera's basis, t = -R from.
-std::array<std::array<double, 4>, 4> world_to_camera(const Camera& camera, uint32_t width, uint32_t height);
+Matrix4 world_to_camera(const Camera& camera, uint32_t width, uint32_t height);
+
+// The camera as OpenEXR's standard attributes describe it (RenderMan's conventions), which the EXR
+// header carries. worldToCamera: camera space x right, y up, z along the view direction (left-handed;
+// points in front have z > 0, their planar depth): rows right, up, -forward.
+Matrix4 world_to_openexr_camera(const Camera& camera, uint32_t width, uint32_t height);
+// worldToNDC: a world point p goes to (X, Y, Z, W) = M (p, 1); (X / W, Y / W) is the point in the
+// image with (0, 0) at the top-left corner of the top-left pixel and (1, 1) at the bottom-right
+// corner of the bottom-right one, x right and y down: ((u + 0.5) / W, (v + 0.5) / H) in the pinhole
+// model's pixel coordinates. W is the planar depth and Z = 1 (Z / W its reciprocal).
+Matrix4 world_to_openexr_ndc(const Camera& camera, uint32_t width, uint32_t height);
 
 }  // namespace vkray

@@ -1,6 +1,7 @@
 #include "engine/views/manifest.hpp"
 
 #include "engine/io/image_io.hpp"
+#include "engine/scene/camera_description.hpp"
 #include "engine/scene/scene.hpp"
 
 #include <fcntl.h>
@@ -18,8 +19,6 @@ namespace vkray {
 namespace {
 
 using Json = nlohmann::json;
-
-Json vector_json(const glm::dvec3& v) { return Json::array({v.x, v.y, v.z}); }
 
 std::string relative_name(const std::filesystem::path& file, const std::filesystem::path& folder) {
   const std::filesystem::path relative = std::filesystem::absolute(file).lexically_normal().lexically_relative(
@@ -53,14 +52,8 @@ std::string manifest_line(const ViewRecord& record, const std::filesystem::path&
   if (record.png) line["png"] = relative_name(*record.png, folder);
   line["width"] = record.width;
   line["height"] = record.height;
-  line["camera"] = nlohmann::ordered_json{{"from", vector_json(record.camera.from)},
-                                          {"to", vector_json(record.camera.to)},
-                                          {"up", vector_json(record.camera.up)},
-                                          {"fovy", record.camera.fovy_degrees}};
-  const PinholeIntrinsics intrinsics = pinhole_intrinsics(record.camera, record.width, record.height);
-  line["intrinsics"] =
-      nlohmann::ordered_json{{"fx", intrinsics.fx}, {"fy", intrinsics.fy}, {"cx", intrinsics.cx}, {"cy", intrinsics.cy}};
-  line["world_to_camera"] = world_to_camera(record.camera, record.width, record.height);
+  const nlohmann::ordered_json camera = camera_description(record.camera, record.width, record.height);
+  for (auto key = camera.begin(); key != camera.end(); ++key) line[key.key()] = key.value();
   return line.dump();
 }
 

@@ -6,8 +6,8 @@
 //    "intrinsics": {"fx": ..., "fy": ..., "cx": ..., "cy": ...},
 //    "world_to_camera": [[...], [...], [...], [0, 0, 0, 1]]}
 //
-// "png" only where previews are written; file names relative to the manifest's folder; intrinsics
-// and world_to_camera in OpenCV's pinhole convention (engine/scene/camera.hpp, README "Many views").
+// "png" only where previews are written; file names relative to the manifest's folder; the camera's
+// keys as engine/scene/camera_description.hpp describes them (README "Many views").
 #pragma once
 
 #include "engine/scene/camera.hpp"

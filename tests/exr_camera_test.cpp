@@ -1,0 +1,126 @@
+// The camera in the EXR header, read back with OpenImageIO as a user's script would: OpenEXR's
+// worldToCamera and worldToNDC take every reference hit point to its planar depth and to its pixel's
+// centre, within the rounding of the matrices to float32 (the standard's type); vkray:camera holds
+// the camera exactly and the pinhole intrinsics.
+#include "engine/io/image_io.hpp"
+#include "engine/reference/reference.hpp"
+#include "engine/scene/scene_loader.hpp"
+#include "tests/temp_dir_test.hpp"
+#include "tests/test_scenes.hpp"
+
+#include <OpenImageIO/imageio.h>
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+
+namespace vkray {
+namespace {
+
+using ExrCameraTest = test::TempDirTest;
+
+// An EXR attribute as 16 floats, Imath's order (row by row, for row vectors: p' = p M).
+std::array<float, 16> read_matrix(const OIIO::ImageSpec& spec, const char* name) {
+  std::array<float, 16> matrix{};
+  const OIIO::ParamValue* value = spec.find_attribute(name, OIIO::TypeMatrix44);
+  EXPECT_NE(value, nullptr) << name << " is not in the header";
+  if (value) std::memcpy(matrix.data(), value->data(), sizeof matrix);
+  return matrix;
+}
+
+// (p, 1) M as a user computes it, in double from the float32 entries, and the bound on how far each
+// component is from the exact matrix's: every entry is within 2^-24 of its value relatively (round
+// to nearest), so component c is off by at most 2^-24 sum_k |M_kc p_k| (the double evaluation adds
+// some 1e-16 of that).
+struct Transformed {
+  glm::dvec4 value, bound;
+};
+Transformed transform(const std::array<float, 16>& m, const glm::dvec3& p) {
+  const double point[4] = {p.x, p.y, p.z, 1.0};
+  Transformed result{};
+  for (int c = 0; c < 4; ++c) {
+    for (int k = 0; k < 4; ++k) {
+      const double term = point[k] * static_cast<double>(m[4 * k + c]);
+      result.value[c] += term;
+      result.bound[c] += std::abs(term) * 0x1p-24 * (1.0 + 1e-12);
+    }
+  }
+  return result;
+}
+
+// The bound on x / w from bounds on x and w (first order; w is a planar depth well away from 0 here).
+double quotient_bound(double x, double w, double x_bound, double w_bound) {
+  return (x_bound + std::abs(x / w) * w_bound) / (std::abs(w) - w_bound);
+}
+
+TEST_F(ExrCameraTest, HeaderMatricesTakeEveryHitToItsPixelAndPlanarDepth) {
+  const Scene scene = test::sized(default_scene(), 64, 48);
+  const CameraBasis basis = make_camera_basis(scene.camera, scene.width, scene.height);
+  const std::vector<ReferenceHit> hits = render_reference_hits(ReferenceScene(scene), basis, scene.width, scene.height);
+  Frame frame = reference_frame(hits, scene.width, scene.height, {Aov::depth});
+  frame.camera = scene.camera;
+  const std::filesystem::path path = dir_ / "camera.exr";
+  write_exr(path, frame);
+
+  auto input = OIIO::ImageInput::open(path.string());
+  ASSERT_TRUE(input) << OIIO::geterror();
+  const OIIO::ImageSpec& spec = input->spec();
+  const std::array<float, 16> to_camera = read_matrix(spec, "worldtocamera");
+  const std::array<float, 16> to_ndc = read_matrix(spec, "worldtoNDC");
+
+  size_t checked = 0;
+  for (uint32_t j = 0; j < scene.height; ++j) {
+    for (uint32_t i = 0; i < scene.width; ++i) {
+      const ReferenceHit& hit = hits[size_t{j} * scene.width + i];
+      if (!std::isfinite(hit.t)) continue;
+      const glm::dvec3 direction = basis.direction(pixel_uv(i, j, scene.width, scene.height));
+      const glm::dvec3 point = basis.origin + hit.t * direction;
+      // Camera space: x right, y up, z the planar depth (along the view direction, -forward).
+      const Transformed camera = transform(to_camera, point);
+      const glm::dvec3 expected_camera(glm::dot(point - basis.origin, basis.right), glm::dot(point - basis.origin, basis.up),
+                                       hit.t * glm::dot(direction, -basis.forward));
+      for (int c = 0; c < 3; ++c) {
+        EXPECT_NEAR(camera.value[c], expected_camera[c], camera.bound[c] + 1e-12) << "pixel " << i << "," << j << " axis " << c;
+      }
+      // NDC: the pixel's centre, (0, 0) the image's top-left corner and (1, 1) its bottom-right.
+      const Transformed ndc = transform(to_ndc, point);
+      const double x = ndc.value.x / ndc.value.w, y = ndc.value.y / ndc.value.w;
+      EXPECT_NEAR(x, (i + 0.5) / scene.width, quotient_bound(ndc.value.x, ndc.value.w, ndc.bound.x, ndc.bound.w) + 1e-12)
+          << "pixel " << i << "," << j;
+      EXPECT_NEAR(y, (j + 0.5) / scene.height, quotient_bound(ndc.value.y, ndc.value.w, ndc.bound.y, ndc.bound.w) + 1e-12)
+          << "pixel " << i << "," << j;
+      EXPECT_NEAR(ndc.value.w, expected_camera.z, ndc.bound.w + 1e-12) << "pixel " << i << "," << j;
+      ++checked;
+    }
+  }
+  EXPECT_GT(checked, size_t{scene.width} * scene.height / 2) << "the scene should fill most of the image";
+
+  // vkray:camera: the camera exactly (JSON numbers read back as the same doubles), and the intrinsics.
+  const nlohmann::json description = nlohmann::json::parse(spec.get_string_attribute("vkray:camera"));
+  const Camera& camera = scene.camera;
+  for (int c = 0; c < 3; ++c) {
+    EXPECT_EQ(description["camera"]["from"][c].get<double>(), camera.from[c]);
+    EXPECT_EQ(description["camera"]["to"][c].get<double>(), camera.to[c]);
+    EXPECT_EQ(description["camera"]["up"][c].get<double>(), camera.up[c]);
+  }
+  EXPECT_EQ(description["camera"]["fovy"].get<double>(), camera.fovy_degrees);
+  const PinholeIntrinsics k = pinhole_intrinsics(camera, scene.width, scene.height);
+  EXPECT_EQ(description["intrinsics"]["fx"].get<double>(), k.fx);
+  EXPECT_EQ(description["intrinsics"]["cy"].get<double>(), k.cy);
+  EXPECT_EQ(description["world_to_camera"][2][3].get<double>(), world_to_camera(camera, scene.width, scene.height)[2][3]);
+}
+
+TEST_F(ExrCameraTest, FramesWithoutACameraHaveNone) {
+  Frame frame(4, 3, {Aov::depth});  // given rays: no camera made them
+  frame.allocate();
+  const std::filesystem::path path = dir_ / "rays.exr";
+  write_exr(path, frame);
+  auto input = OIIO::ImageInput::open(path.string());
+  ASSERT_TRUE(input) << OIIO::geterror();
+  EXPECT_EQ(input->spec().find_attribute("worldtocamera"), nullptr);
+  EXPECT_EQ(input->spec().find_attribute("worldtoNDC"), nullptr);
+  EXPECT_EQ(input->spec().find_attribute("vkray:camera"), nullptr);
+}
+
+}  // namespace
+}  // namespace vkray
