@@ -51,7 +51,9 @@ std::vector<BenchScene> scaling_suite(uint32_t width, uint32_t height) {
   for (const size_t triangles : {1'000, 10'000, 100'000, 1'000'000, 4'000'000}) {
     Scene scene = empty_scene(width, height);
     scene.meshes.push_back(make_sphere_mesh(triangles));
-    scenes.push_back(framed("sphere-mesh-" + std::to_string(scene.triangle_count()), std::move(scene)));
+    // Named before the call: its arguments are evaluated in no set order, and the scene moves.
+    const std::string name = "sphere-mesh-" + std::to_string(scene.triangle_count());
+    scenes.push_back(framed(name, std::move(scene)));
   }
   for (const size_t spheres : {1, 10, 100, 1'000, 10'000}) {
     Scene scene = empty_scene(width, height);
