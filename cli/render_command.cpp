@@ -13,6 +13,8 @@
 
 #include <algorithm>
 #include <cctype>
+#include <charconv>
+#include <cmath>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
@@ -37,6 +39,7 @@ struct RenderOptions {
   bool check = false;
   bool reference = false;
   std::string compression = default_exr_compression;
+  std::string miss = "inf";
   std::string precision = "float";
   std::string traversal = "auto";
   ViewsOptions views;
@@ -70,6 +73,19 @@ class Stopwatch {
   std::chrono::steady_clock::time_point last_ = std::chrono::steady_clock::now();
 };
 
+// --miss: inf, -inf, nan or a finite number, as the float written.
+float miss_value(const std::string& text) {
+  if (text == "inf" || text == "+inf") return INFINITY;
+  if (text == "-inf") return -INFINITY;
+  if (text == "nan") return NAN;
+  float value = 0.0f;
+  const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), value);
+  if (error != std::errc() || end != text.data() + text.size() || !std::isfinite(value)) {
+    throw InputError("--miss: '" + text + "' is not inf, -inf, nan or a number");
+  }
+  return value;
+}
+
 // Usage errors that parsing cannot see. The output is always OpenEXR and the preview always PNG,
 // so a name with another extension (x.jpg holding a PNG) would mislead whoever opens it; the two
 // extensions also keep the preview from ever replacing the EXR. --check on uv alone would count
@@ -87,6 +103,7 @@ void check_render_options(const RenderOptions& options, const AovSet& aovs) {
     throw InputError("--compression: unknown '" + options.compression + "' (choose from " + known +
                      "; zip and zips also with a deflate level, zip:1 to zip:9)");
   }
+  miss_value(options.miss);  // refused here, before any work
   if (options.check && !aovs.needs_rays()) {
     throw InputError("--check compares depth and normal with the reference; add one of them to --aov");
   }
@@ -109,7 +126,7 @@ int run_render_views(const RenderOptions& options, const AovSet& aovs) {
   if (options.preview) batch.png = OutputPattern(*options.preview, "--preview");
   batch.shard = parse_shard(options.views);
   batch.manifest = manifest_path(options.views, batch.shard, batch.exr);
-  batch.compression = options.compression;
+  batch.exr_settings = {options.compression, miss_value(options.miss)};
   batch.aovs = aovs;
   batch.overwrite = options.views.overwrite;
   if (options.views.views_file) batch.cameras = batch_cameras(options.views, Camera{});
@@ -198,8 +215,7 @@ int run_render(const RenderOptions& options) {
   };
 
   if (options.reference) {
-    frame = reference_frame(reference(), scene.width, scene.height, aovs);
-    frame.camera = scene.camera;
+    frame = reference_frame(reference(), scene.camera, scene.width, scene.height, aovs);
     stopwatch.lap_ms();
   } else {
     const OpenedDevice opened = opening.get();
@@ -238,7 +254,8 @@ int run_render(const RenderOptions& options) {
   stopwatch.lap_ms();
 
   std::string written = options.output;
-  write_outputs(options.output, options.no_preview ? nullptr : &preview, frame, options.compression);
+  write_outputs(options.output, options.no_preview ? nullptr : &preview, frame,
+                {options.compression, miss_value(options.miss)});
   if (!options.no_preview) written += " and " + preview.string();
   const double write_ms = stopwatch.lap_ms();
   const double total_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
@@ -331,6 +348,10 @@ Action add_render_command(CLI::App& app) {
   command->add_option("--compression", options->compression,
                       "OpenEXR compression, all lossless: zip, zips, piz, rle, none (fastest, largest); zip and zips "
                       "also with a deflate level from 1 (fastest) to 9, as zip:9")
+      ->capture_default_str();
+  command->add_option("--miss", options->miss,
+                      "Depth written where the ray hits nothing (Z and planar.Z; A is 0 there): inf, -inf, nan or a "
+                      "number such as 0")
       ->capture_default_str();
   CLI::Option* device = add_device_options(command, options->device_options);
   CLI::Option* precision = command->add_option("--precision", options->precision,

@@ -32,7 +32,9 @@ int run_view(const ViewCommandOptions& options) {
   std::optional<uint32_t> width, height;
   if (options.size) std::tie(width, height) = parse_size(*options.size);
   const auto output = aov_from_name(options.output);
-  if (!output) throw InputError("--output: unknown output '" + options.output + "' (choose from " + aov_names_help + ")");
+  if (!output || AovSet{*output}.has_camera_outputs()) {
+    throw InputError("--output: '" + options.output + "' is not an output the viewer shows (choose from depth, normal, uv)");
+  }
   if (options.screenshot && lower_extension(*options.screenshot) != ".png") {
     throw InputError("--screenshot: '" + *options.screenshot + "' must end in .png (what the window shows, 8 bits)");
   }
@@ -71,7 +73,7 @@ Action add_view_command(CLI::App& app) {
   command->add_option("--camera", options->camera,
                       "Override the camera: 'from=X,Y,Z to=X,Y,Z up=X,Y,Z fovy=DEGREES' (any of the keys), or the "
                       "scene file's camera as JSON '{\"from\": [0, 1, 5]}'");
-  command->add_option("--output", options->output, std::string("Output shown first: ") + aov_names_help)
+  command->add_option("--output", options->output, "Output shown first: depth, normal, uv")
       ->capture_default_str();
   add_device_options(command, options->device_options);
   add_traversal_option(command, options->traversal);

@@ -1,7 +1,12 @@
 #include "engine/frame.hpp"
 
+#include "engine/parallel.hpp"
+
+#include <glm/geometric.hpp>
+
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 
 namespace vkray {
 
@@ -10,7 +15,12 @@ struct NamedAov {
   Aov aov;
   const char* name;
 };
-constexpr NamedAov named_aovs[] = {{Aov::depth, "depth"}, {Aov::normal, "normal"}, {Aov::uv, "uv"}};
+constexpr NamedAov named_aovs[] = {{Aov::depth, "depth"},
+                                   {Aov::normal, "normal"},
+                                   {Aov::uv, "uv"},
+                                   {Aov::planar_depth, "planar-depth"},
+                                   {Aov::position, "position"},
+                                   {Aov::camera_position, "camera-position"}};
 }  // namespace
 
 std::string AovSet::names() const {
@@ -31,9 +41,13 @@ std::optional<Aov> aov_from_name(std::string_view name) {
 }
 
 void Frame::allocate(bool doubles) {
-  depth.assign(aovs.has(Aov::depth) ? pixel_count() : 0, 0.0f);
-  normal.assign(aovs.has(Aov::normal) ? 3 * pixel_count() : 0, 0.0f);
-  uv.assign(aovs.has(Aov::uv) ? 2 * pixel_count() : 0, 0.0f);
+  const AovSet device = aovs.on_device();
+  depth.assign(device.has(Aov::depth) ? pixel_count() : 0, 0.0f);
+  normal.assign(device.has(Aov::normal) ? 3 * pixel_count() : 0, 0.0f);
+  uv.assign(device.has(Aov::uv) ? 2 * pixel_count() : 0, 0.0f);
+  planar_depth.assign(aovs.has(Aov::planar_depth) ? pixel_count() : 0, 0.0f);
+  position.assign(aovs.has(Aov::position) ? 3 * pixel_count() : 0, 0.0f);
+  camera_position.assign(aovs.has(Aov::camera_position) ? 3 * pixel_count() : 0, 0.0f);
   depth64.assign(doubles ? depth.size() : 0, 0.0);
   normal64.assign(doubles ? normal.size() : 0, 0.0);
 }
@@ -44,9 +58,40 @@ void Frame::round_doubles() {
 }
 
 bool Frame::hit(size_t pixel) const {
-  if (aovs.has(Aov::depth)) return std::isfinite(depth[pixel]);
-  if (aovs.has(Aov::normal)) return normal_at(pixel) != glm::vec3(0.0f);
+  if (!depth.empty()) return std::isfinite(depth[pixel]);
+  if (!normal.empty()) return normal_at(pixel) != glm::vec3(0.0f);
   return false;
+}
+
+void add_camera_outputs(Frame& frame) {
+  if (!frame.aovs.has_camera_outputs()) return;
+  if (!frame.camera || frame.depth.empty()) throw std::logic_error("add_camera_outputs: the frame has no camera or no depth");
+  const CameraBasis basis = make_camera_basis(*frame.camera, frame.width, frame.height);
+  const size_t pixels = frame.pixel_count();
+  auto store = [pixels](std::vector<float>& planes, size_t p, const glm::dvec3& value) {
+    if (planes.empty()) return;
+    for (int c = 0; c < 3; ++c) planes[c * pixels + p] = static_cast<float>(value[c]);
+  };
+  parallel_for_chunks(frame.height, [&](size_t first_row, size_t end_row) {
+    for (auto j = static_cast<uint32_t>(first_row); j < end_row; ++j) {
+      for (uint32_t i = 0; i < frame.width; ++i) {
+        const size_t p = size_t{j} * frame.width + i;
+        const double t = frame.depth64.empty() ? double{frame.depth[p]} : frame.depth64[p];
+        if (!std::isfinite(t)) {
+          if (!frame.planar_depth.empty()) frame.planar_depth[p] = INFINITY;
+          store(frame.position, p, glm::dvec3(0.0));
+          store(frame.camera_position, p, glm::dvec3(0.0));
+          continue;
+        }
+        const glm::dvec3 offset = t * basis.direction(pixel_uv(i, j, frame.width, frame.height));
+        // OpenEXR's camera space (world_to_openexr_camera): x right, y up, z the view direction.
+        const glm::dvec3 in_camera(glm::dot(offset, basis.right), glm::dot(offset, basis.up), -glm::dot(offset, basis.forward));
+        if (!frame.planar_depth.empty()) frame.planar_depth[p] = static_cast<float>(in_camera.z);
+        store(frame.position, p, basis.origin + offset);
+        store(frame.camera_position, p, in_camera);
+      }
+    }
+  }, 16);
 }
 
 DepthRange finite_depth_range(const Frame& frame) {

@@ -15,7 +15,9 @@
 
 namespace vkray {
 
-enum class Aov : uint32_t { depth = 1, normal = 2, uv = 4 };
+// depth, normal and uv come from the device; planar_depth, position and camera_position are the
+// camera outputs, computed on the host from the depth and the camera (add_camera_outputs).
+enum class Aov : uint32_t { depth = 1, normal = 2, uv = 4, planar_depth = 8, position = 16, camera_position = 32 };
 
 // A set of outputs as a bit mask of Aov values.
 class AovSet {
@@ -28,17 +30,28 @@ class AovSet {
   constexpr void add(Aov aov) { bits_ |= static_cast<uint32_t>(aov); }
   constexpr bool empty() const { return bits_ == 0; }
   constexpr uint32_t bits() const { return bits_; }
-  // Depth or normal need a ray cast; uv alone does not.
-  constexpr bool needs_rays() const { return has(Aov::depth) || has(Aov::normal); }
+  constexpr bool has_camera_outputs() const {
+    return has(Aov::planar_depth) || has(Aov::position) || has(Aov::camera_position);
+  }
+  // Depth, normal or a camera output need a ray cast; uv alone does not.
+  constexpr bool needs_rays() const { return has(Aov::depth) || has(Aov::normal) || has_camera_outputs(); }
+  // What the device computes for these outputs: the camera outputs need its depth.
+  constexpr AovSet on_device() const {
+    AovSet device;
+    device.bits_ = bits_ & (static_cast<uint32_t>(Aov::depth) | static_cast<uint32_t>(Aov::normal) |
+                            static_cast<uint32_t>(Aov::uv));
+    if (has_camera_outputs()) device.add(Aov::depth);
+    return device;
+  }
   std::string names() const;  // "depth,normal"
 
  private:
   uint32_t bits_ = 0;
 };
 
-// "depth", "normal" or "uv"; nullopt for anything else.
+// "depth", "normal", "uv", "planar-depth", "position" or "camera-position"; nullopt for anything else.
 std::optional<Aov> aov_from_name(std::string_view name);
-inline constexpr const char* aov_names_help = "depth, normal, uv";
+inline constexpr const char* aov_names_help = "depth, normal, uv, planar-depth, position, camera-position";
 
 // Multi-component outputs are stored as planes (all x, then all y, ...), the layout the shader
 // writes: neighbouring invocations then store to neighbouring addresses.
@@ -52,16 +65,23 @@ struct Frame {
   AovSet aovs;
   // The camera whose primary rays made the frame (none for given rays): the EXR header describes it.
   std::optional<Camera> camera;
-  std::vector<float> depth;   // distance along the primary ray, +inf on a miss
+  std::vector<float> depth;   // distance along the primary ray, +inf on a miss; also for the camera outputs
   std::vector<float> normal;  // 3 planes: unit geometric normal facing the ray, 0 on a miss
   std::vector<float> uv;      // 2 planes: image-plane coordinates of the pixel centre
+  // The camera outputs (README, "Output contract"): the hit point's distance to the image plane
+  // (+inf on a miss), and the hit point in world space and in OpenEXR's camera space (3 planes each,
+  // 0 on a miss).
+  std::vector<float> planar_depth;
+  std::vector<float> position;
+  std::vector<float> camera_position;
   // The float64 shader's depth and normals before rounding (empty otherwise): what its agreement
   // with the reference is measured on. depth and normal then hold them rounded.
   std::vector<double> depth64;
   std::vector<double> normal64;
 
   size_t pixel_count() const { return size_t{width} * height; }
-  // Sizes the buffers of the outputs in `aovs` for width x height, with the double ones if asked.
+  // Sizes the buffers of the outputs in `aovs` for width x height (depth also for the camera
+  // outputs), with the double ones if asked.
   void allocate(bool doubles = false);
   // depth and normal from depth64 and normal64, where those are there.
   void round_doubles();
@@ -72,6 +92,12 @@ struct Frame {
   // A hit is known from depth (finite) or, when only normals were asked for, from a non-zero normal.
   bool hit(size_t pixel) const;
 };
+
+// Fills the camera outputs `frame.aovs` asks for from its depth (depth64 where the float64 shader or
+// the reference left it: the hit point then rounds to float once) and its camera, in double:
+// the hit point is from + t d with d the pixel's unit ray direction in double (CameraBasis), whose
+// difference from the float32 shader's direction (a few float32 roundings) is within the error of t.
+void add_camera_outputs(Frame& frame);
 
 // The nearest and farthest finite depth of an image; far is 0 when nothing was hit.
 struct DepthRange {

@@ -124,10 +124,13 @@ AovSet aovs_from(py::handle argument) {
   AovSet aovs;
   for (const std::string& name : names) {
     const auto aov = aov_from_name(name);
-    if (!aov) throw InputError("aovs: unknown output '" + name + "' (known: " + aov_names_help + ")");
+    if (!aov) throw InputError("aovs: unknown output '" + name + "' (known: depth, normal, uv)");
     aovs.add(*aov);
+    if (aovs.has_camera_outputs()) {
+      throw InputError("aovs: '" + name + "' is written by `vkray render` only so far; here: depth, normal, uv");
+    }
   }
-  if (aovs.empty()) throw InputError("aovs: name at least one output (" + std::string(aov_names_help) + ")");
+  if (aovs.empty()) throw InputError("aovs: name at least one output (depth, normal, uv)");
   return aovs;
 }
 

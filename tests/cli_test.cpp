@@ -421,6 +421,87 @@ TEST_F(CliTest, PlaneSceneDepthMatchesClosedFormEverywhere) {
   EXPECT_EQ(failures, 0);
 }
 
+// The camera outputs alone (no depth asked for) on the same plane, seen straight down from height
+// h: every hit is at planar depth h, at P = (h x / d, 0, -h y / d) in the world and (h x / d,
+// h y / d, h) in OpenEXR's camera space (x right, y up, z the view direction). They come from the
+// GPU's depth, within the relative error the test above holds it to, and from the camera in double.
+TEST_F(CliTest, CameraOutputsOnAPlaneMatchClosedForm) {
+  write("plane.json", R"({
+    "camera": {"from": [0, 2.5, 0], "to": [0, 0, 0], "up": [0, 0, -1], "fovy": 60},
+    "planes": [{"point": [0, 0, 0], "normal": [0, -3, 0]}]
+  })");
+  const int width = 24, height = 36;
+  const RunResult run = vkray({"render", "plane.json", "--width", "24", "--height", "36", "--aov",
+                               "planar-depth,position,camera-position", "-o", "plane.exr"});
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  Image exr;
+  ASSERT_NO_FATAL_FAILURE(read_image(path("plane.exr"), exr, true));
+  EXPECT_EQ(exr.channels.count("Z"), 0u) << "depth was not asked for";
+  EXPECT_TRUE(fs::is_regular_file(path("plane.png"))) << "the preview shows the depth the outputs come from";
+  const double h = 2.5, sy = 36.0 / 24.0, d = sy / std::tan(30.0 * std::numbers::pi / 180.0);
+  const double tolerance = 1e-5;  // relative, of the distance to the hit (the depth test above)
+  int failures = 0;
+  for (int j = 0; j < height; ++j) {
+    for (int i = 0; i < width; ++i) {
+      const auto [x, y] = pixel_uv(i, j, width, height);
+      const double distance = h * std::sqrt(x * x + y * y + d * d) / d;
+      const std::array<double, 3> world = {h * x / d, 0.0, -h * y / d}, camera = {h * x / d, h * y / d, h};
+      const char* world_channels[] = {"P.X", "P.Y", "P.Z"};
+      const char* camera_channels[] = {"camera.P.X", "camera.P.Y", "camera.P.Z"};
+      bool ok = exr.at("A", i, j) == 1.0f && std::abs(exr.at("planar.Z", i, j) - h) <= tolerance * distance;
+      for (int c = 0; c < 3; ++c) {
+        ok = ok && std::abs(exr.at(world_channels[c], i, j) - world[c]) <= tolerance * distance &&
+             std::abs(exr.at(camera_channels[c], i, j) - camera[c]) <= tolerance * distance;
+      }
+      if (!ok && ++failures <= 10) {
+        ADD_FAILURE() << "pixel (" << i << ", " << j << "): planar.Z = " << exr.at("planar.Z", i, j) << " (expected " << h
+                      << "), P = " << exr.at("P.X", i, j) << ", " << exr.at("P.Y", i, j) << ", " << exr.at("P.Z", i, j)
+                      << " (expected " << world[0] << ", 0, " << world[2] << "), camera.P = " << exr.at("camera.P.X", i, j)
+                      << ", " << exr.at("camera.P.Y", i, j) << ", " << exr.at("camera.P.Z", i, j);
+      }
+    }
+  }
+  EXPECT_EQ(failures, 0);
+}
+
+// --miss changes the depth channels on missed pixels alone (A = 0 there) and says so in the header;
+// a value that is not one is refused before any work.
+TEST_F(CliTest, MissValueReplacesOnlyMissedDepths) {
+  expect_error(vkray({"render", "missing.json", "--miss", "zero"}), 2, {"--miss", "'zero'", "inf, -inf, nan or a number"});
+  expect_error(vkray({"render", "missing.json", "--miss", "1e99"}), 2, {"--miss", "'1e99'"});
+  write("sphere.json", sphere_scene);
+  Image reference;
+  ASSERT_EQ(vkray({"render", "sphere.json", "--aov", "depth,planar-depth", "--no-preview", "-o", "inf.exr"}).exit_code, 0);
+  ASSERT_NO_FATAL_FAILURE(read_image(path("inf.exr"), reference, true));
+  for (const auto& [given, expected] : {std::pair<std::string, float>{"0", 0.0f}, {"-1.5", -1.5f}, {"nan", NAN}}) {
+    SCOPED_TRACE("--miss " + given);
+    const RunResult run = vkray({"render", "sphere.json", "--aov", "depth,planar-depth", "--no-preview", "-o",
+                                 "miss.exr", "--miss", given});
+    ASSERT_EQ(run.exit_code, 0) << run.err;
+    Image exr;
+    ASSERT_NO_FATAL_FAILURE(read_image(path("miss.exr"), exr, true));
+    size_t misses = 0;
+    for (const char* channel : {"Z", "planar.Z"}) {
+      for (size_t p = 0; p < exr.channels.at(channel).size(); ++p) {
+        const float value = exr.channels.at(channel)[p], before = reference.channels.at(channel)[p];
+        if (reference.channels.at("A")[p] == 1.0f) {
+          EXPECT_EQ(value, before) << channel << " pixel " << p;
+        } else {
+          ++misses;
+          EXPECT_TRUE(std::isinf(before)) << channel << " pixel " << p;
+          EXPECT_TRUE(std::isnan(expected) ? std::isnan(value) : value == expected) << channel << " pixel " << p << ": " << value;
+        }
+      }
+    }
+    EXPECT_GT(misses, 0u);
+    EXPECT_EQ(exr.channels.at("A"), reference.channels.at("A"));
+    auto input = OIIO::ImageInput::open(path("miss.exr").string());
+    ASSERT_TRUE(input);
+    const float recorded = input->spec().get_float_attribute("vkray:miss", 12345.0f);
+    EXPECT_TRUE(std::isnan(expected) ? std::isnan(recorded) : recorded == expected) << recorded;
+  }
+}
+
 // ---------------------------------------------------------------------------------------------
 // 3. and 4. Choosing outputs with --aov
 
@@ -1126,6 +1207,7 @@ TEST_F(CliTest, OutputFormatsAndFoldersAreCheckedBeforeAnyWork) {
   expect_error(vkray({"render", "missing.json", "--preview", "x.bmpx"}), 2, {"--preview", "'x.bmpx'", ".png"});
   expect_error(vkray({"render", "missing.json", "--preview", "x.jpg"}), 2, {"--preview", "'x.jpg'", ".png"});
   expect_error(vkray({"view", "--screenshot", "x.exr"}), 2, {"--screenshot", "'x.exr'", ".png"});
+  expect_error(vkray({"view", "--output", "position"}), 2, {"--output", "'position'", "depth, normal, uv"});
   // A folder the user cannot create files in (even as root: /proc takes no new files).
   const RunResult run = vkray({"render", "missing.json", "-o", "/proc/vkray-out.exr"});
   expect_error(run, 1, {"/proc/vkray-out.exr", "cannot write"});

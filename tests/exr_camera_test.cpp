@@ -13,6 +13,7 @@
 #include <nlohmann/json.hpp>
 
 #include <cmath>
+#include <functional>
 
 namespace vkray {
 namespace {
@@ -57,8 +58,7 @@ TEST_F(ExrCameraTest, HeaderMatricesTakeEveryHitToItsPixelAndPlanarDepth) {
   const Scene scene = test::sized(default_scene(), 64, 48);
   const CameraBasis basis = make_camera_basis(scene.camera, scene.width, scene.height);
   const std::vector<ReferenceHit> hits = render_reference_hits(ReferenceScene(scene), basis, scene.width, scene.height);
-  Frame frame = reference_frame(hits, scene.width, scene.height, {Aov::depth});
-  frame.camera = scene.camera;
+  const Frame frame = reference_frame(hits, scene.camera, scene.width, scene.height, {Aov::depth});
   const std::filesystem::path path = dir_ / "camera.exr";
   write_exr(path, frame);
 
@@ -108,6 +108,74 @@ TEST_F(ExrCameraTest, HeaderMatricesTakeEveryHitToItsPixelAndPlanarDepth) {
   EXPECT_EQ(description["intrinsics"]["fx"].get<double>(), k.fx);
   EXPECT_EQ(description["intrinsics"]["cy"].get<double>(), k.cy);
   EXPECT_EQ(description["world_to_camera"][2][3].get<double>(), world_to_camera(camera, scene.width, scene.height)[2][3]);
+}
+
+// What a user of vision code does with the file: reads planar.Z and the intrinsics and
+// world_to_camera of vkray:camera, lifts every hit pixel to the world and lands on its P within
+// the rounding of the two float32 channels: planar depth within 2^-24 relatively moves the point
+// along its ray by 2^-24 t at most, P's components are within 2^-24 of theirs.
+TEST_F(ExrCameraTest, PlanarDepthReprojectsToPositionWithTheHeaderCamera) {
+  const Scene scene = test::sized(default_scene(), 64, 48);
+  const CameraBasis basis = make_camera_basis(scene.camera, scene.width, scene.height);
+  const std::vector<ReferenceHit> hits = render_reference_hits(ReferenceScene(scene), basis, scene.width, scene.height);
+  const Frame frame = reference_frame(hits, scene.camera, scene.width, scene.height,
+                                      {Aov::planar_depth, Aov::position, Aov::camera_position});
+  const std::filesystem::path path = dir_ / "camera-outputs.exr";
+  write_exr(path, frame);
+
+  auto input = OIIO::ImageInput::open(path.string());
+  ASSERT_TRUE(input) << OIIO::geterror();
+  const OIIO::ImageSpec& spec = input->spec();
+  std::vector<float> pixels(size_t{scene.width} * scene.height * spec.nchannels);
+  ASSERT_TRUE(input->read_image(0, 0, 0, spec.nchannels, OIIO::TypeFloat, pixels.data())) << input->geterror();
+  auto channel = [&](const char* name) {
+    const int index = spec.channelindex(name);
+    EXPECT_GE(index, 0) << name << " is not in the file";
+    return [&, index](size_t p) { return index < 0 ? NAN : double{pixels[p * spec.nchannels + index]}; };
+  };
+  EXPECT_LT(spec.channelindex("Z"), 0) << "depth was not asked for";
+  const auto planar = channel("planar.Z"), alpha = channel("A");
+  const std::array<std::function<double(size_t)>, 3> position = {channel("P.X"), channel("P.Y"), channel("P.Z")};
+  const std::array<std::function<double(size_t)>, 3> in_camera = {channel("camera.P.X"), channel("camera.P.Y"),
+                                                                  channel("camera.P.Z")};
+
+  const nlohmann::json description = nlohmann::json::parse(spec.get_string_attribute("vkray:camera"));
+  const auto& k = description["intrinsics"];
+  const double fx = k["fx"], fy = k["fy"], cx = k["cx"], cy = k["cy"];
+  const auto rigid = description["world_to_camera"].get<std::array<std::array<double, 4>, 4>>();
+  size_t hit_pixels = 0;
+  for (uint32_t j = 0; j < scene.height; ++j) {
+    for (uint32_t i = 0; i < scene.width; ++i) {
+      const size_t p = size_t{j} * scene.width + i;
+      const ReferenceHit& hit = hits[p];
+      ASSERT_EQ(alpha(p), std::isfinite(hit.t) ? 1.0 : 0.0) << "pixel " << i << "," << j;
+      if (!std::isfinite(hit.t)) {
+        EXPECT_EQ(planar(p), INFINITY);
+        for (int c = 0; c < 3; ++c) {
+          EXPECT_EQ(position[c](p), 0.0);
+          EXPECT_EQ(in_camera[c](p), 0.0);
+        }
+        continue;
+      }
+      ++hit_pixels;
+      // OpenCV's camera coordinates of the pixel at planar depth z, then p = R^T (c - t).
+      const double z = planar(p);
+      const glm::dvec3 c((i - cx) * z / fx, (j - cy) * z / fy, z);
+      glm::dvec3 world(0.0);
+      for (int row = 0; row < 3; ++row) {
+        for (int axis = 0; axis < 3; ++axis) world[axis] += rigid[row][axis] * (c[row] - rigid[row][3]);
+      }
+      for (int axis = 0; axis < 3; ++axis) {
+        const double bound = 0x1p-24 * (std::abs(position[axis](p)) + hit.t) + 1e-12 * (1.0 + std::abs(world[axis]));
+        EXPECT_NEAR(world[axis], position[axis](p), bound) << "pixel " << i << "," << j << " axis " << axis;
+      }
+      // camera.P is OpenEXR's camera space: OpenCV's with y up; its z is the planar depth itself.
+      EXPECT_EQ(in_camera[2](p), z);
+      EXPECT_NEAR(in_camera[0](p), c.x, 0x1p-24 * (std::abs(c.x) + hit.t) + 1e-12) << "pixel " << i << "," << j;
+      EXPECT_NEAR(in_camera[1](p), -c.y, 0x1p-24 * (std::abs(c.y) + hit.t) + 1e-12) << "pixel " << i << "," << j;
+    }
+  }
+  EXPECT_GT(hit_pixels, size_t{scene.width} * scene.height / 2);
 }
 
 TEST_F(ExrCameraTest, FramesWithoutACameraHaveNone) {

@@ -79,7 +79,6 @@ BenchRow run_views_variant(GpuDevice& device, const Scene& scene, const BenchVar
   batch.height = scene.height;
   batch.aovs = aovs;
   batch.exr = OutputPattern((folder / "view-{index:05}.exr").string(), "views");
-  batch.compression = default_exr_compression;
   batch.manifest = folder / "manifest.jsonl";
   batch.overwrite = true;
   struct Remover {

@@ -4,6 +4,7 @@
 #include "engine/scene/camera_description.hpp"
 
 #include <OpenEXR/ImfChannelList.h>
+#include <OpenEXR/ImfFloatAttribute.h>
 #include <OpenEXR/ImfFrameBuffer.h>
 #include <OpenEXR/ImfHeader.h>
 #include <OpenEXR/ImfOutputFile.h>
@@ -149,7 +150,7 @@ void write_png(const std::filesystem::path& path, size_t width, size_t height, c
 }
 
 void write_exr_to(const PartialFile& file, const std::filesystem::path& target, const Frame& frame,
-                  std::string_view compression);
+                  const ExrSettings& settings);
 void write_preview_png_to(const PartialFile& file, const std::filesystem::path& target, const Frame& frame);
 
 }  // namespace
@@ -195,9 +196,9 @@ bool is_exr_compression(std::string_view name) {
   return (method == "zip" || method == "zips") && level.size() == 1 && level[0] >= '1' && level[0] <= '9';
 }
 
-void write_exr(const std::filesystem::path& path, const Frame& frame, std::string_view compression) {
+void write_exr(const std::filesystem::path& path, const Frame& frame, const ExrSettings& settings) {
   PartialFile file(path);
-  write_exr_to(file, path, frame, compression);
+  write_exr_to(file, path, frame, settings);
   file.commit();
 }
 
@@ -255,9 +256,10 @@ void start_exr_threads(unsigned count = std::max(1u, std::thread::hardware_concu
 }
 
 void write_exr_to(const PartialFile& file, const std::filesystem::path& path, const Frame& frame,
-                  std::string_view compression) {
+                  const ExrSettings& settings) {
+  const std::string_view compression = settings.compression;
   if (!is_exr_compression(compression)) throw std::invalid_argument("unknown EXR compression " + std::string(compression));
-  if (!frame.aovs.has(Aov::depth) && !frame.aovs.has(Aov::normal) && !frame.aovs.has(Aov::uv)) {
+  if (frame.aovs.empty()) {
     throw std::runtime_error(path.string() + ": no outputs to write");
   }
   start_exr_threads();
@@ -275,7 +277,21 @@ void write_exr_to(const PartialFile& file, const std::filesystem::path& path, co
                                    sizeof(float) * frame.width));
   };
   const size_t pixels = frame.pixel_count();
-  if (frame.aovs.has(Aov::depth)) add_channel("Z", frame.depth.data());
+  // Depths with the chosen value where the ray missed (ExrSettings::miss), in a copy: the frame
+  // keeps +inf, by which hits are known.
+  const bool miss_replaced = !(std::isinf(settings.miss) && settings.miss > 0.0f);
+  auto with_misses = [&](const std::vector<float>& depths) {
+    std::vector<float> written(depths);
+    for (size_t p = 0; p < pixels; ++p) {
+      if (!frame.hit(p)) written[p] = settings.miss;
+    }
+    return written;
+  };
+  std::vector<float> depth_written, planar_written;
+  if (frame.aovs.has(Aov::depth)) {
+    if (miss_replaced) depth_written = with_misses(frame.depth);
+    add_channel("Z", miss_replaced ? depth_written.data() : frame.depth.data());
+  }
   if (frame.aovs.has(Aov::normal)) {
     add_channel("N.X", frame.normal.data());
     add_channel("N.Y", frame.normal.data() + pixels);
@@ -285,6 +301,20 @@ void write_exr_to(const PartialFile& file, const std::filesystem::path& path, co
     add_channel("U", frame.uv.data());
     add_channel("V", frame.uv.data() + pixels);
   }
+  // The camera outputs as OpenEXR layers ("layer.channel"); P for positions, the name pbrt-v4's
+  // G-buffer gives them (in camera space there: camera.P here, world space P).
+  if (frame.aovs.has(Aov::planar_depth)) {
+    if (miss_replaced) planar_written = with_misses(frame.planar_depth);
+    add_channel("planar.Z", miss_replaced ? planar_written.data() : frame.planar_depth.data());
+  }
+  if (frame.aovs.has(Aov::depth) || frame.aovs.has(Aov::planar_depth)) {
+    header.insert("vkray:miss", Imf::FloatAttribute(settings.miss));
+  }
+  auto add_xyz = [&](const std::string& prefix, const std::vector<float>& planes) {
+    for (size_t c = 0; c < 3; ++c) add_channel((prefix + "XYZ"[c]).c_str(), planes.data() + c * pixels);
+  };
+  if (frame.aovs.has(Aov::position)) add_xyz("P.", frame.position);
+  if (frame.aovs.has(Aov::camera_position)) add_xyz("camera.P.", frame.camera_position);
   std::vector<float> alpha;
   if (frame.aovs.needs_rays()) {
     alpha.resize(pixels);
@@ -305,6 +335,8 @@ void write_preview_png_to(const PartialFile& file, const std::filesystem::path& 
   for (Aov aov : {Aov::depth, Aov::normal, Aov::uv}) {
     if (frame.aovs.has(aov)) shown.push_back(aov);
   }
+  // Camera outputs alone: the depth they come from stands for them.
+  if (shown.empty() && !frame.depth.empty()) shown.push_back(Aov::depth);
   if (shown.empty()) throw std::runtime_error(path.string() + ": no outputs to preview");
   const size_t width = frame.width, height = frame.height, row_width = width * shown.size();
   std::vector<uint8_t> rgb(row_width * height * 3);
@@ -337,7 +369,7 @@ void remove_stale_partial_files(const std::filesystem::path& target) {
 }
 
 void write_outputs(const std::filesystem::path& exr, const std::filesystem::path* preview, const Frame& frame,
-                   std::string_view compression) {
+                   const ExrSettings& settings) {
   PartialFile exr_file(exr);
   std::optional<PartialFile> png_file;
   if (preview) png_file.emplace(*preview);
@@ -345,7 +377,7 @@ void write_outputs(const std::filesystem::path& exr, const std::filesystem::path
   if (preview) png = std::async(std::launch::async, [&] { write_preview_png_to(*png_file, *preview, frame); });
   std::exception_ptr exr_failure;
   try {
-    write_exr_to(exr_file, exr, frame, compression);
+    write_exr_to(exr_file, exr, frame, settings);
   } catch (...) {
     exr_failure = std::current_exception();
   }

@@ -3,7 +3,9 @@
 
 #include "engine/frame.hpp"
 
+#include <cmath>
 #include <filesystem>
+#include <string>
 #include <string_view>
 #include <vector>
 
@@ -18,6 +20,14 @@ namespace vkray {
 inline constexpr const char* exr_compressions[] = {"zip", "zips", "piz", "rle", "none"};
 inline constexpr const char* default_exr_compression = "zip:1";
 bool is_exr_compression(std::string_view name);
+
+// How an EXR is written: its compression (is_exr_compression), and the value its depth channels
+// (Z, planar.Z) hold where the ray missed: +inf by default, which vkray's contract uses; 0, NaN or
+// another number for loaders that want one (the header's vkray:miss says which).
+struct ExrSettings {
+  std::string compression = default_exr_compression;
+  float miss = INFINITY;
+};
 
 // Every file is written to a temporary file beside its target (".NAME.vkray-PID-N.EXT") and renamed
 // into place once complete, so a failed or interrupted write never leaves a truncated file where a
@@ -44,11 +54,12 @@ void remove_stale_partial_files(const std::filesystem::path& target);
 // first EXR is written.
 void use_exr_threads(unsigned count);
 
-// float32 channels, by output: depth -> Z; normal -> N.X N.Y N.Z; uv -> U V; and A (1 on a hit,
-// 0 on a miss) whenever depth or normal is present. A frame with a camera has it in the header:
+// float32 channels, by output: depth -> Z; normal -> N.X N.Y N.Z; uv -> U V; planar-depth ->
+// planar.Z; position -> P.X P.Y P.Z; camera-position -> camera.P.X camera.P.Y camera.P.Z; and A (1
+// on a hit, 0 on a miss) whenever an output other than uv is present. A frame with a camera has it in the header:
 // OpenEXR's worldToCamera and worldToNDC (engine/scene/camera.hpp) and vkray:camera, JSON
 // (engine/scene/camera_description.hpp). Throws std::runtime_error naming the file.
-void write_exr(const std::filesystem::path& path, const Frame& frame, std::string_view compression = default_exr_compression);
+void write_exr(const std::filesystem::path& path, const Frame& frame, const ExrSettings& settings = {});
 
 // 8-bit RGB preview, one panel per output side by side in the order depth, normal, uv: depth as
 // grey (near bright, far dark, misses black), normals as (N+1)/2, uv as (u+1)/2, (v+1)/2 with the
@@ -62,6 +73,6 @@ void write_rgb_png(const std::filesystem::path& path, uint32_t width, uint32_t h
 // (each takes about as long at 1920x1080), and renamed into place only when both are complete.
 // Throws the EXR's failure, else the PNG's.
 void write_outputs(const std::filesystem::path& exr, const std::filesystem::path* preview, const Frame& frame,
-                   std::string_view compression = default_exr_compression);
+                   const ExrSettings& settings = {});
 
 }  // namespace vkray

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 
 namespace vkray {
 namespace {
@@ -52,8 +53,11 @@ std::array<PreviewRamp, 2> preview_ramps(Aov aov, DepthRange depths) {
       };
       return {brightened(1.0), brightened(outside_brightness)};
     }
+    case Aov::planar_depth:
+    case Aov::position:
+    case Aov::camera_position: break;  // not previewed: the depth they come from stands for them
   }
-  return {};
+  throw std::invalid_argument("no preview for " + AovSet{aov}.names());
 }
 
 bool inside_unit_disk(uint32_t i, uint32_t j, uint32_t width, uint32_t height) {
@@ -96,6 +100,9 @@ std::vector<uint8_t> preview_rgb(const Frame& frame, Aov aov) {
         }
       }
       break;
+    case Aov::planar_depth:
+    case Aov::position:
+    case Aov::camera_position: break;  // preview_ramps refused them
   }
   return rgb;
 }

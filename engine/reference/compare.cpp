@@ -18,16 +18,17 @@ double angle_between(const glm::dvec3& a, const glm::dvec3& b) {
 FrameError measure_error(const Frame& frame, const std::vector<ReferenceHit>& reference) {
   FrameError error;
   error.pixels = frame.pixel_count();
-  error.depth_compared = frame.aovs.has(Aov::depth);
-  error.normal_compared = frame.aovs.has(Aov::normal);
+  // The depth also where only the camera outputs were asked for: they come from it alone.
+  error.depth_compared = !frame.depth.empty();
+  error.normal_compared = !frame.normal.empty();
   // Sized once: at 7680x4320, growing them by doubling would hold up to twice their 265 MB each.
   std::vector<double> depth_errors, depth_ulps, normal_errors;
   if (error.depth_compared) depth_errors.reserve(error.pixels), depth_ulps.reserve(error.pixels);
   if (error.normal_compared) normal_errors.reserve(error.pixels);
   const bool doubles = !frame.depth64.empty() || !frame.normal64.empty();
   for (size_t p = 0; p < error.pixels; ++p) {
-    const bool nan_depth = frame.aovs.has(Aov::depth) && std::isnan(frame.depth[p]);
-    const bool nan_normal = frame.aovs.has(Aov::normal) && glm::any(glm::isnan(frame.normal_at(p)));
+    const bool nan_depth = error.depth_compared && std::isnan(frame.depth[p]);
+    const bool nan_normal = error.normal_compared && glm::any(glm::isnan(frame.normal_at(p)));
     error.nan_pixels += nan_depth || nan_normal;
     const bool reference_hit = reference[p].kind != PrimitiveKind::none;
     if (frame.hit(p) != reference_hit) {
@@ -36,12 +37,12 @@ FrameError measure_error(const Frame& frame, const std::vector<ReferenceHit>& re
     }
     if (!reference_hit) continue;
     ++error.both_hit;
-    if (frame.aovs.has(Aov::depth)) {
+    if (error.depth_compared) {
       const double difference = std::abs((doubles ? frame.depth64[p] : frame.depth[p]) - reference[p].t);
       depth_errors.push_back(difference / reference[p].t);
       depth_ulps.push_back(difference / std::ldexp(1.0, std::ilogb(reference[p].t) - 23));
     }
-    if (frame.aovs.has(Aov::normal)) {
+    if (error.normal_compared) {
       const size_t n = frame.pixel_count();
       const glm::dvec3 normal = doubles ? glm::dvec3(frame.normal64[p], frame.normal64[n + p], frame.normal64[2 * n + p])
                                         : glm::dvec3(frame.normal_at(p));

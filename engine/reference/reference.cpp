@@ -287,9 +287,9 @@ std::vector<ReferenceHit> trace_reference_rays(const ReferenceScene& scene, std:
 }
 
 void store_reference_hit(Frame& frame, size_t pixel, const ReferenceHit& hit) {
-  if (frame.aovs.has(Aov::depth)) frame.depth[pixel] = static_cast<float>(hit.t);
+  if (!frame.depth.empty()) frame.depth[pixel] = static_cast<float>(hit.t);
   if (!frame.depth64.empty()) frame.depth64[pixel] = hit.t;
-  if (frame.aovs.has(Aov::normal)) {
+  if (!frame.normal.empty()) {
     for (size_t c = 0; c < 3; ++c) frame.normal[c * frame.pixel_count() + pixel] = static_cast<float>(hit.normal[int(c)]);
   }
   if (!frame.normal64.empty()) {
@@ -297,9 +297,11 @@ void store_reference_hit(Frame& frame, size_t pixel, const ReferenceHit& hit) {
   }
 }
 
-Frame reference_frame(const std::vector<ReferenceHit>& hits, uint32_t width, uint32_t height, AovSet aovs) {
+Frame reference_frame(const std::vector<ReferenceHit>& hits, const Camera& camera, uint32_t width, uint32_t height,
+                      AovSet aovs) {
   Frame frame(width, height, aovs);
-  frame.allocate();
+  frame.camera = camera;
+  frame.allocate(aovs.has_camera_outputs());  // the camera outputs from the exact depth
   const size_t pixels = frame.pixel_count();
   for (uint32_t j = 0; j < height; ++j) {
     for (uint32_t i = 0; i < width; ++i) {
@@ -312,6 +314,7 @@ Frame reference_frame(const std::vector<ReferenceHit>& hits, uint32_t width, uin
       }
     }
   }
+  add_camera_outputs(frame);
   return frame;
 }
 

@@ -542,7 +542,7 @@ Renderer::Renderer(GpuDevice& device, const Scene& scene, RendererOptions option
       const bool lo_parts = needs_lo_parts(scene_anchor(scene), scene_radius(scene, scene_anchor(scene)), scene.camera.from);
       early_creation = std::async(std::launch::async, [&early_pipeline, &options, lo_parts] {
         double created_ms = 0.0;
-        early_pipeline->pipeline(options.first_aovs, lo_parts, RaycastMode::image_buffers, created_ms);
+        early_pipeline->pipeline(options.first_aovs.on_device(), lo_parts, RaycastMode::image_buffers, created_ms);
         return created_ms;
       });
     }
@@ -671,17 +671,20 @@ const SceneStats& Renderer::scene_stats() const { return impl_->stats; }
 Frame Renderer::render(const Camera& camera, uint32_t width, uint32_t height, AovSet aovs) {
   check_image_size(width, height);
   Impl& r = *impl_;
-  if (r.options.shader.generic) aovs = AovSet{Aov::depth, Aov::normal, Aov::uv};  // it writes them all
+  if (r.options.shader.generic) {  // it writes them all
+    for (const Aov written : {Aov::depth, Aov::normal, Aov::uv}) aovs.add(written);
+  }
   Frame frame(width, height, aovs);
   frame.camera = camera;
   frame.allocate(r.precision() == Precision::float64);
   r.reset_timings();
   if (aovs.empty()) return frame;
+  const AovSet device_aovs = aovs.on_device();
 
   with_vulkan_errors("rendering", [&] {
     const CameraBasis basis = make_camera_basis(camera, width, height);
     uint32_t tile_rows = 0;
-    const vk::raii::Pipeline& pipeline = r.begin_render(camera, width, height, aovs, nullptr, tile_rows);
+    const vk::raii::Pipeline& pipeline = r.begin_render(camera, width, height, device_aovs, nullptr, tile_rows);
     DispatchSizer sizer(width, tile_rows, r.options.dispatch_budget_ms, r.camera_ms_per_pixel,
                         r.workgroup_footprint(RaycastMode::image_buffers).height);
     for (uint32_t first_row = 0, rows = 0; first_row < height; first_row += rows) {
@@ -719,6 +722,7 @@ Frame Renderer::render(const Camera& camera, uint32_t width, uint32_t height, Ao
     }
   });
   frame.round_doubles();
+  add_camera_outputs(frame);
   return frame;
 }
 

@@ -158,7 +158,7 @@ ViewBatchSummary render_views(Renderer& renderer, const ViewBatch& batch,
           const std::filesystem::path exr = batch.exr.path(job->index);
           const std::optional<std::filesystem::path> png =
               batch.png ? std::optional(batch.png->path(job->index)) : std::nullopt;
-          write_outputs(exr, png ? &*png : nullptr, job->frame, batch.compression);
+          write_outputs(exr, png ? &*png : nullptr, job->frame, batch.exr_settings);
           const std::lock_guard lock(progress_mutex);
           manifest.append(record_of(batch, job->index));
           ++done.done;

@@ -5,6 +5,7 @@
 // moment and started again ends with the same files.
 #pragma once
 
+#include "engine/io/image_io.hpp"
 #include "engine/render/renderer.hpp"
 #include "engine/views/output_pattern.hpp"
 
@@ -31,7 +32,7 @@ struct ViewBatch {
   AovSet aovs;
   OutputPattern exr{"view-{index}.exr", "-o"};
   std::optional<OutputPattern> png;  // a preview per view, where given
-  std::string compression;
+  ExrSettings exr_settings;
   std::filesystem::path manifest;
   Shard shard;
   bool overwrite = false;  // render views whose files exist too (and start the manifest afresh)

@@ -4,6 +4,7 @@
 #include "preview.comp.spv.h"
 
 #include <cstring>
+#include <stdexcept>
 
 namespace vkray {
 namespace {
@@ -22,8 +23,11 @@ uint32_t preview_mode(Aov aov) {
     case Aov::depth: return VKRAY_PREVIEW_DEPTH;
     case Aov::normal: return VKRAY_PREVIEW_NORMAL;
     case Aov::uv: return VKRAY_PREVIEW_UV;
+    case Aov::planar_depth:
+    case Aov::position:
+    case Aov::camera_position: break;  // the viewer refuses them (cli/view_command.cpp)
   }
-  return VKRAY_PREVIEW_DEPTH;
+  throw std::invalid_argument("the viewer shows depth, normal or uv, not " + AovSet{aov}.names());
 }
 
 }  // namespace

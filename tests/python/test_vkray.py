@@ -252,6 +252,7 @@ def read_obj(path):
     (lambda r: r.render("front"), "camera: expected a dict"),
     (lambda r: r.render(width=0), "width: must be in 1 .. 65536, got 0"),
     (lambda r: r.render(aovs=["depht"]), "aovs: unknown output 'depht'"),
+    (lambda r: r.render(aovs=["depth", "planar-depth"]), "aovs: 'planar-depth' is written by `vkray render` only so far"),
     (lambda r: r.render(aovs=[]), "aovs: name at least one output"),
 ])
 def test_bad_calls_raise_value_error_with_the_place(default_renderer, call, message):
