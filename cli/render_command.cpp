@@ -202,12 +202,13 @@ int run_render(const RenderOptions& options) {
   std::string device_name = "CPU reference (double precision)";
   std::string pipeline_cache;  // what --timings says of the device's pipeline cache
   bool staging = false;
+  std::optional<ReferenceScene> reference_scene;
   std::optional<std::vector<ReferenceHit>> reference_hits;
   auto reference = [&]() -> const std::vector<ReferenceHit>& {
     if (!reference_hits) {
       Stopwatch reference_watch;
-      const ReferenceScene reference_scene(scene);
-      reference_hits = render_reference_hits(reference_scene, make_camera_basis(scene.camera, scene.width, scene.height),
+      reference_scene.emplace(scene);
+      reference_hits = render_reference_hits(*reference_scene, make_camera_basis(scene.camera, scene.width, scene.height),
                                              scene.width, scene.height);
       reference_ms = reference_watch.lap_ms();
     }
@@ -215,7 +216,8 @@ int run_render(const RenderOptions& options) {
   };
 
   if (options.reference) {
-    frame = reference_frame(reference(), scene.camera, scene.width, scene.height, aovs);
+    const std::vector<ReferenceHit>& hits = reference();
+    frame = reference_frame(*reference_scene, hits, scene.camera, scene.width, scene.height, aovs);
     stopwatch.lap_ms();
   } else {
     const OpenedDevice opened = opening.get();

@@ -32,7 +32,7 @@ int run_view(const ViewCommandOptions& options) {
   std::optional<uint32_t> width, height;
   if (options.size) std::tie(width, height) = parse_size(*options.size);
   const auto output = aov_from_name(options.output);
-  if (!output || AovSet{*output}.has_camera_outputs()) {
+  if (!output || !AovSet{*output}.device_outputs_only()) {
     throw InputError("--output: '" + options.output + "' is not an output the viewer shows (choose from depth, normal, uv)");
   }
   if (options.screenshot && lower_extension(*options.screenshot) != ".png") {

@@ -20,7 +20,9 @@ constexpr NamedAov named_aovs[] = {{Aov::depth, "depth"},
                                    {Aov::uv, "uv"},
                                    {Aov::planar_depth, "planar-depth"},
                                    {Aov::position, "position"},
-                                   {Aov::camera_position, "camera-position"}};
+                                   {Aov::camera_position, "camera-position"},
+                                   {Aov::mesh_id, "mesh-id"},
+                                   {Aov::primitive_id, "primitive-id"}};
 }  // namespace
 
 std::string AovSet::names() const {
@@ -48,6 +50,8 @@ void Frame::allocate(bool doubles) {
   planar_depth.assign(aovs.has(Aov::planar_depth) ? pixel_count() : 0, 0.0f);
   position.assign(aovs.has(Aov::position) ? 3 * pixel_count() : 0, 0.0f);
   camera_position.assign(aovs.has(Aov::camera_position) ? 3 * pixel_count() : 0, 0.0f);
+  mesh_id.assign(aovs.has(Aov::mesh_id) ? pixel_count() : 0, no_object);
+  primitive_id.assign(aovs.has(Aov::primitive_id) ? pixel_count() : 0, no_object);
   depth64.assign(doubles ? depth.size() : 0, 0.0);
   normal64.assign(doubles ? normal.size() : 0, 0.0);
 }
@@ -61,6 +65,11 @@ bool Frame::hit(size_t pixel) const {
   if (!depth.empty()) return std::isfinite(depth[pixel]);
   if (!normal.empty()) return normal_at(pixel) != glm::vec3(0.0f);
   return false;
+}
+
+void store_ids(Frame& frame, size_t pixel, ObjectPrimitive source) {
+  if (!frame.mesh_id.empty()) frame.mesh_id[pixel] = source.object;
+  if (!frame.primitive_id.empty()) frame.primitive_id[pixel] = source.primitive;
 }
 
 void add_camera_outputs(Frame& frame) {

@@ -2,6 +2,7 @@
 #pragma once
 
 #include "engine/scene/camera.hpp"
+#include "engine/scene/scene.hpp"
 
 #include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
@@ -16,8 +17,20 @@
 namespace vkray {
 
 // depth, normal and uv come from the device; planar_depth, position and camera_position are the
-// camera outputs, computed on the host from the depth and the camera (add_camera_outputs).
-enum class Aov : uint32_t { depth = 1, normal = 2, uv = 4, planar_depth = 8, position = 16, camera_position = 32 };
+// camera outputs, computed on the host from the depth and the camera (add_camera_outputs);
+// mesh_id and primitive_id are the host's names for the primitive the device says each ray hit
+// (hit, which only the device computes and no user names).
+enum class Aov : uint32_t {
+  depth = 1,
+  normal = 2,
+  uv = 4,
+  planar_depth = 8,
+  position = 16,
+  camera_position = 32,
+  mesh_id = 64,
+  primitive_id = 128,
+  hit = 256
+};
 
 // A set of outputs as a bit mask of Aov values.
 class AovSet {
@@ -33,25 +46,32 @@ class AovSet {
   constexpr bool has_camera_outputs() const {
     return has(Aov::planar_depth) || has(Aov::position) || has(Aov::camera_position);
   }
-  // Depth, normal or a camera output need a ray cast; uv alone does not.
-  constexpr bool needs_rays() const { return has(Aov::depth) || has(Aov::normal) || has_camera_outputs(); }
-  // What the device computes for these outputs: the camera outputs need its depth.
+  constexpr bool has_ids() const { return has(Aov::mesh_id) || has(Aov::primitive_id); }
+  // Depth, normal, a camera output or an id need a ray cast; uv alone does not.
+  constexpr bool needs_rays() const { return has(Aov::depth) || has(Aov::normal) || has_camera_outputs() || has_ids(); }
+  // What the device computes for these outputs: the camera outputs need its depth, the ids what
+  // each ray hit, and its depth too (which pixels hit: the A channel).
   constexpr AovSet on_device() const {
     AovSet device;
     device.bits_ = bits_ & (static_cast<uint32_t>(Aov::depth) | static_cast<uint32_t>(Aov::normal) |
-                            static_cast<uint32_t>(Aov::uv));
-    if (has_camera_outputs()) device.add(Aov::depth);
+                            static_cast<uint32_t>(Aov::uv) | static_cast<uint32_t>(Aov::hit));
+    if (has_camera_outputs() || has_ids()) device.add(Aov::depth);
+    if (has_ids()) device.add(Aov::hit);
     return device;
   }
+  // What `vkray view` and Python show: depth, normal and uv.
+  constexpr bool device_outputs_only() const { return (bits_ & ~on_device().bits_) == 0 && !has(Aov::hit); }
   std::string names() const;  // "depth,normal"
 
  private:
   uint32_t bits_ = 0;
 };
 
-// "depth", "normal", "uv", "planar-depth", "position" or "camera-position"; nullopt for anything else.
+// "depth", "normal", "uv", "planar-depth", "position", "camera-position", "mesh-id" or
+// "primitive-id"; nullopt for anything else.
 std::optional<Aov> aov_from_name(std::string_view name);
-inline constexpr const char* aov_names_help = "depth, normal, uv, planar-depth, position, camera-position";
+inline constexpr const char* aov_names_help =
+    "depth, normal, uv, planar-depth, position, camera-position, mesh-id, primitive-id";
 
 // Multi-component outputs are stored as planes (all x, then all y, ...), the layout the shader
 // writes: neighbouring invocations then store to neighbouring addresses.
@@ -74,6 +94,10 @@ struct Frame {
   std::vector<float> planar_depth;
   std::vector<float> position;
   std::vector<float> camera_position;
+  // What each ray hit (ObjectPrimitive in engine/scene/scene.hpp): the mesh, sphere or plane, and
+  // the primitive within it; no_object on a miss.
+  std::vector<uint32_t> mesh_id;
+  std::vector<uint32_t> primitive_id;
   // The float64 shader's depth and normals before rounding (empty otherwise): what its agreement
   // with the reference is measured on. depth and normal then hold them rounded.
   std::vector<double> depth64;
@@ -92,6 +116,9 @@ struct Frame {
   // A hit is known from depth (finite) or, when only normals were asked for, from a non-zero normal.
   bool hit(size_t pixel) const;
 };
+
+// mesh_id and primitive_id of `pixel`, where the frame has them.
+void store_ids(Frame& frame, size_t pixel, ObjectPrimitive source);
 
 // Fills the camera outputs `frame.aovs` asks for from its depth (depth64 where the float64 shader or
 // the reference left it: the hit point then rounds to float once) and its camera, in double:

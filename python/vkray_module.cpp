@@ -126,7 +126,7 @@ AovSet aovs_from(py::handle argument) {
     const auto aov = aov_from_name(name);
     if (!aov) throw InputError("aovs: unknown output '" + name + "' (known: depth, normal, uv)");
     aovs.add(*aov);
-    if (aovs.has_camera_outputs()) {
+    if (!aovs.device_outputs_only()) {
       throw InputError("aovs: '" + name + "' is written by `vkray render` only so far; here: depth, normal, uv");
     }
   }

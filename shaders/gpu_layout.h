@@ -44,7 +44,7 @@ using uvec4 = glm::uvec4;
 #define VKRAY_BINDING_VERTICES 11    // texels, RGBA32F: a GpuPoint per vertex (and per sphere in the tree)
 #define VKRAY_BINDING_NORMALS 12     // texels, RGBA32F: a triangle's unit normal per primitive slot
 // Rays given by the caller instead of a camera (VKRAY_SPEC_RAY_INPUT): two GpuPoints a ray (GpuRay),
-// and what each ray hit (VKRAY_HIT_*).
+// and what each ray hit (VKRAY_HIT_*; for camera rays too with VKRAY_SPEC_WRITE_HIT).
 #define VKRAY_BINDING_RAYS 13        // texels, RGBA32F
 #define VKRAY_BINDING_HITS 14        // storage buffer
 // The ray-query traversal's top-level acceleration structure (VKRAY_SEARCH_RAY_QUERY): in its
@@ -112,7 +112,9 @@ using uvec4 = glm::uvec4;
 #define VKRAY_SPEC_RAY_INPUT 20
 // The device's subgroup size where it is 8, else 0 (see shaders/packet_walk.glsl).
 #define VKRAY_SPEC_SUBGROUP_SIZE 21
-#define VKRAY_SPEC_COUNT 22
+// Write what each camera ray hit to VKRAY_BINDING_HITS too (the mesh-id and primitive-id outputs).
+#define VKRAY_SPEC_WRITE_HIT 22
+#define VKRAY_SPEC_COUNT 23
 #define VKRAY_STACK_REGISTERS_MAX 32
 
 #define VKRAY_SPHERE_STABLE 0               // Ray Tracing Gems ch. 7 (intersect.glsl)

@@ -1,8 +1,9 @@
 #version 460
 // One primary ray per pixel through the pixel centre; the nearest hit over every primitive wins.
-// Writes the requested outputs (depth, normal, uv) for one tile of rows of the image into buffers,
-// or one output into a storage image (IMAGE_TARGET, the viewer's frame); or traces rays the caller
-// gave (RAY_INPUT), writing depth, normal and what each hit. Compiled five times: float32;
+// Writes the requested outputs (depth, normal, uv, and what each ray hit: WRITE_HIT) for one tile
+// of rows of the image into buffers, or one output into a storage image (IMAGE_TARGET, the
+// viewer's frame); or traces rays the caller gave (RAY_INPUT), writing depth, normal and what each
+// hit. Compiled five times: float32;
 // float32 with VKRAY_DOUBLE_EDGES defined (triangle edge functions from exact double products, for
 // CPU devices: see intersect.glsl); each of those two with VKRAY_STORAGE_GEOMETRY (geometry in
 // storage buffers, not texel buffers: see primitives.glsl); and float64 with VKRAY_FLOAT64 defined
@@ -21,6 +22,7 @@ layout(constant_id = VKRAY_SPEC_PLANE_COUNT) const uint PLANE_COUNT = 0;
 layout(constant_id = VKRAY_SPEC_WRITE_DEPTH) const bool WRITE_DEPTH = true;
 layout(constant_id = VKRAY_SPEC_WRITE_NORMAL) const bool WRITE_NORMAL = true;
 layout(constant_id = VKRAY_SPEC_WRITE_UV) const bool WRITE_UV = false;
+layout(constant_id = VKRAY_SPEC_WRITE_HIT) const bool WRITE_HIT = false;
 layout(constant_id = VKRAY_SPEC_MORTON_ORDER) const bool MORTON_ORDER = true;
 layout(constant_id = VKRAY_SPEC_IMAGE_TARGET) const bool IMAGE_TARGET = false;
 layout(constant_id = VKRAY_SPEC_RAY_INPUT) const bool RAY_INPUT = false;
@@ -269,7 +271,7 @@ void main() {
                  WRITE_DEPTH ? vec4(t_best[r], 0.0, 0.0, 0.0) : vec4(normal[r], 0.0));
       continue;
     }
-    if (RAY_INPUT) hit_out[out_index] = hit_id[r];
+    if (RAY_INPUT || WRITE_HIT) hit_out[out_index] = hit_id[r];
     if (WRITE_DEPTH) depth_out[out_index] = t_best[r];
     if (WRITE_NORMAL) {
       normal_out[out_index] = normal[r].x;

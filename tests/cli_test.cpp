@@ -502,6 +502,43 @@ TEST_F(CliTest, MissValueReplacesOnlyMissedDepths) {
   }
 }
 
+// mesh-id and primitive-id are 32-bit unsigned channels, 0xffffffff exactly where A is 0, from the
+// GPU and from the reference; both see the built-in scene's two meshes (0, 1), its sphere (2) and its
+// plane (3). (tests/bvh_gpu_test.cpp holds the GPU's ids to the reference's pixel by pixel.)
+TEST_F(CliTest, IdsAreUnsignedChannelsNumberedMeshesSpheresPlanes) {
+  for (const char* renderer : {"gpu", "reference"}) {
+    SCOPED_TRACE(renderer);
+    std::vector<std::string> args = {"render", "--width", "64", "--height", "48", "--aov", "mesh-id,primitive-id",
+                                     "--no-preview", "-o", std::string(renderer) + ".exr"};
+    if (std::string(renderer) == "reference") args.push_back("--reference");
+    const RunResult run = vkray(args);
+    ASSERT_EQ(run.exit_code, 0) << run.err;
+    auto input = OIIO::ImageInput::open(path(std::string(renderer) + ".exr").string());
+    ASSERT_TRUE(input) << OIIO::geterror();
+    const OIIO::ImageSpec& spec = input->spec();
+    const size_t pixels = size_t{64} * 48;
+    std::vector<float> alpha(pixels);
+    const int a = spec.channelindex("A");
+    ASSERT_GE(a, 0);
+    ASSERT_TRUE(input->read_image(0, 0, a, a + 1, OIIO::TypeFloat, alpha.data()));
+    for (const char* name : {"mesh_id", "primitive_id"}) {
+      const int channel = spec.channelindex(name);
+      ASSERT_GE(channel, 0) << name;
+      EXPECT_EQ(spec.channelformat(channel), OIIO::TypeUInt) << name;
+      std::vector<uint32_t> ids(pixels);
+      ASSERT_TRUE(input->read_image(0, 0, channel, channel + 1, OIIO::TypeUInt, ids.data()));
+      std::set<uint32_t> seen;
+      for (size_t p = 0; p < pixels; ++p) {
+        EXPECT_EQ(ids[p] == 0xffffffffu, alpha[p] == 0.0f) << name << " pixel " << p;
+        if (alpha[p] == 1.0f) seen.insert(ids[p]);
+      }
+      if (std::string(name) == "mesh_id") {
+        EXPECT_EQ(seen, (std::set<uint32_t>{0, 1, 2, 3}));
+      }
+    }
+  }
+}
+
 // ---------------------------------------------------------------------------------------------
 // 3. and 4. Choosing outputs with --aov
 

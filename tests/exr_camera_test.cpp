@@ -57,8 +57,9 @@ double quotient_bound(double x, double w, double x_bound, double w_bound) {
 TEST_F(ExrCameraTest, HeaderMatricesTakeEveryHitToItsPixelAndPlanarDepth) {
   const Scene scene = test::sized(default_scene(), 64, 48);
   const CameraBasis basis = make_camera_basis(scene.camera, scene.width, scene.height);
-  const std::vector<ReferenceHit> hits = render_reference_hits(ReferenceScene(scene), basis, scene.width, scene.height);
-  const Frame frame = reference_frame(hits, scene.camera, scene.width, scene.height, {Aov::depth});
+  const ReferenceScene reference(scene);
+  const std::vector<ReferenceHit> hits = render_reference_hits(reference, basis, scene.width, scene.height);
+  const Frame frame = reference_frame(reference, hits, scene.camera, scene.width, scene.height, {Aov::depth});
   const std::filesystem::path path = dir_ / "camera.exr";
   write_exr(path, frame);
 
@@ -117,8 +118,9 @@ TEST_F(ExrCameraTest, HeaderMatricesTakeEveryHitToItsPixelAndPlanarDepth) {
 TEST_F(ExrCameraTest, PlanarDepthReprojectsToPositionWithTheHeaderCamera) {
   const Scene scene = test::sized(default_scene(), 64, 48);
   const CameraBasis basis = make_camera_basis(scene.camera, scene.width, scene.height);
-  const std::vector<ReferenceHit> hits = render_reference_hits(ReferenceScene(scene), basis, scene.width, scene.height);
-  const Frame frame = reference_frame(hits, scene.camera, scene.width, scene.height,
+  const ReferenceScene reference(scene);
+  const std::vector<ReferenceHit> hits = render_reference_hits(reference, basis, scene.width, scene.height);
+  const Frame frame = reference_frame(reference, hits, scene.camera, scene.width, scene.height,
                                       {Aov::planar_depth, Aov::position, Aov::camera_position});
   const std::filesystem::path path = dir_ / "camera-outputs.exr";
   write_exr(path, frame);

@@ -315,6 +315,14 @@ void write_exr_to(const PartialFile& file, const std::filesystem::path& path, co
   };
   if (frame.aovs.has(Aov::position)) add_xyz("P.", frame.position);
   if (frame.aovs.has(Aov::camera_position)) add_xyz("camera.P.", frame.camera_position);
+  // Ids as 32-bit unsigned channels, named as Python's cast_rays names them.
+  auto add_id_channel = [&](const char* name, const std::vector<uint32_t>& ids) {
+    header.channels().insert(name, Imf::Channel(Imf::UINT));
+    slices.insert(name, Imf::Slice(Imf::UINT, reinterpret_cast<char*>(const_cast<uint32_t*>(ids.data())), sizeof(uint32_t),
+                                   sizeof(uint32_t) * frame.width));
+  };
+  if (frame.aovs.has(Aov::mesh_id)) add_id_channel("mesh_id", frame.mesh_id);
+  if (frame.aovs.has(Aov::primitive_id)) add_id_channel("primitive_id", frame.primitive_id);
   std::vector<float> alpha;
   if (frame.aovs.needs_rays()) {
     alpha.resize(pixels);
@@ -335,7 +343,7 @@ void write_preview_png_to(const PartialFile& file, const std::filesystem::path& 
   for (Aov aov : {Aov::depth, Aov::normal, Aov::uv}) {
     if (frame.aovs.has(aov)) shown.push_back(aov);
   }
-  // Camera outputs alone: the depth they come from stands for them.
+  // Camera outputs or ids alone: the depth they come with stands for them.
   if (shown.empty() && !frame.depth.empty()) shown.push_back(Aov::depth);
   if (shown.empty()) throw std::runtime_error(path.string() + ": no outputs to preview");
   const size_t width = frame.width, height = frame.height, row_width = width * shown.size();

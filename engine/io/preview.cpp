@@ -55,7 +55,10 @@ std::array<PreviewRamp, 2> preview_ramps(Aov aov, DepthRange depths) {
     }
     case Aov::planar_depth:
     case Aov::position:
-    case Aov::camera_position: break;  // not previewed: the depth they come from stands for them
+    case Aov::camera_position:
+    case Aov::mesh_id:
+    case Aov::primitive_id:
+    case Aov::hit: break;  // not previewed: the depth they come with stands for them
   }
   throw std::invalid_argument("no preview for " + AovSet{aov}.names());
 }
@@ -102,7 +105,10 @@ std::vector<uint8_t> preview_rgb(const Frame& frame, Aov aov) {
       break;
     case Aov::planar_depth:
     case Aov::position:
-    case Aov::camera_position: break;  // preview_ramps refused them
+    case Aov::camera_position:
+    case Aov::mesh_id:
+    case Aov::primitive_id:
+    case Aov::hit: break;  // preview_ramps refused them
   }
   return rgb;
 }

@@ -291,8 +291,8 @@ struct Renderer::Impl {
       tile.rays.emplace(TexelBuffer{create_upload_buffer(context, bytes, geometry_usage)});
       tile.rays->floats = create_texel_view(context, tile.rays->buffer, vk::Format::eR32G32B32A32Sfloat);
       tile.rays->uints = create_texel_view(context, tile.rays->buffer, vk::Format::eR32G32B32A32Uint);
-      tile.hits = make_output(pixels * sizeof(uint32_t));
     }
+    if (mode == RaycastMode::given_rays || (!target && aovs.has(Aov::hit))) tile.hits = make_output(pixels * sizeof(uint32_t));
     if (stats.loop_budget > 0 && aovs.needs_rays()) tile.overflow = make_output((pixels + 1) * sizeof(uint32_t));
     auto floats = [&](const std::optional<TexelBuffer>& texels) {
       return *(texels ? texels->floats : placeholder_texels.floats);
@@ -713,10 +713,17 @@ Frame Renderer::render(const Camera& camera, uint32_t width, uint32_t height, Ao
         copy_planes(r.tile.normal, frame.normal, 3);
       }
       copy_planes(r.tile.uv, frame.uv, 2);
+      if (r.tile.hits) {  // the device's slots, as the scene numbers them
+        const auto* slots = static_cast<const uint32_t*>(r.tile.hits->host());
+        parallel_for_chunks(tile_pixels, [&](size_t begin, size_t end) {
+          for (size_t k = begin; k < end; ++k) store_ids(frame, first_pixel + k, r.hit_sources(slots[k]));
+        });
+      }
       r.timings.readback_ms += elapsed_ms(copy_start);
       if (r.tile.overflow) {
         r.finish_unfinished_rays(basis, width, height, first_row, [&](uint32_t i, uint32_t j, const ReferenceHit& hit) {
           store_reference_hit(frame, size_t{j} * width + i, hit);
+          store_ids(frame, size_t{j} * width + i, r.reference->source(hit));
         });
       }
     }

@@ -25,7 +25,10 @@ uint32_t preview_mode(Aov aov) {
     case Aov::uv: return VKRAY_PREVIEW_UV;
     case Aov::planar_depth:
     case Aov::position:
-    case Aov::camera_position: break;  // the viewer refuses them (cli/view_command.cpp)
+    case Aov::camera_position:
+    case Aov::mesh_id:
+    case Aov::primitive_id:
+    case Aov::hit: break;  // the viewer refuses them (cli/view_command.cpp)
   }
   throw std::invalid_argument("the viewer shows depth, normal or uv, not " + AovSet{aov}.names());
 }

@@ -83,6 +83,7 @@ const vk::raii::Pipeline& RaycastPipeline::pipeline(AovSet aovs, bool lo_parts, 
   values[VKRAY_SPEC_WRITE_DEPTH] = aovs.has(Aov::depth) ? 1u : 0u;
   values[VKRAY_SPEC_WRITE_NORMAL] = aovs.has(Aov::normal) ? 1u : 0u;
   values[VKRAY_SPEC_WRITE_UV] = aovs.has(Aov::uv) ? 1u : 0u;
+  values[VKRAY_SPEC_WRITE_HIT] = aovs.has(Aov::hit) ? 1u : 0u;
   const ShaderVariant& variant = specialization_.variant;
   values[VKRAY_SPEC_SPHERE_FORMULA] = variant.sphere_formula;
   values[VKRAY_SPEC_TRIANGLE_TEST] = variant.triangle_test;
