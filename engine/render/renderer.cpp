@@ -365,6 +365,21 @@ struct Renderer::Impl {
     });
   }
 
+  // A camera's rows in dispatches, each sized by what the earlier ones took (DispatchSizer);
+  // `tile_done(first_row, rows)` reads each back before the next runs.
+  template <typename TileDone>
+  void dispatch_camera_rows(const vk::raii::Pipeline& camera_pipeline, const CameraBasis& basis, uint32_t width, uint32_t height,
+                            uint32_t tile_rows, RaycastMode mode, TileDone&& tile_done) {
+    DispatchSizer sizer(width, tile_rows, options.dispatch_budget_ms, camera_ms_per_pixel, workgroup_footprint(mode).height);
+    for (uint32_t first_row = 0, rows = 0; first_row < height; first_row += rows) {
+      rows = std::min(sizer.next_rows(), height - first_row);
+      sizer.measured(rows, dispatch_tile(camera_pipeline, make_ray_gen_params(basis, anchor, precision(), width, height,
+                                                                              first_row, rows, counts)));
+      camera_ms_per_pixel = sizer.slowest_ms_per_pixel();
+      tile_done(first_row, rows);
+    }
+  }
+
   // Rows per dispatch: every output buffer within the device's storage-buffer range (and the
   // caller's cap), and the workgroup count within the device's limit.
   // `buffer_aovs`: the outputs written to buffers (none with the storage-image target).
@@ -685,13 +700,7 @@ Frame Renderer::render(const Camera& camera, uint32_t width, uint32_t height, Ao
     const CameraBasis basis = make_camera_basis(camera, width, height);
     uint32_t tile_rows = 0;
     const vk::raii::Pipeline& pipeline = r.begin_render(camera, width, height, device_aovs, nullptr, tile_rows);
-    DispatchSizer sizer(width, tile_rows, r.options.dispatch_budget_ms, r.camera_ms_per_pixel,
-                        r.workgroup_footprint(RaycastMode::image_buffers).height);
-    for (uint32_t first_row = 0, rows = 0; first_row < height; first_row += rows) {
-      rows = std::min(sizer.next_rows(), height - first_row);
-      sizer.measured(rows, r.dispatch_tile(pipeline, make_ray_gen_params(basis, r.anchor, r.precision(), width, height,
-                                                                         first_row, rows, r.counts)));
-      r.camera_ms_per_pixel = sizer.slowest_ms_per_pixel();
+    r.dispatch_camera_rows(pipeline, basis, width, height, tile_rows, RaycastMode::image_buffers, [&](uint32_t first_row, uint32_t rows) {
       const auto copy_start = Clock::now();
       // The shader packs each plane of this tile to width * rows floats (see raycast.comp); each
       // lands in the same plane of the frame.
@@ -726,7 +735,7 @@ Frame Renderer::render(const Camera& camera, uint32_t width, uint32_t height, Ao
           store_ids(frame, size_t{j} * width + i, r.reference->source(hit));
         });
       }
-    }
+    });
   });
   frame.round_doubles();
   add_camera_outputs(frame);
@@ -817,13 +826,7 @@ DepthRange Renderer::render(const Camera& camera, Aov aov, ImageTarget& target) 
     uint32_t tile_rows = 0;
     const vk::raii::Pipeline& pipeline = r.begin_render(camera, width, height, AovSet{aov}, &target, tile_rows);
     std::vector<PixelPatch> patches;
-    DispatchSizer sizer(width, tile_rows, r.options.dispatch_budget_ms, r.camera_ms_per_pixel,
-                        r.workgroup_footprint(RaycastMode::image_target).height);
-    for (uint32_t first_row = 0, rows = 0; first_row < height; first_row += rows) {
-      rows = std::min(sizer.next_rows(), height - first_row);
-      sizer.measured(rows, r.dispatch_tile(pipeline, make_ray_gen_params(basis, r.anchor, r.precision(), width, height,
-                                                                         first_row, rows, r.counts)));
-      r.camera_ms_per_pixel = sizer.slowest_ms_per_pixel();
+    r.dispatch_camera_rows(pipeline, basis, width, height, tile_rows, RaycastMode::image_target, [&](uint32_t first_row, uint32_t) {
       if (aov == Aov::depth) {
         const auto& bits = static_cast<const gpu::DepthRangeBits*>(r.depth_range->host())->near_far;
         if (bits.y != 0) depths.add(std::bit_cast<float>(bits.x)), depths.add(std::bit_cast<float>(bits.y));
@@ -836,7 +839,7 @@ DepthRange Renderer::render(const Camera& camera, Aov aov, ImageTarget& target) 
           if (aov == Aov::depth && std::isfinite(depth)) depths.add(depth);
         });
       }
-    }
+    });
     if (!patches.empty()) r.write_patches(patches, target);
   });
   return depths;
