@@ -1,10 +1,12 @@
 #include "engine/scene/scene.hpp"
 
+#include "engine/parallel.hpp"
 #include "engine/unit_vector.hpp"
 
 #include <glm/geometric.hpp>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <string>
 
@@ -98,16 +100,37 @@ void check_scene(Scene& scene) {
   }
 }
 
+namespace {
+
+// What is wrong with a given ray; null for nothing.
+const char* given_ray_fault(const GivenRay& ray) {
+  if (!std::all_of(ray.begin(), ray.begin() + 3, [](double v) { return std::isfinite(v); })) return "the origin is not finite";
+  if (!std::all_of(ray.begin() + 3, ray.end(), [](double v) { return std::isfinite(v); })) return "the direction is not finite";
+  if (std::any_of(ray.begin(), ray.begin() + 3, [](double v) { return std::abs(v) > max_coordinate; })) {
+    return "the origin is farther than 1e15 from the world origin on some axis";
+  }
+  if (ray[3] == 0.0 && ray[4] == 0.0 && ray[5] == 0.0) return "the direction is 0";
+  return nullptr;
+}
+
+}  // namespace
+
 void check_given_rays(std::span<const GivenRay> rays) {
-  for (size_t k = 0; k < rays.size(); ++k) {
-    const GivenRay& ray = rays[k];
-    auto fail = [&](const std::string& what) { throw InputError("ray " + std::to_string(k) + ": " + what); };
-    if (!std::all_of(ray.begin(), ray.begin() + 3, [](double v) { return std::isfinite(v); })) fail("the origin is not finite");
-    if (!std::all_of(ray.begin() + 3, ray.end(), [](double v) { return std::isfinite(v); })) fail("the direction is not finite");
-    if (std::any_of(ray.begin(), ray.begin() + 3, [](double v) { return std::abs(v) > max_coordinate; })) {
-      fail("the origin is farther than 1e15 from the world origin on some axis");
+  // On every core (a million rays took 4 ms on one, a tenth of their casting); the first faulty
+  // ray of the list is the one reported.
+  std::atomic<size_t> first_fault = rays.size();
+  parallel_for_chunks(rays.size(), [&](size_t begin, size_t end) {
+    for (size_t k = begin; k < end; ++k) {
+      if (given_ray_fault(rays[k])) {
+        size_t known = first_fault.load();
+        while (k < known && !first_fault.compare_exchange_weak(known, k)) {
+        }
+        return;
+      }
     }
-    if (ray[3] == 0.0 && ray[4] == 0.0 && ray[5] == 0.0) fail("the direction is 0");
+  });
+  if (const size_t k = first_fault.load(); k < rays.size()) {
+    throw InputError("ray " + std::to_string(k) + ": " + given_ray_fault(rays[k]));
   }
 }
 
