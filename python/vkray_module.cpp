@@ -329,6 +329,12 @@ class PyRenderer {
     dict["pipeline_ms"] = t.pipeline_ms;
     if (t.has_gpu_times) dict["dispatch_gpu_ms"] = t.dispatch_gpu_ms;
     dict["readback_ms"] = t.readback_ms;
+    dict["rays_ms"] = t.rays_ms;
+    if (t.given_walk != GivenRayWalk::none) {
+      dict["rays_walk"] = t.given_walk == GivenRayWalk::one_by_one         ? "one by one"
+                          : t.given_walk == GivenRayWalk::packets_in_place ? "packets in place"
+                                                                           : "packets by direction";
+    }
     dict["dispatches"] = t.tiles;
     dict["cpu_finished_rays"] = t.unfinished_rays;
     return dict;

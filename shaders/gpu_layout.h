@@ -44,7 +44,8 @@ using uvec4 = glm::uvec4;
 #define VKRAY_BINDING_VERTICES 11    // texels, RGBA32F: a GpuPoint per vertex (and per sphere in the tree)
 #define VKRAY_BINDING_NORMALS 12     // texels, RGBA32F: a triangle's unit normal per primitive slot
 // Rays given by the caller instead of a camera (VKRAY_SPEC_RAY_INPUT): two GpuPoints a ray (GpuRay),
-// and what each ray hit (VKRAY_HIT_*; for camera rays too with VKRAY_SPEC_WRITE_HIT).
+// or for rays from one origin their float32 unit directions alone, a texel each; and what each ray
+// hit (VKRAY_HIT_*; for camera rays too with VKRAY_SPEC_WRITE_HIT).
 #define VKRAY_BINDING_RAYS 13        // texels, RGBA32F
 #define VKRAY_BINDING_HITS 14        // storage buffer
 // The ray-query traversal's top-level acceleration structure (VKRAY_SEARCH_RAY_QUERY): in its
@@ -107,9 +108,15 @@ using uvec4 = glm::uvec4;
 // registers, shifted on every push and pop, the bunny's walk at 1920x1080 took 146 instead of
 // 235 ms (16 registers; each 4 more cost about 4 ms).
 #define VKRAY_SPEC_STACK_REGISTERS 19
-// Trace the rays of VKRAY_BINDING_RAYS, one an invocation, rather than a camera's, and write what
-// each hit to VKRAY_BINDING_HITS (Python's cast_rays): depth and normal as for pixels.
+// Trace the rays of VKRAY_BINDING_RAYS rather than a camera's, and write what each hit to
+// VKRAY_BINDING_HITS (Python's cast_rays): depth and normal as for pixels. One of:
 #define VKRAY_SPEC_RAY_INPUT 20
+#define VKRAY_RAY_INPUT_NONE 0        // a camera's pixels
+#define VKRAY_RAY_INPUT_RAYS 1        // GpuRays, one an invocation, each from its own origin
+// Directions from the origin in RayGenParams.camera, as a camera's: each ray's float32 unit
+// direction, a texel, at its position in an image of rows `width` wide, for the packet walk (the
+// host chooses the positions so that neighbours point nearly the same way: see Renderer::cast_rays).
+#define VKRAY_RAY_INPUT_DIRECTIONS 2
 // The device's subgroup size where it is 8, else 0 (see shaders/packet_walk.glsl).
 #define VKRAY_SPEC_SUBGROUP_SIZE 21
 // Write what each camera ray hit to VKRAY_BINDING_HITS too (the mesh-id and primitive-id outputs).

@@ -3,7 +3,7 @@
 // Writes the requested outputs (depth, normal, uv, and what each ray hit: WRITE_HIT) for one tile
 // of rows of the image into buffers, or one output into a storage image (IMAGE_TARGET, the
 // viewer's frame); or traces rays the caller gave (RAY_INPUT), writing depth, normal and what each
-// hit. Compiled five times: float32;
+// hit, or directions the caller gave from one origin. Compiled five times: float32;
 // float32 with VKRAY_DOUBLE_EDGES defined (triangle edge functions from exact double products, for
 // CPU devices: see intersect.glsl); each of those two with VKRAY_STORAGE_GEOMETRY (geometry in
 // storage buffers, not texel buffers: see primitives.glsl); and float64 with VKRAY_FLOAT64 defined
@@ -25,7 +25,11 @@ layout(constant_id = VKRAY_SPEC_WRITE_UV) const bool WRITE_UV = false;
 layout(constant_id = VKRAY_SPEC_WRITE_HIT) const bool WRITE_HIT = false;
 layout(constant_id = VKRAY_SPEC_MORTON_ORDER) const bool MORTON_ORDER = true;
 layout(constant_id = VKRAY_SPEC_IMAGE_TARGET) const bool IMAGE_TARGET = false;
-layout(constant_id = VKRAY_SPEC_RAY_INPUT) const bool RAY_INPUT = false;
+layout(constant_id = VKRAY_SPEC_RAY_INPUT) const uint RAY_INPUT_KIND = VKRAY_RAY_INPUT_NONE;
+const bool RAY_INPUT = RAY_INPUT_KIND != VKRAY_RAY_INPUT_NONE;
+// Each ray from its own origin; otherwise every ray starts at the camera's (RayGenParams.camera).
+// The float64 shader is given rays alone (the host gives directions to the packet walk alone).
+const bool GIVEN_ORIGINS = RAY_INPUT_KIND == VKRAY_RAY_INPUT_RAYS;
 
 layout(push_constant) uniform PushConstants { RayGenParams params; };
 
@@ -67,7 +71,7 @@ uint compact_even_bits(uint bits) {
 #endif
 #if defined(VKRAY_DOUBLE_EDGES) && !defined(VKRAY_RAY_QUERY)
 #include "packet_walk.glsl"
-const bool PACKET_WALK = SEARCH_MODE == VKRAY_SEARCH_BVH_PACKET && !RAY_INPUT;
+const bool PACKET_WALK = SEARCH_MODE == VKRAY_SEARCH_BVH_PACKET && !GIVEN_ORIGINS;
 #else
 const bool PACKET_WALK = false;
 #endif
@@ -159,7 +163,7 @@ void main() {
 
     // A GpuRay is two points; lanes past the last ray read the first (their t_max is 0). float32
     // shaders take the direction rounded to float, as a camera's.
-    Point ray_origin = fetch_point(rays_in, RAY_INPUT && inside[r] ? 2 * int(ray_index) : 0);
+    Point ray_origin = fetch_point(rays_in, GIVEN_ORIGINS && inside[r] ? 2 * int(ray_index) : 0);
 #ifdef VKRAY_FLOAT64
     Point ray_direction = fetch_point(rays_in, RAY_INPUT && inside[r] ? 2 * int(ray_index) + 1 : 1);
     dvec3 camera[4];  // origin, right, up, forward_scaled
@@ -176,10 +180,11 @@ void main() {
                         : normalize(double(uv_numerator.x) / shorter * camera[1] +
                                     double(uv_numerator.y) / shorter * camera[2] + camera[3]);
 #else
-    Point ray_direction = fetch_point_hi(rays_in, RAY_INPUT && inside[r] ? 2 * int(ray_index) + 1 : 1);
-    origin = RAY_INPUT ? Origin(ray_origin.hi.xyz, ray_origin.lo.xyz)
-                       : Origin(uintBitsToFloat(params.camera[0].xyz),
-                                use_lo_parts ? uintBitsToFloat(params.camera[1].xyz) : vec3(0.0));
+    Point ray_direction = GIVEN_ORIGINS ? fetch_point_hi(rays_in, inside[r] ? 2 * int(ray_index) + 1 : 1)
+                                        : Point(FETCH(rays_in, inside[r] ? int(ray_index) : 0), vec4(0.0));
+    origin = GIVEN_ORIGINS ? Origin(ray_origin.hi.xyz, ray_origin.lo.xyz)
+                           : Origin(uintBitsToFloat(params.camera[0].xyz),
+                                    use_lo_parts ? uintBitsToFloat(params.camera[1].xyz) : vec3(0.0));
     dirs[r] = RAY_INPUT ? ray_direction.hi.xyz
                         : normalize(uv.x * uintBitsToFloat(params.camera[2].xyz) + uv.y * uintBitsToFloat(params.camera[3].xyz) +
                                     uintBitsToFloat(params.camera[4].xyz));
@@ -205,11 +210,12 @@ void main() {
       real3 plane_normal = plane.value.xyz;
       real height = RAY_INPUT ? plane.value.w - dot(plane_normal, origin.position) : plane.value.w;
 #else
-      bool anchored = RAY_INPUT || COORDINATES != VKRAY_COORDINATES_CAMERA_RELATIVE;
-      Point plane = RAY_INPUT ? fetch_point(planes, 2 * int(i) + 1) : fetch_point_hi(planes, anchored ? 2 * int(i) + 1 : 2 * int(i));
+      bool anchored = GIVEN_ORIGINS || COORDINATES != VKRAY_COORDINATES_CAMERA_RELATIVE;
+      Point plane = GIVEN_ORIGINS ? fetch_point(planes, 2 * int(i) + 1)
+                                  : fetch_point_hi(planes, anchored ? 2 * int(i) + 1 : 2 * int(i));
       vec3 plane_normal = plane.hi.xyz;
       float height = anchored ? plane.hi.w - dot(plane_normal, origin.hi) : plane.hi.w;
-      if (RAY_INPUT) height += plane.lo.w - dot(plane_normal, origin.lo);
+      if (GIVEN_ORIGINS) height += plane.lo.w - dot(plane_normal, origin.lo);
 #endif
       real t = intersect_plane(plane_normal, height, dir, t_best[r]);
       if (t < t_best[r]) {

@@ -1,24 +1,54 @@
 // Rays the caller gives (Renderer::cast_rays) against the double-precision reference. A camera's
-// pixel rays, given one by one, must land in the same error envelope as the camera's image (their
+// pixel rays, given as rays, must land in the same error envelope as the camera's image (their
 // float32 directions are rounded once, inside the camera path's bound) and hit the same object and
-// primitive as the reference wherever that is stable under the envelope's perturbations.
+// primitive as the reference wherever that is stable under the envelope's perturbations, however
+// they are listed: in the image's rows (rays from one origin keep their places in packets), in a
+// random order (ordered by direction into packets) or from origins that differ (one ray at a time).
 #include "engine/scene/camera.hpp"
+#include "engine/render/ray_order.hpp"
 #include "engine/render/renderer.hpp"
 #include "engine/scene/scene_loader.hpp"
 #include "tests/gpu_test_support.hpp"
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <numeric>
+#include <random>
 
 namespace vkray {
 namespace {
 
 using namespace test;
 
-// Casts the pixel rays of `scene`'s camera as given rays; returns them as a Frame and their ids.
-Frame cast_camera_rays(Renderer& renderer, const Scene& scene, std::vector<ObjectPrimitive>& ids) {
+// How a camera's pixel rays are listed for cast_rays.
+enum class Listing {
+  image_rows,        // row by row, as the image: one origin, scan_width finds the rows
+  shuffled,          // a fixed random order: one origin, ordered by direction into packets
+  distinct_origins,  // row by row, the first ray's origin one ulp off: each ray on its own
+};
+constexpr Listing listings[] = {Listing::image_rows, Listing::shuffled, Listing::distinct_origins};
+
+std::string listing_name(Listing listing) {
+  return listing == Listing::image_rows ? "image rows" : listing == Listing::shuffled ? "shuffled" : "distinct origins";
+}
+
+// The walk cast_rays takes for `rays` listed as `listing` says: packets where the renderer's camera
+// rays take them (and the rays share its origin), in place where scan_width finds the image's rows
+// (its own tests check which images it finds), else one by one.
+GivenRayWalk expected_walk(const Renderer& renderer, Listing listing, std::span<const GivenRay> rays) {
+  if (renderer.scene_stats().search != PrimitiveSearch::bvh_packet || listing == Listing::distinct_origins) {
+    return GivenRayWalk::one_by_one;
+  }
+  return scan_width(rays) ? GivenRayWalk::packets_in_place : GivenRayWalk::packets_by_direction;
+}
+
+// Casts the pixel rays of `scene`'s camera as given rays listed as `listing` says; returns them
+// as a Frame in pixel order, and their ids. Checks the walk cast_rays took.
+Frame cast_camera_rays(Renderer& renderer, const Scene& scene, std::vector<ObjectPrimitive>& ids,
+                       Listing listing = Listing::image_rows) {
   const CameraBasis basis = make_camera_basis(scene.camera, scene.width, scene.height);
   std::vector<GivenRay> rays;
   for (uint32_t j = 0; j < scene.height; ++j) {
@@ -27,31 +57,50 @@ Frame cast_camera_rays(Renderer& renderer, const Scene& scene, std::vector<Objec
       rays.push_back({basis.origin.x, basis.origin.y, basis.origin.z, dir.x, dir.y, dir.z});
     }
   }
+  // pixel_of[k]: the pixel whose ray is listed k-th.
+  std::vector<size_t> pixel_of(rays.size());
+  std::iota(pixel_of.begin(), pixel_of.end(), size_t{0});
+  if (listing == Listing::shuffled) {
+    std::shuffle(pixel_of.begin(), pixel_of.end(), std::mt19937_64(20261125));
+    std::vector<GivenRay> listed(rays.size());
+    for (size_t k = 0; k < rays.size(); ++k) listed[k] = rays[pixel_of[k]];
+    rays = std::move(listed);
+  }
+  if (listing == Listing::distinct_origins) rays[0][0] = std::nextafter(rays[0][0], INFINITY);
   const RayHits hits = renderer.cast_rays(rays);
+  EXPECT_EQ(renderer.timings().given_walk, expected_walk(renderer, listing, rays));
   Frame frame(scene.width, scene.height, {Aov::depth, Aov::normal});
-  frame.depth = hits.t;
-  frame.normal = hits.normal;
-  ids.clear();
-  for (size_t k = 0; k < hits.count; ++k) ids.push_back({hits.object[k], hits.primitive[k]});
+  frame.depth.resize(hits.count);
+  frame.normal.resize(3 * hits.count);
+  ids.assign(hits.count, {});
+  for (size_t k = 0; k < hits.count; ++k) {
+    const size_t pixel = pixel_of[k];
+    frame.depth[pixel] = hits.t[k];
+    for (size_t c = 0; c < 3; ++c) frame.normal[c * frame.pixel_count() + pixel] = hits.normal[c * hits.count + k];
+    ids[pixel] = {hits.object[k], hits.primitive[k]};
+  }
   return frame;
 }
 
 void expect_given_rays_match_reference(const Scene& scene, RendererOptions options = {},
                                        Percentiles percentiles = Percentiles::checked) {
   Renderer renderer(device(), scene, options);
-  std::vector<ObjectPrimitive> ids;
-  const Frame frame = cast_camera_rays(renderer, scene, ids);
-  const EnvelopeReport report = check_against_reference(scene, frame, 1, &ids);
-  EXPECT_EQ(report.failures, 0u) << report.describe();
-  if (percentiles == Percentiles::checked) {
-    EXPECT_LT(report.stats.depth_p99, 1e-5) << report.describe();
-    EXPECT_LT(report.stats.normal_deg_p99, 0.01) << report.describe();
+  for (const Listing listing : listings) {
+    SCOPED_TRACE(listing_name(listing));
+    std::vector<ObjectPrimitive> ids;
+    const Frame frame = cast_camera_rays(renderer, scene, ids, listing);
+    const EnvelopeReport report = check_against_reference(scene, frame, 1, &ids);
+    EXPECT_EQ(report.failures, 0u) << report.describe();
+    if (percentiles == Percentiles::checked) {
+      EXPECT_LT(report.stats.depth_p99, 1e-5) << report.describe();
+      EXPECT_LT(report.stats.normal_deg_p99, 0.01) << report.describe();
+    }
   }
 }
 
-// Spheres, planes and a mesh, in every search mode and both precisions. Given rays walk the tree per
-// ray, also in a renderer whose camera rays take the packet walk (which the float64 shader lacks).
-// Ray queries, where the device has them, in float32 (their only precision).
+// Spheres, planes and a mesh, in every search mode and both precisions, every listing. Rays from
+// one origin take the packet walk where the camera's would (the float32 shader's); the others walk
+// the tree one by one. Ray queries, where the device has them, in float32 (their only precision).
 TEST(GivenRays, DefaultSceneInEverySearchAndPrecision) {
   const Scene scene = sized(default_scene(), 64, 48);
   std::vector<PrimitiveSearch> searches = {PrimitiveSearch::brute_force, PrimitiveSearch::bvh_per_ray, PrimitiveSearch::bvh_packet};
@@ -65,6 +114,13 @@ TEST(GivenRays, DefaultSceneInEverySearchAndPrecision) {
       options.scene.search = search;
       options.shader.precision = precision;
       expect_given_rays_match_reference(scene, options);
+      // The image is large enough for its rows to keep their places: that walk is checked here.
+      if (search == PrimitiveSearch::bvh_packet) {
+        Renderer renderer(device(), scene, options);
+        std::vector<ObjectPrimitive> ids;
+        cast_camera_rays(renderer, scene, ids);
+        EXPECT_EQ(renderer.timings().given_walk, GivenRayWalk::packets_in_place);
+      }
     }
   }
 }
@@ -102,36 +158,47 @@ TEST(GivenRays, LargeWorldCoordinates) {
   expect_given_rays_match_reference(translated(sized(default_scene(), 48, 36), {1e6, 0, -2e6}));
 }
 
-// A budget of a few iterations: nearly every ray is finished on the CPU, ids included.
+// A budget of a few iterations: nearly every ray is finished on the CPU, ids included, whichever
+// walk and listing (a packet's rays that ran out are finished by their place in the list).
 TEST(GivenRays, RaysBeyondTheLoopBudgetAreFinished) {
   Scene scene = sized(default_scene(), 24, 18);
   scene.meshes.push_back(quad_grid({-3, 0.01, -3}, {6, 0, 0}, {0, 0, 6}, 20));
-  RendererOptions options;
-  options.loop_budget = 3;
-  options.scene.search = PrimitiveSearch::bvh_per_ray;
-  Renderer renderer(device(), scene, options);
-  std::vector<ObjectPrimitive> ids;
-  const Frame frame = cast_camera_rays(renderer, scene, ids);
-  EXPECT_GT(renderer.timings().unfinished_rays, frame.pixel_count() / 4);
-  const EnvelopeReport report = check_against_reference(scene, frame, 1, &ids);
-  EXPECT_EQ(report.failures, 0u) << report.describe();
+  for (const PrimitiveSearch search : {PrimitiveSearch::bvh_per_ray, PrimitiveSearch::bvh_packet}) {
+    RendererOptions options;
+    options.loop_budget = 3;
+    options.scene.search = search;
+    Renderer renderer(device(), scene, options);
+    for (const Listing listing : listings) {
+      SCOPED_TRACE(testing::Message() << "search " << int(search) << ", " << listing_name(listing));
+      std::vector<ObjectPrimitive> ids;
+      const Frame frame = cast_camera_rays(renderer, scene, ids, listing);
+        EXPECT_GT(renderer.timings().unfinished_rays, frame.pixel_count() / 4);
+      const EnvelopeReport report = check_against_reference(scene, frame, 1, &ids);
+      EXPECT_EQ(report.failures, 0u) << report.describe();
+    }
+  }
 }
 
-// More rays than one dispatch holds: tiles of rays give the same values as one dispatch.
+// More rays than one dispatch holds: tiles of rays give the same values as one dispatch, in every
+// listing (tiles of whole packets where the rays are ordered by direction; 1200 rays are 9 tiles
+// and a padded packet there).
 TEST(GivenRays, TilesOfRaysGiveTheSameValues) {
   const Scene scene = sized(default_scene(), 40, 30);
   Renderer whole(device(), scene);
   RendererOptions small;
-  small.max_tile_bytes = 8 * 16 * sizeof(float) * 3;  // 16 rows of 8 rays for the normals
+  small.max_tile_bytes = 8 * 16 * sizeof(float) * 3;  // 128 rays' normals: 8 packet rows of 16
   Renderer tiled(device(), scene, small);
-  std::vector<ObjectPrimitive> whole_ids, tiled_ids;
-  const Frame a = cast_camera_rays(whole, scene, whole_ids);
-  const Frame b = cast_camera_rays(tiled, scene, tiled_ids);
-  EXPECT_GT(tiled.timings().tiles, 1u);
-  EXPECT_EQ(whole.timings().tiles, 1u);
-  EXPECT_EQ(std::memcmp(a.depth.data(), b.depth.data(), a.depth.size() * sizeof(float)), 0);
-  EXPECT_EQ(std::memcmp(a.normal.data(), b.normal.data(), a.normal.size() * sizeof(float)), 0);
-  EXPECT_EQ(whole_ids, tiled_ids);
+  for (const Listing listing : listings) {
+    SCOPED_TRACE(listing_name(listing));
+    std::vector<ObjectPrimitive> whole_ids, tiled_ids;
+    const Frame a = cast_camera_rays(whole, scene, whole_ids, listing);
+    const Frame b = cast_camera_rays(tiled, scene, tiled_ids, listing);
+    EXPECT_GT(tiled.timings().tiles, 1u);
+    EXPECT_EQ(whole.timings().tiles, 1u);
+    EXPECT_EQ(std::memcmp(a.depth.data(), b.depth.data(), a.depth.size() * sizeof(float)), 0);
+    EXPECT_EQ(std::memcmp(a.normal.data(), b.normal.data(), a.normal.size() * sizeof(float)), 0);
+    EXPECT_EQ(whole_ids, tiled_ids);
+  }
 }
 
 TEST(GivenRays, BadRaysAreRefusedByIndex) {

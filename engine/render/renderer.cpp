@@ -2,6 +2,7 @@
 
 #include "engine/scene/camera.hpp"
 #include "engine/render/gpu_scene.hpp"
+#include "engine/render/ray_order.hpp"
 #include "engine/parallel.hpp"
 #include "engine/reference/reference.hpp"
 #include "engine/unit_vector.hpp"
@@ -57,6 +58,29 @@ uint32_t checked_count(size_t count, const char* what) {
 vk::DeviceSize depth_bytes(Precision precision) { return precision == Precision::float64 ? sizeof(double) : sizeof(float); }
 vk::DeviceSize normal_bytes(Precision precision) { return 3 * depth_bytes(precision); }
 constexpr vk::DeviceSize uv_bytes = 2 * sizeof(float);
+
+// What the shader reads of a given ray: a GpuRay, or a direction from the shared origin (a texel).
+vk::DeviceSize given_ray_bytes(RaycastMode mode) {
+  return mode == RaycastMode::given_directions ? texel_bytes : sizeof(gpu::GpuRay);
+}
+
+// The packet walk's layout of given directions in an order (by direction): rows
+// VKRAY_PACKET_GROUP_WIDTH wide, in which a packet is packet_columns columns (lavapipe's 8 lanes;
+// wider subgroups take several packets) of VKRAY_PACKET_ROWS rows. The n-th ray of the order takes
+// the n % 64-th place of packet n / 64, so that 64 consecutive rays walk the tree together; a block
+// of VKRAY_PACKET_ROWS rows holds whole packets.
+constexpr uint32_t packet_columns = 8;
+constexpr uint32_t packet_rays = packet_columns * VKRAY_PACKET_ROWS;
+constexpr uint32_t packets_a_row = VKRAY_PACKET_GROUP_WIDTH / packet_columns;
+constexpr uint32_t packet_block_positions = VKRAY_PACKET_GROUP_WIDTH * VKRAY_PACKET_ROWS;
+static_assert(VKRAY_PACKET_GROUP_WIDTH % packet_columns == 0);
+
+// The place in the order of the ray at layout position p.
+size_t packet_order_index(size_t position) {
+  const size_t x = position % VKRAY_PACKET_GROUP_WIDTH, y = position / VKRAY_PACKET_GROUP_WIDTH;
+  const size_t packet = (y / VKRAY_PACKET_ROWS) * packets_a_row + x / packet_columns;
+  return packet * packet_rays + (y % VKRAY_PACKET_ROWS) * packet_columns + x % packet_columns;
+}
 
 // One output of one tile: the buffer the shader writes and, where that buffer is not host-visible,
 // the buffer it is copied into for reading.
@@ -237,6 +261,10 @@ struct Renderer::Impl {
   std::optional<OutputBuffer> depth_range;  // DepthRangeBits, made on the first render to an image
   vk::raii::QueryPool timestamps{nullptr};
   TileOutputs tile;
+  // The last tile of the other kind of work (a camera's pixels, or given rays), kept while this kind
+  // runs: a Renderer that alternates renders and ray casts makes neither's buffers again (for a
+  // million given rays, the fresh memory's page clearing cost about 7 ms a call on lavapipe).
+  TileOutputs parked_tile;
   RenderTimings timings;
   // The slowest pixels' (or given rays') cost in the last render, ms each: the next one's first
   // dispatch is sized by it (DispatchSizer).
@@ -275,25 +303,31 @@ struct Renderer::Impl {
   void prepare_tile(uint32_t width, uint32_t rows, AovSet aovs, const ImageTarget* target,
                     RaycastMode mode = RaycastMode::image_buffers) {
     const uint64_t image_id = target ? target->id() : 0;
-    if (tile.width == width && tile.rows == rows && tile.aov_bits == aovs.bits() && tile.image_id == image_id &&
-        tile.mode == mode) {
-      return;
+    auto fits = [&](const TileOutputs& outputs) {
+      return outputs.width == width && outputs.rows == rows && outputs.aov_bits == aovs.bits() &&
+             outputs.image_id == image_id && outputs.mode == mode;
+    };
+    if (fits(tile)) return;
+    if (fits(parked_tile)) {
+      std::swap(tile, parked_tile);
+    } else {
+      if (is_given(tile.mode) != is_given(mode)) std::swap(tile, parked_tile);  // the other kind's, kept
+      tile = TileOutputs{width, rows, aovs.bits(), image_id, mode, {}, {}, {}, {}, {}, {}};
+      const vk::DeviceSize pixels = vk::DeviceSize{width} * rows;
+      if (!target) {
+        if (aovs.has(Aov::depth)) tile.depth = make_output(pixels * depth_bytes(precision()));
+        if (aovs.has(Aov::normal)) tile.normal = make_output(pixels * normal_bytes(precision()));
+        if (aovs.has(Aov::uv)) tile.uv = make_output(pixels * uv_bytes);
+      }
+      if (is_given(mode)) {
+        const vk::DeviceSize bytes = pixels * given_ray_bytes(mode);
+        tile.rays.emplace(TexelBuffer{create_upload_buffer(context, bytes, geometry_usage)});
+        tile.rays->floats = create_texel_view(context, tile.rays->buffer, vk::Format::eR32G32B32A32Sfloat);
+        tile.rays->uints = create_texel_view(context, tile.rays->buffer, vk::Format::eR32G32B32A32Uint);
+      }
+      if (is_given(mode) || (!target && aovs.has(Aov::hit))) tile.hits = make_output(pixels * sizeof(uint32_t));
+      if (stats.loop_budget > 0 && aovs.needs_rays()) tile.overflow = make_output((pixels + 1) * sizeof(uint32_t));
     }
-    tile = TileOutputs{width, rows, aovs.bits(), image_id, mode, {}, {}, {}, {}, {}, {}};
-    const vk::DeviceSize pixels = vk::DeviceSize{width} * rows;
-    if (!target) {
-      if (aovs.has(Aov::depth)) tile.depth = make_output(pixels * depth_bytes(precision()));
-      if (aovs.has(Aov::normal)) tile.normal = make_output(pixels * normal_bytes(precision()));
-      if (aovs.has(Aov::uv)) tile.uv = make_output(pixels * uv_bytes);
-    }
-    if (mode == RaycastMode::given_rays) {
-      const vk::DeviceSize bytes = pixels * sizeof(gpu::GpuRay);
-      tile.rays.emplace(TexelBuffer{create_upload_buffer(context, bytes, geometry_usage)});
-      tile.rays->floats = create_texel_view(context, tile.rays->buffer, vk::Format::eR32G32B32A32Sfloat);
-      tile.rays->uints = create_texel_view(context, tile.rays->buffer, vk::Format::eR32G32B32A32Uint);
-    }
-    if (mode == RaycastMode::given_rays || (!target && aovs.has(Aov::hit))) tile.hits = make_output(pixels * sizeof(uint32_t));
-    if (stats.loop_budget > 0 && aovs.needs_rays()) tile.overflow = make_output((pixels + 1) * sizeof(uint32_t));
     auto floats = [&](const std::optional<TexelBuffer>& texels) {
       return *(texels ? texels->floats : placeholder_texels.floats);
     };
@@ -365,6 +399,99 @@ struct Renderer::Impl {
     });
   }
 
+  // Given rays in dispatches of at most `tile_rows` rows of `width` positions. Position p holds ray
+  // p, or with an `order` (by direction) the ray at its place packet_order_index(p) in it; places
+  // past its end are padding, which trace its last ray again and keep nothing. `origin`: the rays'
+  // one origin (given_directions), sent as a camera's.
+  void cast_given(std::span<const GivenRay> rays, RaycastMode mode, uint32_t width, uint32_t tile_rows, size_t positions,
+                  const glm::dvec3* origin, const std::vector<uint32_t>* order, RayHits& hits) {
+    auto ray_at = [&](size_t position) {  // rays.size() for padding
+      if (!order) return position;
+      const size_t n = packet_order_index(position);
+      return n < order->size() ? size_t{(*order)[n]} : rays.size();
+    };
+    const AovSet aovs{Aov::depth, Aov::normal};
+    // The lo parts of positions as for a camera (needs_lo_parts), wherever any of the rays starts.
+    const bool lo_parts = origin ? needs_lo_parts(anchor, scene_radius, *origin)
+                                 : std::any_of(rays.begin(), rays.end(), [&](const GivenRay& ray) {
+                                     return needs_lo_parts(anchor, scene_radius, {ray[0], ray[1], ray[2]});
+                                   });
+    const vk::raii::Pipeline& chosen = pipeline->pipeline(aovs, lo_parts, mode, timings.pipeline_ms);
+    // The planes' heights above the one origin; rays from their own origins subtract it themselves.
+    if (planes) {
+      if (origin) set_plane_heights(gpu_planes, scene_planes, *origin, precision());
+      std::memcpy(planes->buffer.mapped, gpu_planes.data(), gpu_planes.size() * sizeof(gpu::GpuPlane));
+    }
+    prepare_tile(width, tile_rows, aovs, nullptr, mode);
+    double& ms_per_ray = origin ? camera_ms_per_pixel : given_ms_per_ray;  // packets cost as pixels do
+    DispatchSizer sizer(width, tile_rows, options.dispatch_budget_ms, ms_per_ray, workgroup_footprint(mode).height);
+    gpu::RayGenParams params{};
+    if (origin) params = make_ray_gen_params(CameraBasis{*origin, {}, {}, {}, 0.0}, anchor, precision(), 0, 0, 0, 0, counts);
+    params.counts = counts;
+    for (size_t first = 0, count = 0; first < positions; first += count) {
+      count = std::min(size_t{width} * sizer.next_rows(), positions - first);
+      const auto encode_start = Clock::now();
+      parallel_for_chunks(count, [&](size_t begin, size_t end) {
+        for (size_t p = begin; p < end; ++p) {
+          const size_t k = ray_at(first + p);
+          const GivenRay& ray = rays[k < rays.size() ? k : order->back()];
+          const glm::dvec3 direction(ray[3], ray[4], ray[5]);
+          if (origin) {  // float32 alone: the packet walk's
+            static_cast<glm::vec4*>(tile.rays->buffer.mapped)[p] = glm::vec4(glm::vec3(unit_vector(direction)), 0.0f);
+          } else {
+            static_cast<gpu::GpuRay*>(tile.rays->buffer.mapped)[p] = encode_ray({ray[0], ray[1], ray[2]}, direction, anchor, precision());
+          }
+        }
+      });
+      timings.rays_ms += elapsed_ms(encode_start);
+      params.image = glm::uvec4(width, static_cast<uint32_t>(count), 0, static_cast<uint32_t>((count + width - 1) / width));
+      sizer.measured(params.image.w, dispatch_tile(chosen, params));
+      ms_per_ray = sizer.slowest_ms_per_pixel();
+
+      const auto copy_start = Clock::now();
+      const auto* slots = static_cast<const uint32_t*>(tile.hits->host());
+      const size_t plane_size = size_t{width} * params.image.w;  // the shader's planes span whole rows
+      auto copy = [&]<typename T>(const T* depths, const T* unit_normals) {
+        parallel_for_chunks(count, [&](size_t begin, size_t end) {
+          for (size_t p = begin; p < end; ++p) {
+            const size_t k = ray_at(first + p);
+            if (k >= rays.size()) continue;
+            const glm::dvec3 normal(unit_normals[p], unit_normals[plane_size + p], unit_normals[2 * plane_size + p]);
+            hits.store(k, depths[p], normal, hit_sources(slots[p]));
+          }
+        });
+      };
+      if (!order && precision() == Precision::float32) {  // in place: the planes as they are, the ids named
+        const auto* unit_normals = static_cast<const float*>(tile.normal->host());
+        std::memcpy(hits.t.data() + first, tile.depth->host(), count * sizeof(float));
+        for (size_t c = 0; c < 3; ++c) {
+          std::memcpy(hits.normal.data() + c * hits.count + first, unit_normals + c * plane_size, count * sizeof(float));
+        }
+        parallel_for_chunks(count, [&](size_t begin, size_t end) {
+          for (size_t k = begin; k < end; ++k) {
+            const ObjectPrimitive source = hit_sources(slots[k]);
+            hits.object[first + k] = source.object;
+            hits.primitive[first + k] = source.primitive;
+          }
+        });
+      } else if (precision() == Precision::float64) {
+        copy(static_cast<const double*>(tile.depth->host()), static_cast<const double*>(tile.normal->host()));
+      } else {
+        copy(static_cast<const float*>(tile.depth->host()), static_cast<const float*>(tile.normal->host()));
+      }
+      timings.readback_ms += elapsed_ms(copy_start);
+      if (tile.overflow) {
+        finish_unfinished([&](uint32_t position) {
+          const size_t k = ray_at(first + position);
+          if (k >= rays.size()) return;
+          const GivenRay& ray = rays[k];
+          const ReferenceHit hit = reference->trace(glm::dvec3(ray[0], ray[1], ray[2]), unit_vector(glm::dvec3(ray[3], ray[4], ray[5])));
+          hits.store(k, hit.t, hit.normal, reference->source(hit));
+        });
+      }
+    }
+  }
+
   // A camera's rows in dispatches, each sized by what the earlier ones took (DispatchSizer);
   // `tile_done(first_row, rows)` reads each back before the next runs.
   template <typename TileDone>
@@ -384,7 +511,7 @@ struct Renderer::Impl {
   // caller's cap), and the workgroup count within the device's limit.
   // `buffer_aovs`: the outputs written to buffers (none with the storage-image target).
   uint32_t rows_per_tile(uint32_t width, uint32_t height, AovSet buffer_aovs, RaycastMode mode = RaycastMode::image_buffers) const {
-    vk::DeviceSize largest = mode == RaycastMode::given_rays ? sizeof(uint32_t) : 0;  // the hits
+    vk::DeviceSize largest = is_given(mode) ? sizeof(uint32_t) : 0;  // the hits
     if (buffer_aovs.has(Aov::depth)) largest = std::max(largest, depth_bytes(precision()));
     if (buffer_aovs.has(Aov::normal)) largest = std::max(largest, normal_bytes(precision()));
     if (buffer_aovs.has(Aov::uv)) largest = std::max(largest, uv_bytes);
@@ -394,9 +521,9 @@ struct Renderer::Impl {
     if (stats.loop_budget > 0) {  // the overflow list: a count, then 4 bytes a pixel
       by_bytes = std::min(by_bytes, std::max<vk::DeviceSize>(1, (limit - sizeof(uint32_t)) / (vk::DeviceSize{width} * 4)));
     }
-    if (mode == RaycastMode::given_rays) {  // the rays: one texel buffer
+    if (is_given(mode)) {  // the rays: one texel buffer
       const vk::DeviceSize ray_limit = binding_limit();
-      by_bytes = std::min(by_bytes, std::max<vk::DeviceSize>(1, ray_limit / (vk::DeviceSize{width} * sizeof(gpu::GpuRay))));
+      by_bytes = std::min(by_bytes, std::max<vk::DeviceSize>(1, ray_limit / (vk::DeviceSize{width} * given_ray_bytes(mode))));
     }
     const vk::DeviceSize by_groups =
         vk::DeviceSize{context.limits.maxComputeWorkGroupCount[1]} * workgroup_footprint(mode).height;
@@ -751,62 +878,44 @@ RayHits Renderer::cast_rays(std::span<const GivenRay> rays) {
   if (rays.empty()) return hits;
 
   with_vulkan_errors("casting rays", [&] {
+    const AovSet aovs{Aov::depth, Aov::normal};
+    // Rows of `width` holding `positions`, at most as many as the device's buffers hold.
+    auto tile_rows = [&](uint32_t width, size_t positions, RaycastMode mode) {
+      return r.rows_per_tile(width, static_cast<uint32_t>(std::min<size_t>((positions + width - 1) / width, UINT32_MAX)), aovs, mode);
+    };
+    // Rays from one origin (a camera's, a LiDAR's) walk the tree in packets as a camera's pixels
+    // do, where the camera's rays would (the float32 packet walk): one by one they take five times
+    // as long (README, "Python"). A packet's rays must point nearly the same way: rays listed as an
+    // image's rows keep their places, as a camera's pixels; others are ordered by direction, 64
+    // consecutive ones a packet, in tiles of whole packets (where the device's buffers hold one).
+    const std::optional<glm::dvec3> origin =
+        r.stats.search == PrimitiveSearch::bvh_packet && r.precision() == Precision::float32 ? shared_origin(rays)
+                                                                                             : std::nullopt;
+    if (const std::optional<uint32_t> rows_width = origin ? scan_width(rays) : std::nullopt) {
+      r.timings.given_walk = GivenRayWalk::packets_in_place;
+      r.cast_given(rays, RaycastMode::given_directions, *rows_width,
+                   tile_rows(*rows_width, rays.size(), RaycastMode::given_directions), rays.size(), &*origin, nullptr, hits);
+      return;
+    }
+    if (origin) {
+      const size_t positions = (rays.size() + packet_block_positions - 1) / packet_block_positions * packet_block_positions;
+      const uint32_t rows = tile_rows(VKRAY_PACKET_GROUP_WIDTH, positions, RaycastMode::given_directions) /
+                            VKRAY_PACKET_ROWS * VKRAY_PACKET_ROWS;
+      if (rows > 0) {
+        r.timings.given_walk = GivenRayWalk::packets_by_direction;
+        const auto order_start = Clock::now();
+        const std::vector<uint32_t> order = order_by_direction(rays);
+        r.timings.rays_ms += elapsed_ms(order_start);
+        r.cast_given(rays, RaycastMode::given_directions, VKRAY_PACKET_GROUP_WIDTH, rows, positions, &*origin, &order, hits);
+        return;
+      }
+    }
     // Rows of one workgroup's width: a workgroup then holds consecutive rays, which callers
     // usually order as they lie in space (a scan line, an image's rows).
+    r.timings.given_walk = GivenRayWalk::one_by_one;
     const uint32_t width = r.options.shader.workgroup_width;
-    const AovSet aovs{Aov::depth, Aov::normal};
-    const auto all_rows = static_cast<uint32_t>(std::min<size_t>((rays.size() + width - 1) / width, UINT32_MAX));
-    const uint32_t tile_rows = r.rows_per_tile(width, all_rows, aovs, RaycastMode::given_rays);
-    // The lo parts of positions as for a camera (needs_lo_parts), wherever any of the rays starts.
-    const bool lo_parts = std::any_of(rays.begin(), rays.end(), [&](const GivenRay& ray) {
-      return needs_lo_parts(r.anchor, r.scene_radius, {ray[0], ray[1], ray[2]});
-    });
-    const vk::raii::Pipeline& pipeline = r.pipeline->pipeline(aovs, lo_parts, RaycastMode::given_rays, r.timings.pipeline_ms);
-    if (r.planes) {  // the heights above a camera are not read: each ray subtracts its own origin
-      std::memcpy(r.planes->buffer.mapped, r.gpu_planes.data(), r.gpu_planes.size() * sizeof(gpu::GpuPlane));
-    }
-    r.prepare_tile(width, tile_rows, aovs, nullptr, RaycastMode::given_rays);
-    DispatchSizer sizer(width, tile_rows, r.options.dispatch_budget_ms, r.given_ms_per_ray);
-    for (size_t first = 0, count = 0; first < rays.size(); first += count) {
-      count = std::min(size_t{width} * sizer.next_rows(), rays.size() - first);
-      auto* encoded = static_cast<gpu::GpuRay*>(r.tile.rays->buffer.mapped);
-      parallel_for_chunks(count, [&](size_t begin, size_t end) {
-        for (size_t k = begin; k < end; ++k) {
-          const GivenRay& ray = rays[first + k];
-          encoded[k] = encode_ray({ray[0], ray[1], ray[2]}, {ray[3], ray[4], ray[5]}, r.anchor, r.precision());
-        }
-      });
-      gpu::RayGenParams params{};
-      params.image = glm::uvec4(width, static_cast<uint32_t>(count), 0, static_cast<uint32_t>((count + width - 1) / width));
-      params.counts = r.counts;
-      sizer.measured(params.image.w, r.dispatch_tile(pipeline, params));
-      r.given_ms_per_ray = sizer.slowest_ms_per_pixel();
-
-      const auto copy_start = Clock::now();
-      const auto* slots = static_cast<const uint32_t*>(r.tile.hits->host());
-      const size_t plane_size = size_t{width} * params.image.w;  // the shader's planes span whole rows
-      auto copy = [&]<typename T>(const T* depths, const T* normals) {
-        parallel_for_chunks(count, [&](size_t begin, size_t end) {
-          for (size_t k = begin; k < end; ++k) {
-            const glm::dvec3 normal(normals[k], normals[plane_size + k], normals[2 * plane_size + k]);
-            hits.store(first + k, depths[k], normal, r.hit_sources(slots[k]));
-          }
-        });
-      };
-      if (r.precision() == Precision::float64) {
-        copy(static_cast<const double*>(r.tile.depth->host()), static_cast<const double*>(r.tile.normal->host()));
-      } else {
-        copy(static_cast<const float*>(r.tile.depth->host()), static_cast<const float*>(r.tile.normal->host()));
-      }
-      r.timings.readback_ms += elapsed_ms(copy_start);
-      if (r.tile.overflow) {
-        r.finish_unfinished([&](uint32_t index) {
-          const GivenRay& ray = rays[first + index];
-          const ReferenceHit hit = r.reference->trace(glm::dvec3(ray[0], ray[1], ray[2]), unit_vector(glm::dvec3(ray[3], ray[4], ray[5])));
-          hits.store(first + index, hit.t, hit.normal, r.reference->source(hit));
-        });
-      }
-    }
+    r.cast_given(rays, RaycastMode::given_rays, width, tile_rows(width, rays.size(), RaycastMode::given_rays), rays.size(),
+                 nullptr, nullptr, hits);
   });
   return hits;
 }

@@ -16,6 +16,14 @@
 
 namespace vkray {
 
+// How cast_rays traced the rays it was given (see Renderer::cast_rays).
+enum class GivenRayWalk {
+  none,                  // no rays given
+  one_by_one,            // each ray walked the tree on its own
+  packets_in_place,      // rays from one origin listed as an image's rows: packets of its 8x8 blocks
+  packets_by_direction,  // rays from one origin in another order: packets of 64 ordered by direction
+};
+
 struct RenderTimings {
   double upload_ms = 0.0;          // scene conversion and upload (once, in the constructor), BVH build included
   double bvh_build_ms = 0.0;       // of which building the BVH
@@ -27,6 +35,8 @@ struct RenderTimings {
   bool has_gpu_times = false;      // the device has timestamps; else dispatch_gpu_ms is not measured
   double dispatch_gpu_ms = 0.0;    // GPU time of the ray-casting dispatches (timestamp queries)
   double readback_ms = 0.0;        // copying results back into the Frame (or the few the host reads)
+  double rays_ms = 0.0;            // cast_rays: ordering the rays and writing them for the device
+  GivenRayWalk given_walk = GivenRayWalk::none;  // how cast_rays walked the tree
   uint32_t tiles = 0;              // dispatches the image was split into
   double longest_dispatch_ms = 0.0;  // GPU time of the longest (wall time where no timestamps)
   uint64_t unfinished_rays = 0;    // rays that ran out of the device's loop budget, finished on the CPU

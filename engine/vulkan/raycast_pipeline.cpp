@@ -94,7 +94,9 @@ const vk::raii::Pipeline& RaycastPipeline::pipeline(AovSet aovs, bool lo_parts, 
   values[VKRAY_SPEC_COORDINATES] = variant.coordinates;
   values[VKRAY_SPEC_LO_PARTS] = lo_parts ? 1u : 0u;
   values[VKRAY_SPEC_IMAGE_TARGET] = mode == RaycastMode::image_target ? 1u : 0u;
-  values[VKRAY_SPEC_RAY_INPUT] = mode == RaycastMode::given_rays ? 1u : 0u;
+  values[VKRAY_SPEC_RAY_INPUT] = mode == RaycastMode::given_rays         ? VKRAY_RAY_INPUT_RAYS
+                                : mode == RaycastMode::given_directions ? VKRAY_RAY_INPUT_DIRECTIONS
+                                                                        : VKRAY_RAY_INPUT_NONE;
   values[VKRAY_SPEC_STACK_REGISTERS] = specialization_.stack_registers;
   values[VKRAY_SPEC_SUBGROUP_SIZE] = context_.info.subgroup_size == 8 ? 8u : 0u;
   std::array<vk::SpecializationMapEntry, values.size()> entries;

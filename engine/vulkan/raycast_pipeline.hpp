@@ -30,8 +30,11 @@ struct PipelineSpecialization {
 enum class RaycastMode : uint32_t {
   image_buffers,  // a camera's pixels into output buffers
   image_target,   // a camera's pixels into the storage image (VKRAY_SPEC_IMAGE_TARGET)
-  given_rays,     // the caller's rays (VKRAY_SPEC_RAY_INPUT) into output buffers
+  given_rays,     // the caller's rays (VKRAY_RAY_INPUT_RAYS) into output buffers
+  given_directions,  // the caller's rays from one origin (VKRAY_RAY_INPUT_DIRECTIONS) into output buffers
 };
+
+inline bool is_given(RaycastMode mode) { return mode == RaycastMode::given_rays || mode == RaycastMode::given_directions; }
 
 // How float32 shaders on `device` take the triangle edge functions for `requested` (see
 // EdgeArithmetic): automatic is double products on CPU devices with shaderFloat64, float elsewhere.
