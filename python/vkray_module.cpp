@@ -29,26 +29,26 @@ namespace {
 
 // A numpy array over `values` without copying them: the vector moves into a capsule that numpy
 // frees with the last view. `strides` in elements.
-template <typename T>
-py::array array_over(std::vector<T>&& values, const std::vector<py::ssize_t>& shape, const std::vector<py::ssize_t>& strides) {
-  auto* owned = new std::vector<T>(std::move(values));
-  py::capsule owner(owned, [](void* p) { delete static_cast<std::vector<T>*>(p); });
+template <typename T, typename Allocator>
+py::array array_over(std::vector<T, Allocator>&& values, const std::vector<py::ssize_t>& shape, const std::vector<py::ssize_t>& strides) {
+  auto* owned = new std::vector<T, Allocator>(std::move(values));
+  py::capsule owner(owned, [](void* p) { delete static_cast<std::vector<T, Allocator>*>(p); });
   std::vector<py::ssize_t> byte_strides;
   for (py::ssize_t stride : strides) byte_strides.push_back(stride * static_cast<py::ssize_t>(sizeof(T)));
   return py::array_t<T>(shape, byte_strides, owned->data(), owner);
 }
 
 // One value a pixel or ray: shape (rows, columns), or (count,) when rows is 0.
-template <typename T>
-py::array scalar_plane(std::vector<T>&& values, py::ssize_t rows, py::ssize_t columns) {
+template <typename T, typename Allocator>
+py::array scalar_plane(std::vector<T, Allocator>&& values, py::ssize_t rows, py::ssize_t columns) {
   if (rows == 0) return array_over(std::move(values), {columns}, {1});
   return array_over(std::move(values), {rows, columns}, {columns, 1});
 }
 
 // `components` planes of rows x columns (the engine's layout) as (rows, columns, components), or
 // (count, components) when rows is 0: a strided view, not a copy.
-template <typename T>
-py::array planes_as_last_axis(std::vector<T>&& values, py::ssize_t rows, py::ssize_t columns, py::ssize_t components) {
+template <typename T, typename Allocator>
+py::array planes_as_last_axis(std::vector<T, Allocator>&& values, py::ssize_t rows, py::ssize_t columns, py::ssize_t components) {
   const py::ssize_t plane = (rows == 0 ? 1 : rows) * columns;
   if (rows == 0) return array_over(std::move(values), {columns, components}, {1, plane});
   return array_over(std::move(values), {rows, columns, components}, {columns, 1, plane});

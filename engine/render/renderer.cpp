@@ -646,12 +646,12 @@ struct Renderer::Impl {
 
 void RayHits::allocate(size_t ray_count, bool doubles) {
   count = ray_count;
-  t.assign(count, INFINITY);
-  normal.assign(3 * count, 0.0f);
-  object.assign(count, no_object);
-  primitive.assign(count, no_object);
-  t64.assign(doubles ? count : 0, INFINITY);
-  normal64.assign(doubles ? 3 * count : 0, 0.0);
+  t.resize(count);
+  normal.resize(3 * count);
+  object.resize(count);
+  primitive.resize(count);
+  t64.resize(doubles ? count : 0);
+  normal64.resize(doubles ? 3 * count : 0);
 }
 
 void RayHits::store(size_t ray, double distance, const glm::dvec3& unit_normal, ObjectPrimitive source) {
