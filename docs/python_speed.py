@@ -24,7 +24,7 @@ import vkray
 
 MODEL = sys.argv[1] if len(sys.argv) > 1 else "../shared/models/stanford-bunny.obj"
 VIEWS = int(sys.argv[2]) if len(sys.argv) > 2 else 100
-FRAMES = 5
+FRAMES = 10  # best of: a run of lavapipe on 2 shared cores varies by 10-20% from call to call
 CLI = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "build", "vkray")
 
 
