@@ -217,7 +217,7 @@ int run_render(const RenderOptions& options) {
 
   if (options.reference) {
     const std::vector<ReferenceHit>& hits = reference();
-    frame = reference_frame(*reference_scene, hits, scene.camera, scene.width, scene.height, aovs);
+    frame = reference_frame(*reference_scene, scene, hits, scene.camera, scene.width, scene.height, aovs);
     stopwatch.lap_ms();
   } else {
     const OpenedDevice opened = opening.get();

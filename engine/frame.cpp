@@ -22,7 +22,10 @@ constexpr NamedAov named_aovs[] = {{Aov::depth, "depth"},
                                    {Aov::position, "position"},
                                    {Aov::camera_position, "camera-position"},
                                    {Aov::mesh_id, "mesh-id"},
-                                   {Aov::primitive_id, "primitive-id"}};
+                                   {Aov::primitive_id, "primitive-id"},
+                                   {Aov::barycentric, "barycentric"},
+                                   {Aov::shading_normal, "shading-normal"},
+                                   {Aov::texcoord, "texcoord"}};
 }  // namespace
 
 std::string AovSet::names() const {
@@ -50,8 +53,12 @@ void Frame::allocate(bool doubles) {
   planar_depth.assign(aovs.has(Aov::planar_depth) ? pixel_count() : 0, 0.0f);
   position.assign(aovs.has(Aov::position) ? 3 * pixel_count() : 0, 0.0f);
   camera_position.assign(aovs.has(Aov::camera_position) ? 3 * pixel_count() : 0, 0.0f);
-  mesh_id.assign(aovs.has(Aov::mesh_id) ? pixel_count() : 0, no_object);
-  primitive_id.assign(aovs.has(Aov::primitive_id) ? pixel_count() : 0, no_object);
+  // The surface outputs are found from both ids.
+  mesh_id.assign(aovs.has(Aov::mesh_id) || aovs.has_surface_outputs() ? pixel_count() : 0, no_object);
+  primitive_id.assign(aovs.has(Aov::primitive_id) || aovs.has_surface_outputs() ? pixel_count() : 0, no_object);
+  barycentric.assign(aovs.has(Aov::barycentric) ? 2 * pixel_count() : 0, 0.0f);
+  shading_normal.assign(aovs.has(Aov::shading_normal) ? 3 * pixel_count() : 0, 0.0f);
+  texcoord.assign(aovs.has(Aov::texcoord) ? 2 * pixel_count() : 0, 0.0f);
   depth64.assign(doubles ? depth.size() : 0, 0.0);
   normal64.assign(doubles ? normal.size() : 0, 0.0);
 }

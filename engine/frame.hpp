@@ -19,7 +19,9 @@ namespace vkray {
 // depth, normal and uv come from the device; planar_depth, position and camera_position are the
 // camera outputs, computed on the host from the depth and the camera (add_camera_outputs);
 // mesh_id and primitive_id are the host's names for the primitive the device says each ray hit
-// (hit, which only the device computes and no user names).
+// (hit, which only the device computes and no user names); barycentric, shading_normal and
+// texcoord are the surface outputs, computed on the host from that primitive and the pixel's ray
+// (add_surface_outputs).
 enum class Aov : uint32_t {
   depth = 1,
   normal = 2,
@@ -29,7 +31,10 @@ enum class Aov : uint32_t {
   camera_position = 32,
   mesh_id = 64,
   primitive_id = 128,
-  hit = 256
+  hit = 256,
+  barycentric = 512,
+  shading_normal = 1024,
+  texcoord = 2048
 };
 
 // A set of outputs as a bit mask of Aov values.
@@ -47,16 +52,21 @@ class AovSet {
     return has(Aov::planar_depth) || has(Aov::position) || has(Aov::camera_position);
   }
   constexpr bool has_ids() const { return has(Aov::mesh_id) || has(Aov::primitive_id); }
-  // Depth, normal, a camera output or an id need a ray cast; uv alone does not.
-  constexpr bool needs_rays() const { return has(Aov::depth) || has(Aov::normal) || has_camera_outputs() || has_ids(); }
+  constexpr bool has_surface_outputs() const {
+    return has(Aov::barycentric) || has(Aov::shading_normal) || has(Aov::texcoord);
+  }
+  // Depth, normal, a camera, id or surface output need a ray cast; uv alone does not.
+  constexpr bool needs_rays() const {
+    return has(Aov::depth) || has(Aov::normal) || has_camera_outputs() || has_ids() || has_surface_outputs();
+  }
   // What the device computes for these outputs: the camera outputs need its depth, the ids what
-  // each ray hit, and its depth too (which pixels hit: the A channel).
+  // each ray hit, and its depth too (which pixels hit: the A channel); the surface outputs both.
   constexpr AovSet on_device() const {
     AovSet device;
     device.bits_ = bits_ & (static_cast<uint32_t>(Aov::depth) | static_cast<uint32_t>(Aov::normal) |
                             static_cast<uint32_t>(Aov::uv) | static_cast<uint32_t>(Aov::hit));
-    if (has_camera_outputs() || has_ids()) device.add(Aov::depth);
-    if (has_ids()) device.add(Aov::hit);
+    if (has_camera_outputs() || has_ids() || has_surface_outputs()) device.add(Aov::depth);
+    if (has_ids() || has_surface_outputs()) device.add(Aov::hit);
     return device;
   }
   // What `vkray view` and Python show: depth, normal and uv.
@@ -67,11 +77,12 @@ class AovSet {
   uint32_t bits_ = 0;
 };
 
-// "depth", "normal", "uv", "planar-depth", "position", "camera-position", "mesh-id" or
-// "primitive-id"; nullopt for anything else.
+// "depth", "normal", "uv", "planar-depth", "position", "camera-position", "mesh-id",
+// "primitive-id", "barycentric", "shading-normal" or "texcoord"; nullopt for anything else.
 std::optional<Aov> aov_from_name(std::string_view name);
 inline constexpr const char* aov_names_help =
-    "depth, normal, uv, planar-depth, position, camera-position, mesh-id, primitive-id";
+    "depth, normal, uv, planar-depth, position, camera-position, mesh-id, primitive-id, barycentric, shading-normal, "
+    "texcoord";
 
 // Multi-component outputs are stored as planes (all x, then all y, ...), the layout the shader
 // writes: neighbouring invocations then store to neighbouring addresses.
@@ -98,6 +109,12 @@ struct Frame {
   // the primitive within it; no_object on a miss.
   std::vector<uint32_t> mesh_id;
   std::vector<uint32_t> primitive_id;
+  // The surface outputs (README, "Output contract"), 0 where nothing or no triangle gives them: the
+  // hit's weights of its triangle's second and third vertices (2 planes), the shading normal (3
+  // planes) and the texture coordinates (2 planes).
+  std::vector<float> barycentric;
+  std::vector<float> shading_normal;
+  std::vector<float> texcoord;
   // The float64 shader's depth and normals before rounding (empty otherwise): what its agreement
   // with the reference is measured on. depth and normal then hold them rounded.
   std::vector<double> depth64;
@@ -117,7 +134,7 @@ struct Frame {
   bool hit(size_t pixel) const;
 };
 
-// mesh_id and primitive_id of `pixel`, where the frame has them.
+// mesh_id and primitive_id of `pixel`, where the frame has them (for the ids or the surface outputs).
 void store_ids(Frame& frame, size_t pixel, ObjectPrimitive source);
 
 // Fills the camera outputs `frame.aovs` asks for from its depth (depth64 where the float64 shader or

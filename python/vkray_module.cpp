@@ -15,6 +15,7 @@
 
 #include <glm/mat4x4.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <memory>
 #include <mutex>
@@ -122,16 +123,32 @@ AovSet aovs_from(py::handle argument) {
     }
   }
   AovSet aovs;
-  for (const std::string& name : names) {
+  for (std::string name : names) {
+    std::replace(name.begin(), name.end(), '_', '-');  // the dict's keys name them with '_'
     const auto aov = aov_from_name(name);
-    if (!aov) throw InputError("aovs: unknown output '" + name + "' (known: depth, normal, uv)");
+    if (!aov) throw InputError("aovs: unknown output '" + name + "' (known: " + aov_names_help + ")");
     aovs.add(*aov);
-    if (!aovs.device_outputs_only()) {
-      throw InputError("aovs: '" + name + "' is written by `vkray render` only so far; here: depth, normal, uv");
-    }
   }
-  if (aovs.empty()) throw InputError("aovs: name at least one output (depth, normal, uv)");
+  if (aovs.empty()) throw InputError(std::string("aovs: name at least one output (") + aov_names_help + ")");
   return aovs;
+}
+
+// The camera, id and surface outputs of `frame` into `result`, as the EXR has them (float32; ids
+// uint32), keyed by their names with '_'.
+void add_derived_outputs(Frame& frame, AovSet aovs, py::dict& result) {
+  const auto rows = static_cast<py::ssize_t>(frame.height), columns = static_cast<py::ssize_t>(frame.width);
+  if (aovs.has(Aov::planar_depth)) result["planar_depth"] = scalar_plane(std::move(frame.planar_depth), rows, columns);
+  if (aovs.has(Aov::position)) result["position"] = planes_as_last_axis(std::move(frame.position), rows, columns, 3);
+  if (aovs.has(Aov::camera_position)) {
+    result["camera_position"] = planes_as_last_axis(std::move(frame.camera_position), rows, columns, 3);
+  }
+  if (aovs.has(Aov::mesh_id)) result["mesh_id"] = scalar_plane(std::move(frame.mesh_id), rows, columns);
+  if (aovs.has(Aov::primitive_id)) result["primitive_id"] = scalar_plane(std::move(frame.primitive_id), rows, columns);
+  if (aovs.has(Aov::barycentric)) result["barycentric"] = planes_as_last_axis(std::move(frame.barycentric), rows, columns, 2);
+  if (aovs.has(Aov::shading_normal)) {
+    result["shading_normal"] = planes_as_last_axis(std::move(frame.shading_normal), rows, columns, 3);
+  }
+  if (aovs.has(Aov::texcoord)) result["texcoord"] = planes_as_last_axis(std::move(frame.texcoord), rows, columns, 2);
 }
 
 // The rays argument of cast_rays: N x 6 (origin, direction), any real dtype.
@@ -297,6 +314,7 @@ class PyRenderer {
                                  : planes_as_last_axis(std::move(frame.normal), rows, columns, 3);
     }
     if (aovs.has(Aov::uv)) result["uv"] = planes_as_last_axis(std::move(frame.uv), rows, columns, 2);
+    add_derived_outputs(frame, aovs, result);
     return result;
   }
 
@@ -385,6 +403,16 @@ class PyReference {
     if (aovs.has(Aov::depth)) result["depth"] = scalar_plane(std::move(depth), rows, columns);
     if (aovs.has(Aov::normal)) result["normal"] = planes_as_last_axis(std::move(normal), rows, columns, 3);
     if (aovs.has(Aov::uv)) result["uv"] = planes_as_last_axis(std::move(uv), rows, columns, 2);
+    // The camera, id and surface outputs as `vkray render --reference` writes them.
+    AovSet derived;
+    for (const Aov aov : {Aov::planar_depth, Aov::position, Aov::camera_position, Aov::mesh_id, Aov::primitive_id,
+                          Aov::barycentric, Aov::shading_normal, Aov::texcoord}) {
+      if (aovs.has(aov)) derived.add(aov);
+    }
+    if (!derived.empty()) {
+      Frame frame = reference_frame(*reference_, scene_, hits, view.camera, view.width, view.height, derived);
+      add_derived_outputs(frame, derived, result);
+    }
     return result;
   }
 

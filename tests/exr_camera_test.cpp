@@ -59,7 +59,7 @@ TEST_F(ExrCameraTest, HeaderMatricesTakeEveryHitToItsPixelAndPlanarDepth) {
   const CameraBasis basis = make_camera_basis(scene.camera, scene.width, scene.height);
   const ReferenceScene reference(scene);
   const std::vector<ReferenceHit> hits = render_reference_hits(reference, basis, scene.width, scene.height);
-  const Frame frame = reference_frame(reference, hits, scene.camera, scene.width, scene.height, {Aov::depth});
+  const Frame frame = reference_frame(reference, scene, hits, scene.camera, scene.width, scene.height, {Aov::depth});
   const std::filesystem::path path = dir_ / "camera.exr";
   write_exr(path, frame);
 
@@ -120,7 +120,7 @@ TEST_F(ExrCameraTest, PlanarDepthReprojectsToPositionWithTheHeaderCamera) {
   const CameraBasis basis = make_camera_basis(scene.camera, scene.width, scene.height);
   const ReferenceScene reference(scene);
   const std::vector<ReferenceHit> hits = render_reference_hits(reference, basis, scene.width, scene.height);
-  const Frame frame = reference_frame(reference, hits, scene.camera, scene.width, scene.height,
+  const Frame frame = reference_frame(reference, scene, hits, scene.camera, scene.width, scene.height,
                                       {Aov::planar_depth, Aov::position, Aov::camera_position});
   const std::filesystem::path path = dir_ / "camera-outputs.exr";
   write_exr(path, frame);

@@ -135,6 +135,38 @@ TEST(ObjText, VertexTexcoordNormalReferences) {
   EXPECT_EQ(mesh.triangles[0], (std::array<uint32_t, 3>{0, 1, 2}));
 }
 
+// vn and vt are kept, with each triangle's corners' indices into them: by the direct path and by
+// tinyobjloader's triangulation of polygons alike; faces without them (before the first that gives
+// them and after) get no_attribute.
+TEST(ObjText, NormalsAndTexcoordsByCorner) {
+  constexpr uint32_t none = vkray::no_attribute;
+  const std::string attributes = "vt 0 0\nvt 1 0\nvt 0.25 1\nvn 0 0 1\nvn 0 1 0\n";
+  for (const std::string& extra : {std::string(), std::string("v 1 1 0\nf 1 2 4 3\n")}) {
+    SCOPED_TRACE(extra.empty() ? "triangles only" : "with a quad");
+    const Mesh mesh = vkray::load_obj_text(tri_vertices + attributes + "f 1 2 3\nf 1/1/2 2/2/1 3/3/2\nf 3//1 1//2 2//1\n" +
+                                               "f 2/3 3/2 1/1\n" + extra, "t.obj");
+    ASSERT_EQ(mesh.normals.size(), 2u);
+    EXPECT_EQ(mesh.normals[1], glm::dvec3(0, 1, 0));
+    ASSERT_EQ(mesh.texcoords.size(), 3u);
+    EXPECT_EQ(mesh.texcoords[2], glm::dvec2(0.25, 1));
+    ASSERT_EQ(mesh.normal_corners.size(), mesh.triangles.size());
+    ASSERT_EQ(mesh.texcoord_corners.size(), mesh.triangles.size());
+    using Corners = std::array<uint32_t, 3>;
+    EXPECT_EQ(mesh.normal_corners[0], (Corners{none, none, none}));
+    EXPECT_EQ(mesh.normal_corners[1], (Corners{1, 0, 1}));
+    EXPECT_EQ(mesh.texcoord_corners[1], (Corners{0, 1, 2}));
+    EXPECT_EQ(mesh.normal_corners[2], (Corners{0, 1, 0}));
+    EXPECT_EQ(mesh.texcoord_corners[2], (Corners{none, none, none}));
+    EXPECT_EQ(mesh.texcoord_corners[3], (Corners{2, 1, 0}));
+    EXPECT_EQ(mesh.normal_corners[3], (Corners{none, none, none}));
+    for (size_t t = 4; t < mesh.triangles.size(); ++t) EXPECT_EQ(mesh.normal_corners[t], (Corners{none, none, none}));
+  }
+  // A file without any keeps no lists.
+  const Mesh plain = vkray::load_obj_text(tri_vertices + "vn 0 0 1\nf 1 2 3\n", "t.obj");
+  EXPECT_TRUE(plain.normal_corners.empty());
+  EXPECT_TRUE(plain.texcoord_corners.empty());
+}
+
 TEST(ObjText, VertexNormalReferences) {
   const Mesh mesh = vkray::load_obj_text(tri_vertices + "vn 0 0 1\nf 3//1 1//1 2//1\n", "t.obj");
   ASSERT_EQ(mesh.triangles.size(), 1u);

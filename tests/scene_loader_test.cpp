@@ -474,6 +474,19 @@ TEST(SceneJson, RotationAboutYFollowsRightHandRule) {
   expect_near(scene.meshes[0].positions[2], {0, 1, 0});
 }
 
+// An OBJ's normals go through the inverse transpose: scaled by (1, 4, 1), the normal (1, 1, 0) of
+// the plane x + y = 1 becomes (1, 1/4, 0), the normal of that plane stretched (x + y / 4 = 1); then
+// rotated 90 degrees about +z, (-1/4, 1, 0).
+TEST(SceneJson, TransformTurnsObjNormalsByTheInverseTranspose) {
+  const Scene scene = parse(with_camera(R"("meshes": [{"obj": "n.obj", "transform": {"scale": [1, 4, 1],
+                                           "rotate": {"axis": [0, 0, 1], "degrees": 90}}}])"),
+                            [](const std::filesystem::path&) {
+                              return vkray::load_obj_text("v 1 0 0\nv 0 1 0\nv 1 0 1\nvn 1 1 0\nf 1//1 2//1 3//1\n", "n.obj");
+                            });
+  ASSERT_EQ(scene.meshes[0].normals.size(), 1u);
+  expect_near(scene.meshes[0].normals[0], {-0.25, 1, 0});
+}
+
 TEST(SceneJson, TransformAppliesToObjMeshes) {
   std::vector<std::filesystem::path> loaded;
   const Scene scene = parse(with_camera(R"("meshes": [{"obj": "models/tri.obj", "transform": {"scale": 3, "translate": [0, 0, 1]}}])"),

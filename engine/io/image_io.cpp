@@ -310,11 +310,12 @@ void write_exr_to(const PartialFile& file, const std::filesystem::path& path, co
   if (frame.aovs.has(Aov::depth) || frame.aovs.has(Aov::planar_depth)) {
     header.insert("vkray:miss", Imf::FloatAttribute(settings.miss));
   }
-  auto add_xyz = [&](const std::string& prefix, const std::vector<float>& planes) {
-    for (size_t c = 0; c < 3; ++c) add_channel((prefix + "XYZ"[c]).c_str(), planes.data() + c * pixels);
+  // A plane each of `components`' letters, "layer.letter".
+  auto add_planes = [&](const std::string& prefix, const char* components, const std::vector<float>& planes) {
+    for (size_t c = 0; components[c] != 0; ++c) add_channel((prefix + components[c]).c_str(), planes.data() + c * pixels);
   };
-  if (frame.aovs.has(Aov::position)) add_xyz("P.", frame.position);
-  if (frame.aovs.has(Aov::camera_position)) add_xyz("camera.P.", frame.camera_position);
+  if (frame.aovs.has(Aov::position)) add_planes("P.", "XYZ", frame.position);
+  if (frame.aovs.has(Aov::camera_position)) add_planes("camera.P.", "XYZ", frame.camera_position);
   // Ids as 32-bit unsigned channels, named as Python's cast_rays names them.
   auto add_id_channel = [&](const char* name, const std::vector<uint32_t>& ids) {
     header.channels().insert(name, Imf::Channel(Imf::UINT));
@@ -323,6 +324,11 @@ void write_exr_to(const PartialFile& file, const std::filesystem::path& path, co
   };
   if (frame.aovs.has(Aov::mesh_id)) add_id_channel("mesh_id", frame.mesh_id);
   if (frame.aovs.has(Aov::primitive_id)) add_id_channel("primitive_id", frame.primitive_id);
+  // The surface outputs: Ns, pbrt-v4's name for the shading normal; texcoord and barycentric in
+  // their own layers, apart from U and V (the image plane's coordinates, not a texture's).
+  if (frame.aovs.has(Aov::barycentric)) add_planes("barycentric.", "UV", frame.barycentric);
+  if (frame.aovs.has(Aov::shading_normal)) add_planes("Ns.", "XYZ", frame.shading_normal);
+  if (frame.aovs.has(Aov::texcoord)) add_planes("texcoord.", "UV", frame.texcoord);
   std::vector<float> alpha;
   if (frame.aovs.needs_rays()) {
     alpha.resize(pixels);

@@ -58,6 +58,9 @@ std::array<PreviewRamp, 2> preview_ramps(Aov aov, DepthRange depths) {
     case Aov::camera_position:
     case Aov::mesh_id:
     case Aov::primitive_id:
+    case Aov::barycentric:
+    case Aov::shading_normal:
+    case Aov::texcoord:
     case Aov::hit: break;  // not previewed: the depth they come with stands for them
   }
   throw std::invalid_argument("no preview for " + AovSet{aov}.names());
@@ -108,6 +111,9 @@ std::vector<uint8_t> preview_rgb(const Frame& frame, Aov aov) {
     case Aov::camera_position:
     case Aov::mesh_id:
     case Aov::primitive_id:
+    case Aov::barycentric:
+    case Aov::shading_normal:
+    case Aov::texcoord:
     case Aov::hit: break;  // preview_ramps refused them
   }
   return rgb;

@@ -1,6 +1,7 @@
 #include "engine/reference/reference.hpp"
 
 #include "engine/parallel.hpp"
+#include "engine/surface_outputs.hpp"
 #include "engine/unit_vector.hpp"
 #include "shaders/gpu_layout.h"
 
@@ -297,8 +298,8 @@ void store_reference_hit(Frame& frame, size_t pixel, const ReferenceHit& hit) {
   }
 }
 
-Frame reference_frame(const ReferenceScene& scene, const std::vector<ReferenceHit>& hits, const Camera& camera,
-                      uint32_t width, uint32_t height, AovSet aovs) {
+Frame reference_frame(const ReferenceScene& scene, const Scene& source, const std::vector<ReferenceHit>& hits,
+                      const Camera& camera, uint32_t width, uint32_t height, AovSet aovs) {
   Frame frame(width, height, aovs);
   frame.camera = camera;
   frame.allocate(aovs.has_camera_outputs());  // the camera outputs from the exact depth
@@ -307,7 +308,7 @@ Frame reference_frame(const ReferenceScene& scene, const std::vector<ReferenceHi
     for (uint32_t i = 0; i < width; ++i) {
       const size_t p = size_t{j} * width + i;
       store_reference_hit(frame, p, hits[p]);
-      if (aovs.has_ids()) store_ids(frame, p, scene.source(hits[p]));
+      if (aovs.has_ids() || aovs.has_surface_outputs()) store_ids(frame, p, scene.source(hits[p]));
       if (aovs.has(Aov::uv)) {
         const glm::dvec2 uv = pixel_uv(i, j, width, height);
         frame.uv[p] = static_cast<float>(uv.x);
@@ -316,6 +317,7 @@ Frame reference_frame(const ReferenceScene& scene, const std::vector<ReferenceHi
     }
   }
   add_camera_outputs(frame);
+  add_surface_outputs(frame, source);
   return frame;
 }
 

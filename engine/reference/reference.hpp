@@ -89,8 +89,8 @@ std::vector<ReferenceHit> trace_reference_rays(const ReferenceScene& scene, std:
 void store_reference_hit(Frame& frame, size_t pixel, const ReferenceHit& hit);
 
 // The same outputs the GPU writes, from `scene`'s hits of `camera`'s rays (rounded to float only at
-// the end).
-Frame reference_frame(const ReferenceScene& scene, const std::vector<ReferenceHit>& hits, const Camera& camera,
-                      uint32_t width, uint32_t height, AovSet aovs);
+// the end); `source` is the scene `scene` was made from (the surface outputs read its meshes).
+Frame reference_frame(const ReferenceScene& scene, const Scene& source, const std::vector<ReferenceHit>& hits,
+                      const Camera& camera, uint32_t width, uint32_t height, AovSet aovs);
 
 }  // namespace vkray

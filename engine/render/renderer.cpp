@@ -4,6 +4,7 @@
 #include "engine/render/gpu_scene.hpp"
 #include "engine/render/ray_order.hpp"
 #include "engine/parallel.hpp"
+#include "engine/surface_outputs.hpp"
 #include "engine/reference/reference.hpp"
 #include "engine/unit_vector.hpp"
 #include "engine/vulkan/acceleration_structures.hpp"
@@ -254,7 +255,9 @@ struct Renderer::Impl {
   std::vector<Plane> scene_planes;
   SceneStats stats;
   // Where a loop budget applies: the scene, to finish on the CPU the rays that run out of it.
-  std::optional<Scene> scene_for_unfinished;
+  // The scene on the host: the surface outputs read its meshes, and rays the device leaves unfinished
+  // (a loop budget) are traced by a reference made from it.
+  Scene host_scene;
   std::optional<ReferenceScene> reference;
   std::optional<RaycastPipeline> pipeline;
   std::unique_ptr<ImageTarget> placeholder_image;  // 1x1, bound while rendering to buffers
@@ -382,7 +385,7 @@ struct Renderer::Impl {
     const uint32_t count = overflow[0];
     if (count == 0) return;
     const auto start = Clock::now();
-    if (!reference) reference.emplace(*scene_for_unfinished);
+    if (!reference) reference.emplace(host_scene);
     for (uint32_t k = 0; k < count; ++k) finish(overflow[1 + k]);
     timings.unfinished_rays += count;
     timings.cpu_finish_ms += elapsed_ms(start);
@@ -762,7 +765,7 @@ Renderer::Renderer(GpuDevice& device, const Scene& scene, RendererOptions option
     }
 
     r.stats.loop_budget = tree_loop_budget(gpu_scene.shape(), r.context.info, options.loop_budget);
-    if (r.stats.loop_budget > 0) r.scene_for_unfinished = scene;
+    r.host_scene = scene;
 
     const ShaderVariant& shader = options.shader;
     const uint32_t group_size = shader.workgroup_width * shader.workgroup_height;
@@ -866,6 +869,7 @@ Frame Renderer::render(const Camera& camera, uint32_t width, uint32_t height, Ao
   });
   frame.round_doubles();
   add_camera_outputs(frame);
+  add_surface_outputs(frame, r.host_scene);
   return frame;
 }
 

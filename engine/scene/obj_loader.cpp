@@ -73,6 +73,14 @@ struct ParsedObj {
   bool only_triangles = true;
 };
 
+// Records the corners' attribute indices of triangle `triangle_index`; the list starts at the first
+// face that gives any (the triangles before it get no_attribute), and stays empty without.
+void add_corners(std::vector<std::array<uint32_t, 3>>& list, const std::array<uint32_t, 3>& corners, size_t triangle_index) {
+  if (list.empty() && corners[0] == no_attribute) return;
+  list.resize(triangle_index, {no_attribute, no_attribute, no_attribute});
+  list.push_back(corners);
+}
+
 // Returns an empty string when the statement is acceptable, else what is wrong with it; adds what
 // it defines to `parsed`.
 std::string check_statement(const std::vector<std::string_view>& tokens, ElementCounts& counts, ParsedObj& parsed) {
@@ -91,6 +99,8 @@ std::string check_statement(const std::vector<std::string_view>& tokens, Element
       if (k <= 3) position[static_cast<int>(k - 1)] = value;
     }
     if (keyword == "v") parsed.mesh.positions.push_back(position);
+    if (keyword == "vn") parsed.mesh.normals.push_back(position);
+    if (keyword == "vt") parsed.mesh.texcoords.emplace_back(position.x, position.y);
     (keyword == "v" ? counts.positions : keyword == "vn" ? counts.normals : counts.texcoords) += 1;
     return {};
   }
@@ -98,7 +108,7 @@ std::string check_statement(const std::vector<std::string_view>& tokens, Element
   if (tokens.size() < 4) return "a face needs at least 3 vertices, got " + std::to_string(tokens.size() - 1);
   size_t form = std::string_view::npos;  // number of '/'-separated fields (with "//" as an empty one)
   bool form_has_texcoord = false;
-  std::array<uint32_t, 3> triangle{};
+  std::array<uint32_t, 3> triangle{}, normal_corners{}, texcoord_corners{};
   for (size_t k = 1; k < tokens.size(); ++k) {
     std::array<std::string_view, 4> fields;  // a fourth one is already malformed
     size_t field_count = 0;
@@ -122,17 +132,23 @@ std::string check_statement(const std::vector<std::string_view>& tokens, Element
       return "face vertex '" + std::string(tokens[k]) + "' has a different form than '" +
              std::string(tokens[1]) + "'";
     }
-    long vertex = 0, other = 0;
+    long vertex = 0, texcoord = -1, normal = -1;
     if (auto error = check_index(fields[0], counts.positions, "vertex", vertex); !error.empty()) return error;
     if (has_texcoord) {
-      if (auto error = check_index(fields[1], counts.texcoords, "texture", other); !error.empty()) return error;
+      if (auto error = check_index(fields[1], counts.texcoords, "texture", texcoord); !error.empty()) return error;
     }
     if (field_count == 3) {
-      if (auto error = check_index(fields[2], counts.normals, "normal", other); !error.empty()) return error;
+      if (auto error = check_index(fields[2], counts.normals, "normal", normal); !error.empty()) return error;
     }
-    if (k <= 3) triangle[k - 1] = static_cast<uint32_t>(vertex);
+    if (k <= 3) {
+      triangle[k - 1] = static_cast<uint32_t>(vertex);
+      texcoord_corners[k - 1] = texcoord < 0 ? no_attribute : static_cast<uint32_t>(texcoord);
+      normal_corners[k - 1] = normal < 0 ? no_attribute : static_cast<uint32_t>(normal);
+    }
   }
   if (tokens.size() == 4) {
+    add_corners(parsed.mesh.normal_corners, normal_corners, parsed.mesh.triangles.size());
+    add_corners(parsed.mesh.texcoord_corners, texcoord_corners, parsed.mesh.triangles.size());
     parsed.mesh.triangles.push_back(triangle);
   } else {
     parsed.only_triangles = false;
@@ -173,6 +189,9 @@ Mesh load_obj_text(std::string_view text, const std::string& name) {
   ParsedObj parsed = parse_obj_text(text, name);
   if (parsed.only_triangles) {
     if (parsed.mesh.triangles.empty()) throw InputError(name + ": no faces ('f' lines) found");
+    for (auto* corners : {&parsed.mesh.normal_corners, &parsed.mesh.texcoord_corners}) {
+      if (!corners->empty()) corners->resize(parsed.mesh.triangles.size(), {no_attribute, no_attribute, no_attribute});
+    }
     return std::move(parsed.mesh);
   }
 
@@ -199,23 +218,37 @@ Mesh load_obj_text(std::string_view text, const std::string& name) {
 
   // The positions are the checking pass's: std::from_chars rounds each number correctly, where
   // tinyobjloader's own parser is often an ulp off (46% of the bunny's coordinates).
+  // So are the normals and texture coordinates, in the file's order as tinyobjloader's indices.
   Mesh mesh;
   mesh.positions = std::move(parsed.mesh.positions);
+  mesh.normals = std::move(parsed.mesh.normals);
+  mesh.texcoords = std::move(parsed.mesh.texcoords);
+  auto attribute = [&](int index, size_t count) {
+    if (index >= 0 && static_cast<size_t>(index) >= count) throw InputError(name + ": face refers to a missing normal or texture coordinate");
+    return index < 0 ? no_attribute : static_cast<uint32_t>(index);
+  };
   for (const auto& shape : reader.GetShapes()) {
     const auto& indices = shape.mesh.indices;
     for (size_t k = 0; k + 2 < indices.size(); k += 3) {
-      std::array<uint32_t, 3> triangle;
+      std::array<uint32_t, 3> triangle, normal_corners, texcoord_corners;
       for (size_t c = 0; c < 3; ++c) {
         const int index = indices[k + c].vertex_index;
         if (index < 0 || static_cast<size_t>(index) >= mesh.positions.size()) {
           throw InputError(name + ": face refers to a missing vertex");  // the validation pass rules this out
         }
         triangle[c] = static_cast<uint32_t>(index);
+        normal_corners[c] = attribute(indices[k + c].normal_index, mesh.normals.size());
+        texcoord_corners[c] = attribute(indices[k + c].texcoord_index, mesh.texcoords.size());
       }
+      add_corners(mesh.normal_corners, normal_corners, mesh.triangles.size());
+      add_corners(mesh.texcoord_corners, texcoord_corners, mesh.triangles.size());
       mesh.triangles.push_back(triangle);
     }
   }
   if (mesh.triangles.empty()) throw InputError(name + ": no faces ('f' lines) found");
+  for (auto* corners : {&mesh.normal_corners, &mesh.texcoord_corners}) {
+    if (!corners->empty()) corners->resize(mesh.triangles.size(), {no_attribute, no_attribute, no_attribute});
+  }
   return mesh;
 }
 

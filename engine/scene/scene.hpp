@@ -32,9 +32,19 @@ struct Plane {
   glm::dvec3 normal;  // unit length
 };
 
+// A triangle corner's vn or vt that its face does not give (Mesh::normal_corners, texcoord_corners).
+inline constexpr uint32_t no_attribute = 0xffffffffu;
+
 struct Mesh {
   std::vector<glm::dvec3> positions;
   std::vector<std::array<uint32_t, 3>> triangles;  // 0-based, checked against positions
+  // The OBJ's shading normals (vn, as given, through the mesh's transform's inverse transpose)
+  // and texture coordinates (vt: u, v), and each triangle's corners' indices into them
+  // (no_attribute where its face gives none). The corner lists are empty, or one a triangle.
+  std::vector<glm::dvec3> normals;
+  std::vector<glm::dvec2> texcoords;
+  std::vector<std::array<uint32_t, 3>> normal_corners;
+  std::vector<std::array<uint32_t, 3>> texcoord_corners;
 };
 
 // Largest coordinate or radius magnitude accepted. The shader squares distances in float32 (max

@@ -223,6 +223,8 @@ void apply_transform(const Node& node, Mesh& mesh) {
   }
   const glm::dvec3 translation = node.has("translate") ? node.at("translate").vec3() : glm::dvec3(0.0);
   for (auto& position : mesh.positions) position = rotation * (scale * position) + translation;
+  // Normals through the inverse transpose of rotation times scale: rotation divided by the scale.
+  for (auto& normal : mesh.normals) normal = rotation * (normal / scale);
 }
 
 Mesh parse_mesh(const Node& node, const std::filesystem::path& base_dir, const ObjFileLoader& load_obj) {

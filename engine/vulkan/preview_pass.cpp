@@ -28,6 +28,9 @@ uint32_t preview_mode(Aov aov) {
     case Aov::camera_position:
     case Aov::mesh_id:
     case Aov::primitive_id:
+    case Aov::barycentric:
+    case Aov::shading_normal:
+    case Aov::texcoord:
     case Aov::hit: break;  // the viewer refuses them (cli/view_command.cpp)
   }
   throw std::invalid_argument("the viewer shows depth, normal or uv, not " + AovSet{aov}.names());

@@ -16,6 +16,7 @@ EPS = 2.0**-24  # float32 unit roundoff
 MODELS = os.environ.get("VKRAY_MODELS_DIR", "")
 BUNNY = os.path.join(MODELS, "stanford-bunny.obj")
 TEAPOT = os.path.join(MODELS, "teapot-vn.obj")
+SPOT = os.path.join(MODELS, "spot.obj")
 
 
 def need_model(path):
@@ -252,7 +253,6 @@ def read_obj(path):
     (lambda r: r.render("front"), "camera: expected a dict"),
     (lambda r: r.render(width=0), "width: must be in 1 .. 65536, got 0"),
     (lambda r: r.render(aovs=["depht"]), "aovs: unknown output 'depht'"),
-    (lambda r: r.render(aovs=["depth", "planar-depth"]), "aovs: 'planar-depth' is written by `vkray render` only so far"),
     (lambda r: r.render(aovs=[]), "aovs: name at least one output"),
 ])
 def test_bad_calls_raise_value_error_with_the_place(default_renderer, call, message):
@@ -461,3 +461,88 @@ def test_arrays_outlive_the_renderer():
     scene = vkray.load("", 16, 12)
     depth = vkray.Renderer(scene).render()["depth"]
     assert np.isfinite(depth).any()  # the renderer is gone; the array owns its memory
+
+
+# Every output render() offers beside depth and normal, and its EXR channels (`vkray render --aov`).
+DERIVED_CHANNELS = {
+    "planar_depth": ["planar.Z"],
+    "position": ["P.X", "P.Y", "P.Z"],
+    "camera_position": ["camera.P.X", "camera.P.Y", "camera.P.Z"],
+    "mesh_id": ["mesh_id"],
+    "primitive_id": ["primitive_id"],
+    "barycentric": ["barycentric.U", "barycentric.V"],
+    "shading_normal": ["Ns.X", "Ns.Y", "Ns.Z"],
+    "texcoord": ["texcoord.U", "texcoord.V"],
+}
+
+
+def read_exr_native(path):
+    """Every channel in its own type (the ids as uint32), and the header."""
+    image = oiio.ImageInput.open(str(path))
+    assert image, oiio.geterror()
+    spec = image.spec()
+    channels = {}
+    for k, name in enumerate(spec.channelnames):
+        kind = oiio.UINT if spec.channelformat(k) == oiio.UINT else oiio.FLOAT
+        channels[name] = image.read_image(0, 0, k, k + 1, kind)[:, :, 0]
+    image.close()
+    return channels, spec
+
+
+@pytest.mark.parametrize("model", [SPOT, TEAPOT])
+def test_every_output_is_the_command_lines_exr_channel(tmp_path, model):
+    """Renderer and Reference give each output exactly as `vkray render --aov` (and --reference) writes
+    its channels: spot has texture coordinates, the teapot normals."""
+    scene = vkray.load(need_model(model), 120, 90)
+    names = ["depth", "normal", *DERIVED_CHANNELS]
+    aov_option = ",".join(name.replace("_", "-") for name in names)
+    for make, extra in ((vkray.Renderer, []), (vkray.Reference, ["--reference"])):
+        arrays = make(scene).render(aovs=names)
+        assert sorted(arrays) == sorted(names)
+        output = tmp_path / "all.exr"
+        subprocess.run([os.environ["VKRAY_CLI"], "render", model, "--width", "120", "--height", "90", "--aov", aov_option,
+                        "-o", str(output), "--no-preview", *extra], check=True, capture_output=True)
+        channels, _ = read_exr_native(output)
+        for name, channel_names in DERIVED_CHANNELS.items():
+            expected = np.stack([channels[c] for c in channel_names], axis=-1).squeeze(-1 if len(channel_names) == 1 else ())
+            assert arrays[name].dtype == expected.dtype, name
+            assert np.array_equal(arrays[name], expected), name
+    # The file's attributes are there: texture coordinates on spot, normals apart from the faces' on the teapot.
+    arrays = vkray.Renderer(scene).render(aovs=["normal", "mesh_id", "shading_normal", "texcoord"])
+    hit = arrays["mesh_id"] != vkray.NO_HIT
+    if model == SPOT:
+        assert np.mean(np.any(arrays["texcoord"][hit] != 0, axis=-1)) > 0.5
+    else:
+        assert np.mean(np.linalg.norm(arrays["shading_normal"][hit] - arrays["normal"][hit], axis=-1) > 1e-3) > 0.5
+
+
+def test_planar_depth_reprojects_to_the_position_channel_with_the_headers_camera(tmp_path):
+    """What the EXR's header says of the camera is enough to reproject its planar depth to its P channel:
+    OpenEXR's worldToCamera (float32, row vectors: p_camera = p_world M, x right, y up, z along the view)
+    and vkray:camera's OpenCV intrinsics."""
+    model = need_model(SPOT)
+    output = tmp_path / "spot.exr"
+    subprocess.run([os.environ["VKRAY_CLI"], "render", model, "--width", "160", "--height", "120", "--aov",
+                    "planar-depth,position", "-o", str(output), "--no-preview"], check=True, capture_output=True)
+    channels, spec = read_exr_native(output)
+    world_to_camera = np.array(spec.getattribute("worldToCamera"), dtype=np.float64).reshape(4, 4)
+    intrinsics = __import__("json").loads(spec.getattribute("vkray:camera"))["intrinsics"]
+    z = channels["planar.Z"].astype(np.float64)
+    hit = np.isfinite(z)
+    v, u = np.nonzero(hit)
+    z = z[hit]
+    # OpenCV's pixel coordinates (x right, y down) to OpenEXR's camera space (y up).
+    x = (u - intrinsics["cx"]) / intrinsics["fx"] * z
+    y = -(v - intrinsics["cy"]) / intrinsics["fy"] * z
+    camera_points = np.stack([x, y, z, np.ones_like(z)], axis=-1)
+    world = (camera_points @ np.linalg.inv(world_to_camera))[:, :3]
+    position = np.stack([channels["P.X"], channels["P.Y"], channels["P.Z"]], axis=-1)[hit].astype(np.float64)
+    # Float32 roundings: of the planar depth (moves the point by |point - eye| 2^-24), of each P
+    # component, and of the matrix' entries (rotation and translation, each 2^-24 of its size, times
+    # the point's camera coordinates and the translation): a few 2^-24 of those magnitudes.
+    eye = -world_to_camera[3, :3] @ world_to_camera[:3, :3].T
+    scale = np.linalg.norm(position - eye, axis=-1) + np.linalg.norm(camera_points[:, :3], axis=-1) + \
+        np.linalg.norm(world_to_camera[3, :3]) + np.abs(position).max(axis=-1)
+    error = np.abs(world - position).max(axis=-1)
+    assert len(z) > 1000
+    assert np.all(error <= 4 * EPS * scale), (error / (EPS * scale)).max()

@@ -1,0 +1,25 @@
+// The surface outputs of a camera's frame (README, "Output contract"): what the primitive each
+// pixel's ray hit gives at the hit, evaluated on the host in double from the frame's ids and the
+// pixel's ray, so that the device keeps no per-corner attributes and computes nothing more.
+#pragma once
+
+#include "engine/frame.hpp"
+#include "engine/scene/scene.hpp"
+
+namespace vkray {
+
+// Fills the barycentric, shading-normal and texcoord outputs `frame.aovs` asks for; `scene` is the
+// one rendered (its meshes give the triangles, normals and texture coordinates the ids name).
+// - barycentric: the weights (b1, b2) of the triangle's second and third vertices where the
+//   pixel's ray in double (CameraBasis) meets the triangle's plane, clamped onto the triangle (the
+//   device may take a triangle the double ray passes a rounding outside); the hit point from the
+//   depth where the ray lies in the plane. 0 for spheres, planes and misses.
+// - shading-normal: the triangle's vn interpolated with those weights and normalized, negated
+//   where the ray meets the triangle's back (the side from which its vertices run clockwise), so
+//   that it lies on the ray's side as the geometric normal output does; a triangle without vn
+//   (or whose interpolated vn vanishes), a sphere or a plane gives its geometric normal facing the
+//   ray. 0 on a miss.
+// - texcoord: the triangle's vt (u, v) interpolated with those weights; 0 without vt.
+void add_surface_outputs(Frame& frame, const Scene& scene);
+
+}  // namespace vkray
