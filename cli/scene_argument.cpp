@@ -30,8 +30,9 @@ std::vector<std::string> split(const std::string& text, const std::string& separ
 }
 
 constexpr const char* camera_forms =
-    "write --camera 'from=0,1,5 to=0,0,0 up=0,1,0 fovy=35' (any of the keys, vectors also as [0,1,5]) or the scene "
-    "file's camera as JSON, '{\"from\": [0, 1, 5], \"fovy\": 35}'";
+    "write --camera 'from=0,1,5 to=0,0,0 up=0,1,0 fovy=35' (any of the keys, vectors also as [0,1,5]; "
+    "intrinsics=FX,FY,CX,CY in place of fovy, world_to_camera=16 numbers by rows in place of from, to and up) or "
+    "the scene file's camera as JSON, '{\"from\": [0, 1, 5], \"fovy\": 35}'";
 
 // The items of the key=value form: separated by spaces or semicolons outside brackets, so that
 // "from=[0, 1, 5]" stays one item.
@@ -74,7 +75,7 @@ std::string camera_json(const std::string& text) {
   for (const std::string& item : camera_items(text)) {
     const size_t equals = item.find('=');
     const std::string key = item.substr(0, equals);
-    const std::vector<std::string> keys = {"from", "to", "up", "fovy"};
+    const std::vector<std::string> keys = {"from", "to", "up", "fovy", "intrinsics", "world_to_camera"};
     if (std::find(keys.begin(), keys.end(), key) == keys.end()) {
       const auto nearest = nearest_name(key, keys);
       throw InputError("--camera: unknown key '" + key + "'" + (nearest ? " (did you mean '" + *nearest + "'?)" : "") +
@@ -89,6 +90,23 @@ std::string camera_json(const std::string& text) {
       continue;
     }
     const std::vector<std::string> parts = split(value, ",");
+    if (key == "intrinsics") {
+      if (parts.size() != 4) throw InputError("--camera: intrinsics takes four numbers FX,FY,CX,CY (pixels); " + std::string(camera_forms));
+      json += "{\"fx\": " + number_json(parts[0], key) + ", \"fy\": " + number_json(parts[1], key) +
+              ", \"cx\": " + number_json(parts[2], key) + ", \"cy\": " + number_json(parts[3], key) + "}";
+      continue;
+    }
+    if (key == "world_to_camera") {
+      if (parts.size() != 16) {
+        throw InputError("--camera: world_to_camera takes 16 numbers, the 4 x 4 matrix by rows; " + std::string(camera_forms));
+      }
+      for (size_t r = 0; r < 4; ++r) {
+        json += r == 0 ? "[[" : "], [";
+        for (size_t c = 0; c < 4; ++c) json += (c ? ", " : "") + number_json(parts[4 * r + c], key);
+      }
+      json += "]]";
+      continue;
+    }
     if (parts.size() != 3) {
       throw InputError("--camera: " + key + " takes three numbers X,Y,Z, got '" + item.substr(equals + 1) + "'; " +
                        camera_forms);
@@ -138,8 +156,11 @@ std::string camera_option(const Camera& camera) {
     return std::string(text, end);
   };
   auto vector = [&](const glm::dvec3& v) { return number(v.x) + "," + number(v.y) + "," + number(v.z); };
-  return "--camera 'from=" + vector(camera.from) + " to=" + vector(camera.to) + " up=" + vector(camera.up) +
-         " fovy=" + number(camera.fovy_degrees) + "'";
+  const std::string plane = camera.intrinsics ? " intrinsics=" + number(camera.intrinsics->fx) + "," +
+                                                    number(camera.intrinsics->fy) + "," + number(camera.intrinsics->cx) +
+                                                    "," + number(camera.intrinsics->cy)
+                                              : " fovy=" + number(camera.fovy_degrees);
+  return "--camera 'from=" + vector(camera.from) + " to=" + vector(camera.to) + " up=" + vector(camera.up) + plane + "'";
 }
 
 }  // namespace vkray::cli

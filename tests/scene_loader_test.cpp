@@ -636,3 +636,32 @@ TEST(SceneJson, ExtremeMagnitudes) {
                                          "transform": {"scale": 1e10}}])")),
                "t.json: meshes[0]: ", "vertex 1 lies beyond the supported coordinate magnitude");
 }
+
+// Cameras as vision code gives them: OpenCV's intrinsics in place of fovy, its [R t] in place of
+// from, to and up.
+TEST(SceneJson, CameraFromIntrinsicsAndWorldToCamera) {
+  const Scene scene = parse(R"({"camera": {"world_to_camera": [[1, 0, 0, 0], [0, -1, 0, 1], [0, 0, -1, 5], [0, 0, 0, 1]],
+                                           "intrinsics": {"fx": 500, "fy": 510, "cx": 319.5, "cy": 240}}})");
+  EXPECT_EQ(scene.camera.from, glm::dvec3(0, 1, 5));
+  EXPECT_EQ(scene.camera.to, glm::dvec3(0, 1, 4));
+  EXPECT_EQ(scene.camera.up, glm::dvec3(0, 1, 0));
+  ASSERT_TRUE(scene.camera.intrinsics);
+  EXPECT_EQ(*scene.camera.intrinsics, (vkray::PinholeIntrinsics{500, 510, 319.5, 240}));
+}
+
+TEST(SceneJson, CameraIntrinsicsAndMatrixChecks) {
+  const std::string rotation = R"([[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]])";
+  expect_error(parse_error(R"({"camera": {"from": [0, 0, 1], "world_to_camera": )" + rotation + R"(, "fovy": 40}})"),
+               "t.json: camera.world_to_camera: ", "give either world_to_camera or from, to and up, not both (from given)");
+  expect_error(parse_error(R"({"camera": {"world_to_camera": [[2, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]], "fovy": 40}})"),
+               "t.json: camera.world_to_camera: ", "must be a rotation");
+  expect_error(parse_error(R"({"camera": {"world_to_camera": [[1, 0, 0], [0, 1, 0], [0, 0, 1]], "fovy": 40}})"),
+               "t.json: camera.world_to_camera: ", "expected 4 rows of 4 numbers");
+  expect_error(parse_error(R"({"camera": {"from": [0, 0, 1], "to": [0, 0, 0], "fovy": 40,
+                                          "intrinsics": {"fx": 1, "fy": 1, "cx": 0, "cy": 0}}})"),
+               "t.json: camera.intrinsics: ", "give either fovy or intrinsics, not both");
+  expect_error(parse_error(R"({"camera": {"from": [0, 0, 1], "to": [0, 0, 0], "intrinsics": {"fx": 0, "fy": 1, "cx": 0, "cy": 0}}})"),
+               "t.json: camera.intrinsics.fx: ", "focal length must be > 0 pixels");
+  expect_error(parse_error(R"({"camera": {"from": [0, 0, 1], "to": [0, 0, 0], "intrinsics": {"fx": 1, "fy": 1, "cx": 0}}})"),
+               "t.json: camera.intrinsics: ", "missing required key 'cy'");
+}

@@ -442,16 +442,15 @@ gpu::RayGenParams make_ray_gen_params(const CameraBasis& camera, const glm::dvec
                                       const glm::uvec4& counts) {
   gpu::RayGenParams params{};
   const glm::dvec3 origin = camera.origin - anchor;
-  const glm::dvec3 forward_scaled = -camera.plane_distance * camera.forward;
+  const glm::dvec3 right = camera.right_step(), up = camera.up_step(), forward_scaled = camera.centre_direction();
   if (precision == Precision::float64) {
-    const std::array<double, 12> values{origin.x,  origin.y,  origin.z,  camera.right.x,   camera.right.y,   camera.right.z,
-                                        camera.up.x, camera.up.y, camera.up.z, forward_scaled.x, forward_scaled.y, forward_scaled.z};
+    const std::array<double, 12> values{origin.x, origin.y, origin.z, right.x,          right.y,          right.z,
+                                        up.x,     up.y,     up.z,     forward_scaled.x, forward_scaled.y, forward_scaled.z};
     static_assert(sizeof(values) == sizeof(params.camera));
     std::memcpy(params.camera, values.data(), sizeof(values));
   } else {
     const gpu::GpuPoint split = encode_point(glm::dvec4(origin, 0.0), Precision::float32);
-    const glm::vec4 words[] = {split.first, split.second, to_float4(camera.right), to_float4(camera.up),
-                               to_float4(forward_scaled)};
+    const glm::vec4 words[] = {split.first, split.second, to_float4(right), to_float4(up), to_float4(forward_scaled)};
     for (size_t k = 0; k < std::size(words); ++k) params.camera[k] = std::bit_cast<glm::uvec4>(words[k]);
   }
   params.image = glm::uvec4(width, height, first_row, row_count);

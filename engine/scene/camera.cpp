@@ -16,7 +16,7 @@ glm::dvec2 pixel_uv(uint32_t i, uint32_t j, uint32_t width, uint32_t height) {
 }
 
 glm::dvec3 CameraBasis::direction(glm::dvec2 uv) const {
-  return glm::normalize(uv.x * right + uv.y * up - plane_distance * forward);
+  return glm::normalize(uv.x * right_step() + uv.y * up_step() + centre_direction());
 }
 
 glm::dvec3 float32_ray_direction(const CameraBasis& camera, uint32_t i, uint32_t j, uint32_t width, uint32_t height) {
@@ -24,7 +24,7 @@ glm::dvec3 float32_ray_direction(const CameraBasis& camera, uint32_t i, uint32_t
   const glm::vec2 uv = glm::vec2(static_cast<float>(2 * i + 1) - static_cast<float>(width),
                                  static_cast<float>(height) - static_cast<float>(2 * j + 1)) /
                        shorter;
-  const glm::vec3 right(camera.right), up(camera.up), forward_scaled(-camera.plane_distance * camera.forward);
+  const glm::vec3 right(camera.right_step()), up(camera.up_step()), forward_scaled(camera.centre_direction());
   return glm::dvec3(glm::normalize(uv.x * right + uv.y * up + forward_scaled));
 }
 
@@ -54,18 +54,62 @@ CameraBasis make_camera_basis(const Camera& camera, uint32_t width, uint32_t hei
   if (glm::length(side) <= parallel_sine) side = glm::cross(least_aligned_axis(basis.forward), basis.forward);
   basis.right = glm::normalize(side);
   basis.up = glm::cross(basis.forward, basis.right);
-  const double half_height = static_cast<double>(height) / std::min(width, height);
-  const double half_fovy = camera.fovy_degrees * std::numbers::pi / 360.0;
-  basis.plane_distance = half_height / std::tan(half_fovy);
+  if (!camera.intrinsics) {
+    const double half_height = static_cast<double>(height) / std::min(width, height);
+    const double half_fovy = camera.fovy_degrees * std::numbers::pi / 360.0;
+    basis.plane_distance = half_height / std::tan(half_fovy);
+    return basis;
+  }
+  // Pixel (i, j)'s centre has uv = (2 i + 1 - W, H - 2 j - 1) / S, S = min(W, H), and the pinhole
+  // model sees it at (x, y) / z = ((i - cx) / fx, (j - cy) / fy) in its camera frame (right, -up,
+  // -forward). Scaled by 2 fx / S: uv.x right + (uv.y fx / fy) up, shifted by
+  // ((W - 1) / 2 - cx) 2 / S right and -((H - 1) / 2 - cy) 2 fx / (S fy) up, at distance 2 fx / S.
+  // The centred square-pixel case (fx = fy, cx = (W - 1) / 2, cy = (H - 1) / 2) gives scale 1 and
+  // shift 0 exactly, and the same plane as the fovy it stands for up to the distance's rounding.
+  const PinholeIntrinsics& k = *camera.intrinsics;
+  const double shorter = std::min(width, height);
+  basis.plane_distance = 2.0 * k.fx / shorter;
+  basis.scale = {1.0, k.fx / k.fy};
+  basis.shift = {((width - 1.0) / 2.0 - k.cx) * 2.0 / shorter, -((height - 1.0) / 2.0 - k.cy) * 2.0 * k.fx / (shorter * k.fy)};
   return basis;
 }
 
 PinholeIntrinsics pinhole_intrinsics(const Camera& camera, uint32_t width, uint32_t height) {
+  if (camera.intrinsics) return *camera.intrinsics;
   // A pixel is 2 / min(W, H) of the image plane at distance plane_distance: fx = plane_distance
   // min(W, H) / 2, which is H / (2 tan(fovy / 2)).
   const CameraBasis basis = make_camera_basis(camera, width, height);
   const double focal = basis.plane_distance * std::min(width, height) / 2.0;
   return {focal, focal, (width - 1.0) / 2.0, (height - 1.0) / 2.0};
+}
+
+Camera with_world_to_camera(Camera camera, const Matrix4& matrix, std::string& fault) {
+  // How far R R^T may be from I: matrices written with float precision (1e-7) pass, a scale or
+  // shear does not.
+  constexpr double tolerance = 1e-6;
+  fault.clear();
+  if (matrix[3] != std::array<double, 4>{0.0, 0.0, 0.0, 1.0}) {
+    fault = "the last row must be 0, 0, 0, 1";
+    return camera;
+  }
+  glm::dvec3 rows[3];
+  for (int r = 0; r < 3; ++r) rows[r] = {matrix[r][0], matrix[r][1], matrix[r][2]};
+  double deviation = 0.0;
+  for (int a = 0; a < 3; ++a) {
+    for (int b = 0; b < 3; ++b) deviation = std::max(deviation, std::abs(glm::dot(rows[a], rows[b]) - (a == b ? 1.0 : 0.0)));
+  }
+  const double determinant = glm::dot(rows[0], glm::cross(rows[1], rows[2]));
+  if (!(deviation <= tolerance) || !(determinant > 0.0)) {
+    fault = "the upper-left 3 x 3 part must be a rotation (R R^T = I within 1e-6, det R = 1): it is off by " +
+            std::to_string(deviation) + (determinant > 0.0 ? "" : ", and it mirrors (det R < 0)");
+    return camera;
+  }
+  // p_camera = R p + t: the camera sits at -R^T t, looks along R's third row, and its up is -R's second.
+  const glm::dvec3 t(matrix[0][3], matrix[1][3], matrix[2][3]);
+  camera.from = -(t.x * rows[0] + t.y * rows[1] + t.z * rows[2]);
+  camera.to = camera.from + rows[2];
+  camera.up = -rows[1];
+  return camera;
 }
 
 Matrix4 world_to_camera(const Camera& camera, uint32_t width, uint32_t height) {

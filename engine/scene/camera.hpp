@@ -7,28 +7,51 @@
 
 #include <array>
 #include <cstdint>
+#include <optional>
+#include <string>
 
 namespace vkray {
+
+// OpenCV's pinhole model: camera coordinates x right, y down, z along the view direction; pixel
+// coordinates (u, v) from the centre of the top-left pixel, u right and v down. A world point p is
+// at (x, y, z) = R p + t, seen at (u, v) = (fx x / z + cx, fy y / z + cy), and z is its planar depth.
+struct PinholeIntrinsics {
+  double fx, fy, cx, cy;
+  bool operator==(const PinholeIntrinsics&) const = default;
+};
 
 struct Camera {
   glm::dvec3 from{0.0, 0.0, 0.0};
   glm::dvec3 to{0.0, 0.0, -1.0};
   glm::dvec3 up{0.0, 1.0, 0.0};
   double fovy_degrees = 60.0;
+  // The image plane given in pixels instead of by fovy (vision code's cameras): any focal lengths
+  // and principal point, for whatever image size is rendered.
+  std::optional<PinholeIntrinsics> intrinsics = std::nullopt;
 };
 
 // UV of the centre of pixel (i, j), j counted from the top row: origin at the image centre, the
 // shorter side spans [-1, 1], +y up.
 glm::dvec2 pixel_uv(uint32_t i, uint32_t j, uint32_t width, uint32_t height);
 
-// Orthonormal camera frame and image-plane distance for one image size.
+// Orthonormal camera frame and image plane for one image size. The ray through image-plane point uv
+// runs along (uv.x scale.x + shift.x) right + (uv.y scale.y + shift.y) up - plane_distance forward:
+// scale (1, 1) and shift 0 for a camera given by fovy; intrinsics stretch and shift the plane.
 struct CameraBasis {
   glm::dvec3 origin;
   glm::dvec3 right;
   glm::dvec3 up;
   glm::dvec3 forward;     // normalize(from - to): the camera looks along -forward
-  double plane_distance;  // sy / tan(fovy / 2), sy = half-height of the image in UV
+  double plane_distance;  // sy / tan(fovy / 2), sy = half-height of the image in UV; 2 fx / min(W, H)
+  glm::dvec2 scale{1.0, 1.0};
+  glm::dvec2 shift{0.0, 0.0};
 
+  // The three vectors the ray direction combines (the shader's: see RayGenParams): uv.x times the
+  // first plus uv.y times the second plus the third. Exactly right, up and -plane_distance forward
+  // for a camera given by fovy.
+  glm::dvec3 right_step() const { return scale.x * right; }
+  glm::dvec3 up_step() const { return scale.y * up; }
+  glm::dvec3 centre_direction() const { return shift.x * right + shift.y * up - plane_distance * forward; }
   // Unit direction of the primary ray through image-plane point uv.
   glm::dvec3 direction(glm::dvec2 uv) const;
 };
@@ -41,17 +64,13 @@ glm::dvec3 float32_ray_direction(const CameraBasis& camera, uint32_t i, uint32_t
 // Builds the course's frame: right = normalize(up x forward), up' = forward x right. When `up` is
 // parallel to the view direction (looking straight up or down) that cross product vanishes; the
 // frame then uses the coordinate axis least aligned with the view direction as `up` (ties: +z,
-// then +x), so the image is well defined instead of NaN.
+// then +x), so the image is well defined instead of NaN. With intrinsics, the plane is put where
+// pixel (i, j)'s centre is seen at (u, v) = (i, j) of the pinhole model.
 CameraBasis make_camera_basis(const Camera& camera, uint32_t width, uint32_t height);
 
-// The same camera as vision code describes it, OpenCV's pinhole model: camera coordinates x right,
-// y down, z along the view direction; pixel coordinates (u, v) from the centre of the top-left
-// pixel, u right and v down. A world point p is at (x, y, z) = R p + t, seen at
-// (u, v) = (fx x / z + cx, fy y / z + cy), and z is its planar depth. For vkray's image plane
-// (README, "Output contract") fx = fy = H / (2 tan(fovy / 2)), cx = (W - 1) / 2, cy = (H - 1) / 2.
-struct PinholeIntrinsics {
-  double fx, fy, cx, cy;
-};
+// The camera as OpenCV's pinhole model describes it (PinholeIntrinsics): its own intrinsics where
+// it has them; for fovy and vkray's image plane (README, "Output contract") fx = fy =
+// H / (2 tan(fovy / 2)), cx = (W - 1) / 2, cy = (H - 1) / 2.
 PinholeIntrinsics pinhole_intrinsics(const Camera& camera, uint32_t width, uint32_t height);
 
 // A 4x4 matrix by rows, for column vectors (p' = M p).
@@ -60,6 +79,12 @@ using Matrix4 = std::array<std::array<double, 4>, 4>;
 // [R t; 0 0 0 1] of the pinhole model above, by rows: rows of R are right, -up and -forward of the
 // camera's basis, t = -R from.
 Matrix4 world_to_camera(const Camera& camera, uint32_t width, uint32_t height);
+
+// The look-at form (from, to = from + the view direction, up) of a camera given by OpenCV's [R t]
+// (as world_to_camera writes it); `fault` receives what makes the matrix no rigid motion (a last row
+// other than 0 0 0 1, R not a rotation within 1e-6: R R^T = I and det R = 1), and the camera is
+// then unchanged. The image plane (fovy or intrinsics) is kept.
+Camera with_world_to_camera(Camera camera, const Matrix4& matrix, std::string& fault);
 
 // The camera as OpenEXR's standard attributes describe it (RenderMan's conventions), which the EXR
 // header carries. worldToCamera: camera space x right, y up, z along the view direction (left-handed;

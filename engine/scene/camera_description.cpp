@@ -11,9 +11,14 @@ nlohmann::ordered_json camera_description(const Camera& camera, uint32_t width, 
   nlohmann::ordered_json description;
   description["camera"] = nlohmann::ordered_json{{"from", vector_json(camera.from)},
                                                  {"to", vector_json(camera.to)},
-                                                 {"up", vector_json(camera.up)},
-                                                 {"fovy", camera.fovy_degrees}};
+                                                 {"up", vector_json(camera.up)}};
   const PinholeIntrinsics intrinsics = pinhole_intrinsics(camera, width, height);
+  if (camera.intrinsics) {
+    description["camera"]["intrinsics"] =
+        nlohmann::ordered_json{{"fx", intrinsics.fx}, {"fy", intrinsics.fy}, {"cx", intrinsics.cx}, {"cy", intrinsics.cy}};
+  } else {
+    description["camera"]["fovy"] = camera.fovy_degrees;
+  }
   description["intrinsics"] =
       nlohmann::ordered_json{{"fx", intrinsics.fx}, {"fy", intrinsics.fy}, {"cx", intrinsics.cx}, {"cy", intrinsics.cy}};
   description["world_to_camera"] = world_to_camera(camera, width, height);

@@ -1,5 +1,6 @@
 // A rendered image's camera as JSON, for readers outside vkray: the scene file's camera (from, to,
-// up, fovy: pasted into a scene file or given to --camera it renders the same pixels), and OpenCV's
+// up, and fovy or the intrinsics it was given: pasted into a scene file or given to --camera it
+// renders the same pixels), and OpenCV's
 // intrinsics and world-to-camera matrix (engine/scene/camera.hpp) at the image's size:
 //
 //   {"camera": {"from": [...], "to": [...], "up": [...], "fovy": 40},

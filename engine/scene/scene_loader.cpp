@@ -162,23 +162,66 @@ class Node {
   const std::string& file_;
 };
 
-// A camera object. With a `base`, every key is optional and overrides that camera's (--camera).
-Camera parse_camera(const Node& node, const Camera* base = nullptr) {
-  node.expect_object({"from", "to", "up", "fovy"});
-  Camera camera = base ? *base : Camera{};
-  if (!base || node.has("from")) camera.from = node.at("from").point();
-  if (!base || node.has("to")) camera.to = node.at("to").point();
-  if (camera.from == camera.to) {
-    if (node.has("to")) node.at("to").fail("must differ from camera.from");
-    node.at("from").fail("must differ from camera.to");
+// OpenCV's [R t] as 4 rows of 4 numbers.
+Matrix4 parse_matrix4(const Node& node) {
+  const auto rows = node.elements();
+  if (rows.size() != 4) node.fail("expected 4 rows of 4 numbers, [[r00, r01, r02, tx], ..., [0, 0, 0, 1]]");
+  Matrix4 matrix{};
+  for (size_t r = 0; r < 4; ++r) {
+    const auto entries = rows[r].elements();
+    if (entries.size() != 4) rows[r].fail("expected 4 numbers, got " + describe(rows[r].json()));
+    for (size_t c = 0; c < 4; ++c) matrix[r][c] = entries[c].number();
   }
-  if (node.has("up")) camera.up = node.at("up").nonzero_vec3();
-  if (!base || node.has("fovy")) {
+  return matrix;
+}
+
+PinholeIntrinsics parse_intrinsics(const Node& node) {
+  node.expect_object({"fx", "fy", "cx", "cy"});
+  PinholeIntrinsics k{node.at("fx").number(), node.at("fy").number(), node.at("cx").number(), node.at("cy").number()};
+  if (!(k.fx > 0.0)) node.at("fx").fail("focal length must be > 0 pixels, got " + describe(node.at("fx").json()));
+  if (!(k.fy > 0.0)) node.at("fy").fail("focal length must be > 0 pixels, got " + describe(node.at("fy").json()));
+  // A principal point beyond 1e9 pixels or a ratio of focal lengths beyond 1e9 is a typo, and
+  // would put the image plane's float32 basis out of range.
+  for (const char* key : {"cx", "cy"}) {
+    if (!(std::abs(node.at(key).number()) <= 1e9)) node.at(key).fail("must be within 1e9 pixels, got " + describe(node.at(key).json()));
+  }
+  if (!(k.fx / k.fy <= 1e9 && k.fy / k.fx <= 1e9)) node.at("fy").fail("fx / fy must be within 1e-9 .. 1e9");
+  return k;
+}
+
+// A camera object. With a `base`, every key is optional and overrides that camera's (--camera).
+// Where it stands: from, to and up, or OpenCV's world_to_camera; its image plane: fovy, or OpenCV's
+// intrinsics in pixels.
+Camera parse_camera(const Node& node, const Camera* base = nullptr) {
+  node.expect_object({"from", "to", "up", "fovy", "intrinsics", "world_to_camera"});
+  Camera camera = base ? *base : Camera{};
+  if (node.has("world_to_camera")) {
+    const Node matrix = node.at("world_to_camera");
+    for (const char* key : {"from", "to", "up"}) {
+      if (node.has(key)) matrix.fail(std::string("give either world_to_camera or from, to and up, not both (") + key + " given)");
+    }
+    std::string fault;
+    camera = with_world_to_camera(camera, parse_matrix4(matrix), fault);
+    if (!fault.empty()) matrix.fail(fault);
+  } else {
+    if (!base || node.has("from")) camera.from = node.at("from").point();
+    if (!base || node.has("to")) camera.to = node.at("to").point();
+    if (camera.from == camera.to) {
+      if (node.has("to")) node.at("to").fail("must differ from camera.from");
+      node.at("from").fail("must differ from camera.to");
+    }
+    if (node.has("up")) camera.up = node.at("up").nonzero_vec3();
+  }
+  if (node.has("intrinsics")) {
+    if (node.has("fovy")) node.at("intrinsics").fail("give either fovy or intrinsics, not both");
+    camera.intrinsics = parse_intrinsics(node.at("intrinsics"));
+  } else if (!base || node.has("fovy")) {
     const Node fovy = node.at("fovy");
     camera.fovy_degrees = fovy.number();
     if (!(camera.fovy_degrees > 0.0 && camera.fovy_degrees < 180.0)) {
       fovy.fail("field of view must be in (0, 180) degrees, got " + describe(fovy.json()));
     }
+    camera.intrinsics.reset();
   }
   return camera;
 }

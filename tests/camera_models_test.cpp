@@ -1,0 +1,93 @@
+// Cameras as vision code gives them: OpenCV's intrinsics in pixels and its world-to-camera matrix
+// (engine/scene/camera.hpp), on the device and in the reference.
+#include "engine/reference/reference.hpp"
+#include "engine/scene/scene_loader.hpp"
+#include "tests/gpu_test_support.hpp"
+
+#include <gtest/gtest.h>
+
+#include <glm/geometric.hpp>
+
+#include <cmath>
+#include <cstring>
+
+namespace vkray {
+namespace {
+
+using namespace test;
+
+// A camera given by fovy, and the same camera as its OpenCV intrinsics and [R t] (what the EXR
+// header and a many-view manifest print for it), render the same pixels: every depth, normal and
+// id bit for bit. The matrix gives from, to and up back within a few roundings of double, and the
+// centred intrinsics the same image plane up to the rounding of its distance: none of which
+// survives the float32 rounding of the basis the device takes.
+TEST(CameraModels, IntrinsicsAndMatrixRenderTheLookAtCamerasPixels) {
+  const Scene scene = sized(default_scene(), 64, 48);
+  const Box box{{-3, -1, -3}, {3, 2, 3}};
+  for (const Camera& look_at : cameras_around(box, 2026, 3)) {
+    SCOPED_TRACE(testing::Message() << "fovy " << look_at.fovy_degrees);
+    Camera given = look_at;
+    given.intrinsics = pinhole_intrinsics(look_at, scene.width, scene.height);
+    std::string fault;
+    given = with_world_to_camera(given, world_to_camera(look_at, scene.width, scene.height), fault);
+    ASSERT_EQ(fault, "");
+    Renderer renderer(device(), scene);
+    const AovSet aovs{Aov::depth, Aov::normal, Aov::mesh_id, Aov::primitive_id};
+    const Frame a = renderer.render(look_at, scene.width, scene.height, aovs);
+    const Frame b = renderer.render(given, scene.width, scene.height, aovs);
+    EXPECT_EQ(std::memcmp(a.depth.data(), b.depth.data(), a.depth.size() * sizeof(float)), 0);
+    EXPECT_EQ(std::memcmp(a.normal.data(), b.normal.data(), a.normal.size() * sizeof(float)), 0);
+    EXPECT_EQ(a.mesh_id, b.mesh_id);
+    EXPECT_EQ(a.primitive_id, b.primitive_id);
+  }
+}
+
+// Focal lengths that differ and a principal point off the centre: the device's image is within the
+// reference envelope, and every hit point the reference finds projects through the intrinsics
+// and [R t] onto its own pixel's centre (u, v) = (i, j), within double's rounding of the hit.
+TEST(CameraModels, OffCentreIntrinsicsProjectEachHitOntoItsPixel) {
+  Scene scene = sized(default_scene(), 80, 50);
+  scene.camera.intrinsics = PinholeIntrinsics{70.0, 55.0, 30.25, 31.5};
+  expect_frame_matches_reference(scene, render(scene));
+
+  const ReferenceScene reference(scene);
+  const auto hits = render_reference_hits(reference, make_camera_basis(scene.camera, scene.width, scene.height),
+                                          scene.width, scene.height);
+  const Matrix4 rigid = world_to_camera(scene.camera, scene.width, scene.height);
+  const PinholeIntrinsics& k = *scene.camera.intrinsics;
+  const CameraBasis basis = make_camera_basis(scene.camera, scene.width, scene.height);
+  size_t hit_count = 0;
+  for (uint32_t j = 0; j < scene.height; ++j) {
+    for (uint32_t i = 0; i < scene.width; ++i) {
+      const ReferenceHit& hit = hits[size_t{j} * scene.width + i];
+      if (hit.kind == PrimitiveKind::none) continue;
+      ++hit_count;
+      const glm::dvec3 p = basis.origin + hit.t * basis.direction(pixel_uv(i, j, scene.width, scene.height));
+      glm::dvec3 c;
+      for (int r = 0; r < 3; ++r) c[r] = rigid[r][0] * p.x + rigid[r][1] * p.y + rigid[r][2] * p.z + rigid[r][3];
+      EXPECT_NEAR(k.fx * c.x / c.z + k.cx, i, 1e-9) << i << "," << j;
+      EXPECT_NEAR(k.fy * c.y / c.z + k.cy, j, 1e-9) << i << "," << j;
+    }
+  }
+  EXPECT_GT(hit_count, size_t{scene.width} * scene.height / 2);
+}
+
+TEST(CameraModels, MatricesThatAreNoRigidMotionAreRefused) {
+  std::string fault;
+  const Camera camera;
+  with_world_to_camera(camera, {{{2, 0, 0, 0}, {0, 1, 0, 0}, {0, 0, 1, 0}, {0, 0, 0, 1}}}, fault);
+  EXPECT_NE(fault.find("must be a rotation"), std::string::npos) << fault;
+  with_world_to_camera(camera, {{{-1, 0, 0, 0}, {0, 1, 0, 0}, {0, 0, 1, 0}, {0, 0, 0, 1}}}, fault);
+  EXPECT_NE(fault.find("mirrors"), std::string::npos) << fault;
+  with_world_to_camera(camera, {{{1, 0, 0, 0}, {0, 1, 0, 0}, {0, 0, 1, 0}, {0, 0, 1, 1}}}, fault);
+  EXPECT_EQ(fault, "the last row must be 0, 0, 0, 1");
+  // OpenCV's camera at (0, 1, 5) looking down -z, y down: R = diag(1, -1, -1), t = -R (0, 1, 5).
+  const Camera placed = with_world_to_camera(camera, {{{1, 0, 0, 0}, {0, -1, 0, 1}, {0, 0, -1, 5}, {0, 0, 0, 1}}}, fault);
+  EXPECT_EQ(fault, "");
+  EXPECT_EQ(placed.from, glm::dvec3(0, 1, 5));
+  EXPECT_EQ(placed.to, glm::dvec3(0, 1, 4));
+  EXPECT_EQ(placed.up, glm::dvec3(0, 1, 0));
+}
+
+}  // namespace
+}  // namespace vkray
