@@ -29,6 +29,7 @@ namespace {
 struct RenderOptions {
   std::string scene_path;
   std::optional<std::string> camera;
+  std::optional<std::string> view;
   std::string output = "render.exr";
   std::optional<std::string> preview;
   bool no_preview = false;
@@ -133,7 +134,7 @@ int run_render_views(const RenderOptions& options, const AovSet& aovs) {
   auto opening = std::async(std::launch::async, [&options] {
     return std::make_unique<GpuDevice>(options.device_options.device, options.device_options.transfer_mode());
   });
-  Scene scene = load_scene_argument(options.scene_path, options.width, options.height);
+  Scene scene = load_scene_argument(options.scene_path, options.width, options.height, options.view);
   if (options.camera) apply_camera_option(*options.camera, scene.camera);
   if (!options.views.views_file) batch.cameras = batch_cameras(options.views, scene.camera);
   batch.width = scene.width;
@@ -190,7 +191,7 @@ int run_render(const RenderOptions& options) {
       return OpenedDevice{std::move(device), open_watch.lap_ms()};
     });
   }
-  Scene scene = load_scene_argument(options.scene_path, options.width, options.height);
+  Scene scene = load_scene_argument(options.scene_path, options.width, options.height, options.view);
   if (options.camera) apply_camera_option(*options.camera, scene.camera);
   const double load_ms = stopwatch.lap_ms();
 
@@ -265,7 +266,7 @@ int run_render(const RenderOptions& options) {
   std::printf("vkray: wrote %s (%ux%u, %s) on %s\n", written.c_str(), scene.width, scene.height,
               aovs.names().c_str(), device_name.c_str());
   // A model is framed by vkray: say from where, ready to paste (to render it again, or a neighbour).
-  if (lower_extension(options.scene_path) == ".obj") std::printf("camera: %s\n", camera_option(scene.camera).c_str());
+  if (lower_extension(options.scene_path) == ".obj" || options.view) std::printf("camera: %s\n", camera_option(scene.camera).c_str());
   if (error) std::printf("error vs. double-precision reference: %s\n", error->summary().c_str());
   if (options.timings) {
     std::printf("timings (wall clock unless said; an indented line is a part of the line above it, and a line "
@@ -334,6 +335,9 @@ Action add_render_command(CLI::App& app) {
   auto options = std::make_shared<RenderOptions>();
   command->add_option("scene", options->scene_path,
                       "Scene file (.json) or model (.obj, framed automatically); the built-in scene when omitted");
+  command->add_option("--view", options->view,
+                      "Frame the scene (a model, or a scene file's geometry) from a side: front (default for models), "
+                      "back, left, right, top, bottom, or the direction X,Y,Z from its centre to the eye");
   command->add_option("--camera", options->camera,
                       "Override the camera: 'from=X,Y,Z to=X,Y,Z up=X,Y,Z fovy=DEGREES' (any of the keys), or the "
                       "scene file's camera as JSON '{\"from\": [0, 1, 5]}'");

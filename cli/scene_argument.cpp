@@ -118,8 +118,28 @@ std::string camera_json(const std::string& text) {
 
 }  // namespace
 
-Scene load_scene_argument(const std::string& path, std::optional<uint32_t> width, std::optional<uint32_t> height) {
+FramingView parse_view_option(const std::string& text) {
+  const std::string given = trimmed(text);
+  if (const auto named = framing_view_from_name(given)) return *named;
+  const std::string forms = std::string("--view: '") + given + "' is neither a side (" + framing_view_names +
+                            ") nor a direction X,Y,Z from the centre to the eye";
+  const std::vector<std::string> parts = split(given, ",");
+  if (parts.size() != 3 || given.find_first_not_of("0123456789+-.,eE ") != std::string::npos) throw InputError(forms);
+  glm::dvec3 direction;
+  for (int c = 0; c < 3; ++c) {
+    const std::string number = trimmed(parts[static_cast<size_t>(c)]);
+    const auto [end, error] = std::from_chars(number.data(), number.data() + number.size(), direction[c]);
+    if (error != std::errc() || end != number.data() + number.size() || !std::isfinite(direction[c])) throw InputError(forms);
+  }
+  if (direction == glm::dvec3(0.0)) throw InputError("--view: the direction must not be 0, 0, 0");
+  return {direction, {0.0, 1.0, 0.0}};
+}
+
+Scene load_scene_argument(const std::string& path, std::optional<uint32_t> width, std::optional<uint32_t> height,
+                          const std::optional<std::string>& view) {
+  const std::optional<FramingView> side = view ? std::optional(parse_view_option(*view)) : std::nullopt;
   Scene scene = load_scene_or_model(path, width, height);
+  if (side) scene.camera = frame_scene(scene, scene.width, scene.height, *side);
   if (const size_t dropped = scene.zero_area_triangle_count(); dropped > 0) {
     std::fprintf(stderr, "vkray: note: %s: %zu zero-area triangle%s dropped (no ray can hit them)\n",
                  path.empty() ? "built-in scene" : path.c_str(), dropped, dropped == 1 ? "" : "s");

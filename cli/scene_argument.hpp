@@ -1,6 +1,7 @@
 // What a user names on the command line: the scene to render and the camera to render it with.
 #pragma once
 
+#include "engine/scene/framing.hpp"
 #include "engine/scene/scene.hpp"
 
 #include <optional>
@@ -9,8 +10,14 @@
 
 namespace vkray::cli {
 
-// engine's load_scene_or_model, with a note on stderr of the zero-area triangles it drops.
-Scene load_scene_argument(const std::string& path, std::optional<uint32_t> width, std::optional<uint32_t> height);
+// engine's load_scene_or_model, with a note on stderr of the zero-area triangles it drops; with a
+// --view value, the scene framed from that side (frame_scene), a scene file's camera replaced.
+Scene load_scene_argument(const std::string& path, std::optional<uint32_t> width, std::optional<uint32_t> height,
+                          const std::optional<std::string>& view = {});
+
+// A --view value: a side's name (front, back, left, right, top, bottom) or the direction X,Y,Z
+// from the scene's centre to the eye. Throws InputError with the forms that work.
+FramingView parse_view_option(const std::string& text);
 
 // A --size value "WIDTHxHEIGHT" (bench, view). Throws InputError for anything else or a size
 // check_image_size refuses.

@@ -16,6 +16,7 @@ struct ViewCommandOptions {
   std::string scene_path;
   std::optional<std::string> size;
   std::optional<std::string> camera;
+  std::optional<std::string> view;
   std::string output = "depth";
   DeviceOptions device_options;
   std::string traversal = "auto";
@@ -40,7 +41,7 @@ int run_view(const ViewCommandOptions& options) {
   }
   if (options.screenshot) check_output_path(*options.screenshot);
   viewer.load_scene = [options, width, height] {
-    Scene scene = load_scene_argument(options.scene_path, width, height);
+    Scene scene = load_scene_argument(options.scene_path, width, height, options.view);
     if (options.camera) apply_camera_option(*options.camera, scene.camera);
     return scene;
   };
@@ -70,6 +71,9 @@ Action add_view_command(CLI::App& app) {
   command->add_option("scene", options->scene_path,
                       "Scene file (.json, reloaded when it changes) or model (.obj); the built-in scene when omitted");
   command->add_option("--size", options->size, "Window size WIDTHxHEIGHT (default: the scene's image size)");
+  command->add_option("--view", options->view,
+                      "Frame the scene from a side: front, back, left, right, top, bottom, or the direction X,Y,Z from "
+                      "its centre to the eye");
   command->add_option("--camera", options->camera,
                       "Override the camera: 'from=X,Y,Z to=X,Y,Z up=X,Y,Z fovy=DEGREES' (any of the keys), or the "
                       "scene file's camera as JSON '{\"from\": [0, 1, 5]}'");

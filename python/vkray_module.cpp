@@ -496,13 +496,28 @@ PYBIND11_MODULE(vkray, m) {
 
   m.def(
       "load",
-      [](const std::string& path, std::optional<int64_t> width, std::optional<int64_t> height) {
+      [](const std::string& path, std::optional<int64_t> width, std::optional<int64_t> height, py::handle view) {
         const auto w = size_argument(width, "width"), h = size_argument(height, "height");
+        std::optional<FramingView> side;
+        if (py::isinstance<py::str>(view)) {
+          side = framing_view_from_name(view.cast<std::string>());
+          if (!side) throw InputError("view: unknown side '" + view.cast<std::string>() + "' (" + framing_view_names + ")");
+        } else if (!view.is_none()) {
+          const auto direction = float_rows(py::array::ensure(view).reshape({1, -1}), "view", 3);
+          side = FramingView{row_vec3(direction, 0), {0.0, 1.0, 0.0}};
+          if (side->from_direction == glm::dvec3(0.0) || !std::isfinite(glm::length(side->from_direction))) {
+            throw InputError("view: the direction from the centre to the eye must be finite and not 0");
+          }
+        }
         py::gil_scoped_release released;
-        return load_scene_or_model(path, w, h);
+        Scene scene = load_scene_or_model(path, w, h);
+        if (side) scene.camera = frame_scene(scene, scene.width, scene.height, *side);
+        return scene;
       },
-      py::arg("path"), py::arg("width") = py::none(), py::arg("height") = py::none(),
-      "A scene file (.json) or a model (.obj, framed as `vkray render MODEL.obj` frames it).");
+      py::arg("path"), py::arg("width") = py::none(), py::arg("height") = py::none(), py::arg("view") = py::none(),
+      "A scene file (.json) or a model (.obj, framed as `vkray render MODEL.obj` frames it). view: frame the "
+      "scene from a side ('front', 'back', 'left', 'right', 'top', 'bottom') or a direction [x, y, z] from its "
+      "centre to the eye, as `vkray render --view`.");
 
   py::class_<PyRenderer>(m, "Renderer",
                          "Opens the device, uploads the scene and makes the pipeline once; then renders and casts "

@@ -944,6 +944,33 @@ TEST_F(CliTest, FramedCameraIsPrintedReadyToPaste) {
   EXPECT_GT(hits, 100u) << "the model should fill much of the image";
 }
 
+// --view frames from another side: a tetrahedron whose faces all point away from one vertex is
+// seen from behind and from above as the framing says (the eye on that side of the centre, at the
+// framed distance), a scene file's camera replaced; a side that does not exist is refused.
+TEST_F(CliTest, ViewFramesFromTheSideNamed) {
+  write("tetra.obj", "v 0.1234567 -3.3 7.01\nv 1.9 -2.2 7.3\nv 0.7 -1.05 6.4\nv 0.8 -2.9 8.9\nf 1 2 3\nf 1 3 4\nf 2 4 3\nf 1 4 2\n");
+  expect_error(vkray({"render", "tetra.obj", "--view", "behind"}), 2, {"--view: 'behind' is neither a side", "back"});
+  expect_error(vkray({"render", "tetra.obj", "--view", "0,0,0"}), 2, {"--view: the direction must not be 0, 0, 0"});
+  auto printed_camera = [&](const std::vector<std::string>& view) {
+    std::vector<std::string> arguments = {"render", "tetra.obj", "--width", "48", "--height", "40", "--no-preview", "-o", "v.exr"};
+    arguments.insert(arguments.end(), view.begin(), view.end());
+    const RunResult run = vkray(arguments);
+    EXPECT_EQ(run.exit_code, 0) << run.err;
+    const size_t start = run.out.find("camera: --camera '");
+    EXPECT_NE(start, std::string::npos) << run.out;
+    return start == std::string::npos ? std::string() : run.out.substr(start, run.out.find('\n', start) - start);
+  };
+  const std::string front = printed_camera({});
+  EXPECT_EQ(printed_camera({"--view", "front"}), front);
+  // The framed distance is the same from every side: from differs in its z from the front's only.
+  const std::string back = printed_camera({"--view", "back"});
+  EXPECT_NE(back, front);
+  EXPECT_NE(back.find(" up=0,1,0 fovy=40'"), std::string::npos) << back;
+  const std::string top = printed_camera({"--view", "top"});
+  EXPECT_NE(top.find(" up=0,0,-1 fovy=40'"), std::string::npos) << top;
+  EXPECT_EQ(printed_camera({"--view", "0, 0.25, 1"}), front);
+}
+
 TEST_F(CliTest, ModelBeyondTheCoordinateLimitExitsTwo) {
   {
     std::ofstream(path("huge.obj")) << "v 0 0 0\nv 1 0 0\nv 0 2e16 0\nf 1 2 3\n";

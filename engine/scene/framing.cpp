@@ -12,7 +12,17 @@
 
 namespace vkray {
 
-Camera frame_scene(const Scene& scene, uint32_t width, uint32_t height) {
+std::optional<FramingView> framing_view_from_name(std::string_view name) {
+  if (name == "front") return front_view;
+  if (name == "back") return FramingView{{0.0, 0.25, -1.0}, {0.0, 1.0, 0.0}};
+  if (name == "left") return FramingView{{-1.0, 0.25, 0.0}, {0.0, 1.0, 0.0}};
+  if (name == "right") return FramingView{{1.0, 0.25, 0.0}, {0.0, 1.0, 0.0}};
+  if (name == "top") return FramingView{{0.0, 1.0, 0.0}, {0.0, 0.0, -1.0}};
+  if (name == "bottom") return FramingView{{0.0, -1.0, 0.0}, {0.0, 0.0, 1.0}};
+  return std::nullopt;
+}
+
+Camera frame_scene(const Scene& scene, uint32_t width, uint32_t height, const FramingView& view) {
   glm::dvec3 lower(std::numeric_limits<double>::infinity()), upper(-std::numeric_limits<double>::infinity());
   for (const auto& mesh : scene.meshes) {
     for (const auto& p : mesh.positions) lower = glm::min(lower, p), upper = glm::max(upper, p);
@@ -36,7 +46,7 @@ Camera frame_scene(const Scene& scene, uint32_t width, uint32_t height) {
   const double half_fovy = framing_fovy_degrees * std::numbers::pi / 360.0;
   const double half = width >= height ? half_fovy : std::atan(std::tan(half_fovy) * width / height);
   const double distance = radius / std::sin(half);
-  return {centre + distance * unit_vector(framing_view_from), centre, {0.0, 1.0, 0.0}, framing_fovy_degrees};
+  return {centre + distance * unit_vector(view.from_direction), centre, view.up, framing_fovy_degrees};
 }
 
 Scene load_model_file(const std::filesystem::path& path) {

@@ -546,3 +546,21 @@ def test_planar_depth_reprojects_to_the_position_channel_with_the_headers_camera
     error = np.abs(world - position).max(axis=-1)
     assert len(z) > 1000
     assert np.all(error <= 4 * EPS * scale), (error / (EPS * scale)).max()
+
+
+def test_load_frames_from_the_side_asked_for():
+    """view= frames as `vkray render --view` does: the eye on that side of the centre, at the same distance."""
+    front = vkray.load("", 64, 48, view="front").camera
+    back = vkray.load("", 64, 48, view="back").camera
+    right = vkray.load("", 64, 48, view=[1, 0.25, 0]).camera
+    centre = np.array(front["to"])
+    assert np.allclose(back["to"], centre) and np.allclose(right["to"], centre)
+    distance = np.linalg.norm(np.array(front["from"]) - centre)
+    for camera, axis, sign in ((front, 2, 1), (back, 2, -1), (right, 0, 1)):
+        offset = np.array(camera["from"]) - centre
+        assert np.isclose(np.linalg.norm(offset), distance)
+        assert sign * offset[axis] > 0.9 * distance
+    with pytest.raises(ValueError, match="view: unknown side 'behind'"):
+        vkray.load("", 64, 48, view="behind")
+    with pytest.raises(ValueError, match="must be finite and not 0"):
+        vkray.load("", 64, 48, view=[0, 0, 0])
