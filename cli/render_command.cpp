@@ -209,7 +209,7 @@ int run_render(const RenderOptions& options) {
     if (!reference_hits) {
       Stopwatch reference_watch;
       reference_scene.emplace(scene);
-      reference_hits = render_reference_hits(*reference_scene, make_camera_basis(scene.camera, scene.width, scene.height),
+      reference_hits = render_reference_hits(*reference_scene, scene.camera,
                                              scene.width, scene.height);
       reference_ms = reference_watch.lap_ms();
     }

@@ -75,7 +75,7 @@ std::string camera_json(const std::string& text) {
   for (const std::string& item : camera_items(text)) {
     const size_t equals = item.find('=');
     const std::string key = item.substr(0, equals);
-    const std::vector<std::string> keys = {"from", "to", "up", "fovy", "intrinsics", "world_to_camera"};
+    const std::vector<std::string> keys = {"from", "to", "up", "fovy", "intrinsics", "world_to_camera", "projection", "view_height"};
     if (std::find(keys.begin(), keys.end(), key) == keys.end()) {
       const auto nearest = nearest_name(key, keys);
       throw InputError("--camera: unknown key '" + key + "'" + (nearest ? " (did you mean '" + *nearest + "'?)" : "") +
@@ -85,8 +85,15 @@ std::string camera_json(const std::string& text) {
     std::string value = trimmed(item.substr(equals + 1));
     if (value.size() >= 2 && value.front() == '[' && value.back() == ']') value = value.substr(1, value.size() - 2);
     json += (json.empty() ? "{" : ", ") + std::string("\"") + key + "\": ";
-    if (key == "fovy") {
+    if (key == "fovy" || key == "view_height") {
       json += number_json(value, key);
+      continue;
+    }
+    if (key == "projection") {  // a name: letters alone, quoted as a JSON string
+      if (value.empty() || !std::all_of(value.begin(), value.end(), [](unsigned char c) { return std::isalpha(c) != 0; })) {
+        throw InputError("--camera: projection takes a name (perspective, orthographic, equirectangular), got '" + value + "'");
+      }
+      json += "\"" + value + "\"";
       continue;
     }
     const std::vector<std::string> parts = split(value, ",");
@@ -176,10 +183,12 @@ std::string camera_option(const Camera& camera) {
     return std::string(text, end);
   };
   auto vector = [&](const glm::dvec3& v) { return number(v.x) + "," + number(v.y) + "," + number(v.z); };
-  const std::string plane = camera.intrinsics ? " intrinsics=" + number(camera.intrinsics->fx) + "," +
-                                                    number(camera.intrinsics->fy) + "," + number(camera.intrinsics->cx) +
-                                                    "," + number(camera.intrinsics->cy)
-                                              : " fovy=" + number(camera.fovy_degrees);
+  const std::string plane =
+      camera.projection == Projection::orthographic ? " projection=orthographic view_height=" + number(camera.view_height)
+      : camera.projection == Projection::equirectangular ? std::string(" projection=equirectangular")
+      : camera.intrinsics ? " intrinsics=" + number(camera.intrinsics->fx) + "," + number(camera.intrinsics->fy) + "," +
+                                number(camera.intrinsics->cx) + "," + number(camera.intrinsics->cy)
+                          : " fovy=" + number(camera.fovy_degrees);
   return "--camera 'from=" + vector(camera.from) + " to=" + vector(camera.to) + " up=" + vector(camera.up) + plane + "'";
 }
 

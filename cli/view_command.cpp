@@ -43,6 +43,10 @@ int run_view(const ViewCommandOptions& options) {
   viewer.load_scene = [options, width, height] {
     Scene scene = load_scene_argument(options.scene_path, width, height, options.view);
     if (options.camera) apply_camera_option(*options.camera, scene.camera);
+    if (scene.camera.projection != Projection::perspective) {
+      throw InputError(std::string("the viewer draws perspective cameras; `vkray render` writes ") +
+                       projection_name(scene.camera.projection) + " ones");
+    }
     return scene;
   };
   viewer.watched = options.scene_path;

@@ -99,7 +99,8 @@ void add_camera_outputs(Frame& frame) {
           store(frame.camera_position, p, glm::dvec3(0.0));
           continue;
         }
-        const glm::dvec3 offset = t * basis.direction(pixel_uv(i, j, frame.width, frame.height));
+        const PixelRay ray = pixel_ray(*frame.camera, basis, i, j, frame.width, frame.height);
+        const glm::dvec3 offset = ray.origin + t * ray.direction - basis.origin;
         // OpenEXR's camera space (world_to_openexr_camera): x right, y up, z the view direction.
         const glm::dvec3 in_camera(glm::dot(offset, basis.right), glm::dot(offset, basis.up), -glm::dot(offset, basis.forward));
         if (!frame.planar_depth.empty()) frame.planar_depth[p] = static_cast<float>(in_camera.z);

@@ -139,8 +139,8 @@ void store_ids(Frame& frame, size_t pixel, ObjectPrimitive source);
 
 // Fills the camera outputs `frame.aovs` asks for from its depth (depth64 where the float64 shader or
 // the reference left it: the hit point then rounds to float once) and its camera, in double:
-// the hit point is from + t d with d the pixel's unit ray direction in double (CameraBasis), whose
-// difference from the float32 shader's direction (a few float32 roundings) is within the error of t.
+// the hit point is o + t d with o and d the pixel's ray in double (pixel_ray), whose difference
+// from the float32 shader's (a few float32 roundings) is within the error of t.
 void add_camera_outputs(Frame& frame);
 
 // The nearest and farthest finite depth of an image; far is 0 when nothing was hit.

@@ -97,14 +97,15 @@ void add_surface_outputs(Frame& frame, const Scene& scene) {
         const size_t p = size_t{j} * frame.width + i;
         const uint32_t object = frame.mesh_id[p], primitive = frame.primitive_id[p];
         if (object == no_object) continue;  // the outputs stay 0
-        const glm::dvec3 dir = basis.direction(pixel_uv(i, j, frame.width, frame.height));
+        const PixelRay ray = pixel_ray(*frame.camera, basis, i, j, frame.width, frame.height);
+        const glm::dvec3& dir = ray.direction;
         const double t = frame.depth64.empty() ? double{frame.depth[p]} : frame.depth64[p];
         Surface surface;
         if (object < meshes) {
-          surface = triangle_surface(scene.meshes[object], primitive, basis.origin, dir, t);
+          surface = triangle_surface(scene.meshes[object], primitive, ray.origin, dir, t);
         } else if (object < meshes + spheres) {
           const Sphere& sphere = scene.spheres[object - meshes];
-          surface.shading_normal = facing(unit_vector(basis.origin + t * dir - sphere.center), dir);
+          surface.shading_normal = facing(unit_vector(ray.origin + t * dir - sphere.center), dir);
         } else {
           surface.shading_normal = facing(scene.planes[object - meshes - spheres].normal, dir);
         }

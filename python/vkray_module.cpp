@@ -390,7 +390,7 @@ class PyReference {
     std::vector<ReferenceHit> hits;
     {
       py::gil_scoped_release released;
-      hits = render_reference_hits(*reference_, make_camera_basis(view.camera, view.width, view.height), view.width, view.height);
+      hits = render_reference_hits(*reference_, view.camera, view.width, view.height);
     }
     const size_t pixels = hits.size();
     // Only the outputs asked for, as the Renderer does.

@@ -191,7 +191,7 @@ TEST(BvhGpu, FlatAlligatorFaceOnAndEdgeOn) {
     scene.camera = camera;
     for (PrimitiveSearch search : tree_walks()) EXPECT_EQ(count_hits(render_and_check(scene, search)), 0u) << name_of(search);
     size_t reference_hits = 0;
-    for (const ReferenceHit& hit : render_reference_hits(reference, make_camera_basis(camera, 63, 47), 63, 47)) {
+    for (const ReferenceHit& hit : render_reference_hits(reference, camera, 63, 47)) {
       reference_hits += hit.kind != PrimitiveKind::none;
     }
     EXPECT_EQ(reference_hits, 0u);
@@ -227,7 +227,7 @@ TEST(BvhGpu, CameraInsideMillionTriangleSphere) {
       EXPECT_EQ(count_hits(frame), frame.pixel_count()) << name_of(search) << ": rays leak through the closed mesh";
     }
     size_t reference_misses = 0;
-    for (const ReferenceHit& hit : render_reference_hits(reference, make_camera_basis(camera, size.first, size.second),
+    for (const ReferenceHit& hit : render_reference_hits(reference, camera,
                                                          size.first, size.second)) {
       reference_misses += hit.kind == PrimitiveKind::none;
     }

@@ -10,6 +10,7 @@
 
 #include <cmath>
 #include <cstring>
+#include <numbers>
 
 namespace vkray {
 namespace {
@@ -51,7 +52,7 @@ TEST(CameraModels, OffCentreIntrinsicsProjectEachHitOntoItsPixel) {
   expect_frame_matches_reference(scene, render(scene));
 
   const ReferenceScene reference(scene);
-  const auto hits = render_reference_hits(reference, make_camera_basis(scene.camera, scene.width, scene.height),
+  const auto hits = render_reference_hits(reference, scene.camera,
                                           scene.width, scene.height);
   const Matrix4 rigid = world_to_camera(scene.camera, scene.width, scene.height);
   const PinholeIntrinsics& k = *scene.camera.intrinsics;
@@ -70,6 +71,70 @@ TEST(CameraModels, OffCentreIntrinsicsProjectEachHitOntoItsPixel) {
     }
   }
   EXPECT_GT(hit_count, size_t{scene.width} * scene.height / 2);
+}
+
+// Orthographic and equirectangular images of the default scene (spheres, planes and meshes), its
+// camera's placement kept: within the reference envelope, on the device as the reference traces
+// each pixel's ray (pixel_ray).
+TEST(CameraModels, OrthographicAndEquirectangularWithinTheEnvelope) {
+  Scene scene = sized(default_scene(), 96, 48);
+  scene.camera.projection = Projection::equirectangular;
+  scene.camera.from = {0.3, 1.0, 1.5};  // among the objects: they surround it
+  expect_frame_matches_reference(scene, render(scene));
+  scene = sized(default_scene(), 64, 48);
+  scene.camera.projection = Projection::orthographic;
+  scene.camera.view_height = 3.0;
+  expect_frame_matches_reference(scene, render(scene));
+}
+
+// Closed forms. Equirectangular from the centre of a sphere of radius 2: every pixel at depth 2,
+// its normal against its ray, and the ray of pixel (i, j) at longitude 2 pi ((i + 1/2) / W - 1/2)
+// east of the view direction and latitude pi (1/2 - (j + 1/2) / H): its position on the sphere
+// says so. Orthographic facing a plane 5 away: every ray meets it at depth 5, from its pixel of
+// the image plane, so that position minus the view direction's 5 spans view_height over the
+// image's height. Depth and position within a few float32 roundings of 5 (1e-6); the direction's
+// within the float32 rounding of its components (4e-7).
+TEST(CameraModels, OrthographicAndEquirectangularClosedForms) {
+  Scene inside;
+  inside.spheres.push_back({{1, 2, 3}, 2});
+  inside.camera = {{1, 2, 3}, {1, 2, 2}, {0, 1, 0}, 60};
+  inside.camera.projection = Projection::equirectangular;
+  inside = sized(inside, 32, 16);
+  const Frame sphere = render(inside, {Aov::depth, Aov::normal, Aov::position});
+  const size_t pixels = sphere.pixel_count();
+  for (uint32_t j = 0; j < 16; ++j) {
+    for (uint32_t i = 0; i < 32; ++i) {
+      const size_t p = size_t{j} * 32 + i;
+      EXPECT_NEAR(sphere.depth[p], 2.0, 1e-6);
+      const double longitude = 2 * std::numbers::pi * ((i + 0.5) / 32 - 0.5), latitude = std::numbers::pi * (0.5 - (j + 0.5) / 16);
+      // View direction -z, right +x, up +y.
+      const glm::dvec3 dir(std::cos(latitude) * std::sin(longitude), std::sin(latitude), -std::cos(latitude) * std::cos(longitude));
+      const glm::dvec3 position(sphere.position[p], sphere.position[pixels + p], sphere.position[2 * pixels + p]);
+      EXPECT_LT(glm::distance(position, glm::dvec3(1, 2, 3) + 2.0 * dir), 4e-6) << i << "," << j;
+      const glm::dvec3 normal(sphere.normal[p], sphere.normal[pixels + p], sphere.normal[2 * pixels + p]);
+      EXPECT_LT(glm::distance(normal, -dir), 1e-6) << i << "," << j;
+    }
+  }
+
+  Scene wall;
+  wall.planes.push_back({{0, 0, -5}, {0, 0, 1}});
+  wall.camera = {{0.5, 0.25, 0}, {0.5, 0.25, -1}, {0, 1, 0}, 60};
+  wall.camera.projection = Projection::orthographic;
+  wall.camera.view_height = 4.0;
+  wall = sized(wall, 40, 20);
+  const Frame plane = render(wall, {Aov::depth, Aov::planar_depth, Aov::position});
+  const size_t wall_pixels = plane.pixel_count();
+  for (uint32_t j = 0; j < 20; ++j) {
+    for (uint32_t i = 0; i < 40; ++i) {
+      const size_t p = size_t{j} * 40 + i;
+      EXPECT_NEAR(plane.depth[p], 5.0, 1e-6);
+      EXPECT_NEAR(plane.planar_depth[p], 5.0, 1e-6);
+      // 4 world units over 20 rows: 0.2 a pixel, centred on the camera.
+      EXPECT_NEAR(plane.position[p], 0.5 + 0.2 * (i + 0.5 - 20), 1e-6) << i << "," << j;
+      EXPECT_NEAR(plane.position[wall_pixels + p], 0.25 + 0.2 * (9.5 - j), 1e-6) << i << "," << j;
+      EXPECT_NEAR(plane.position[2 * wall_pixels + p], -5.0, 1e-6);
+    }
+  }
 }
 
 TEST(CameraModels, MatricesThatAreNoRigidMotionAreRefused) {

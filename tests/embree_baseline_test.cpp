@@ -19,7 +19,7 @@ void expect_close_to_reference(Scene scene, uint32_t width, uint32_t height) {
   scene.width = width, scene.height = height;
   const ReferenceScene reference(scene);
   const FrameError error =
-      measure_error(embree.frame, render_reference_hits(reference, make_camera_basis(scene.camera, width, height), width, height));
+      measure_error(embree.frame, render_reference_hits(reference, scene.camera, width, height));
   EXPECT_LE(error.mismatch_fraction(), 0.005) << error.summary();
   EXPECT_GT(error.both_hit, error.pixels / 10) << "the view must show the scene";
   EXPECT_LT(error.depth_p99, 1e-5) << error.summary();

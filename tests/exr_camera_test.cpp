@@ -58,7 +58,7 @@ TEST_F(ExrCameraTest, HeaderMatricesTakeEveryHitToItsPixelAndPlanarDepth) {
   const Scene scene = test::sized(default_scene(), 64, 48);
   const CameraBasis basis = make_camera_basis(scene.camera, scene.width, scene.height);
   const ReferenceScene reference(scene);
-  const std::vector<ReferenceHit> hits = render_reference_hits(reference, basis, scene.width, scene.height);
+  const std::vector<ReferenceHit> hits = render_reference_hits(reference, scene.camera, scene.width, scene.height);
   const Frame frame = reference_frame(reference, scene, hits, scene.camera, scene.width, scene.height, {Aov::depth});
   const std::filesystem::path path = dir_ / "camera.exr";
   write_exr(path, frame);
@@ -117,9 +117,8 @@ TEST_F(ExrCameraTest, HeaderMatricesTakeEveryHitToItsPixelAndPlanarDepth) {
 // along its ray by 2^-24 t at most, P's components are within 2^-24 of theirs.
 TEST_F(ExrCameraTest, PlanarDepthReprojectsToPositionWithTheHeaderCamera) {
   const Scene scene = test::sized(default_scene(), 64, 48);
-  const CameraBasis basis = make_camera_basis(scene.camera, scene.width, scene.height);
   const ReferenceScene reference(scene);
-  const std::vector<ReferenceHit> hits = render_reference_hits(reference, basis, scene.width, scene.height);
+  const std::vector<ReferenceHit> hits = render_reference_hits(reference, scene.camera, scene.width, scene.height);
   const Frame frame = reference_frame(reference, scene, hits, scene.camera, scene.width, scene.height,
                                       {Aov::planar_depth, Aov::position, Aov::camera_position});
   const std::filesystem::path path = dir_ / "camera-outputs.exr";

@@ -56,9 +56,9 @@ namespace {
 constexpr double eps = 0x1p-24;
 // eta for the ray through `uv` (the direction bound above).
 double direction_uncertainty(const CameraBasis& camera, const glm::dvec2& uv) {
-  const glm::dvec3 forward_scaled = -camera.plane_distance * camera.forward;
-  const glm::dvec3 ray = uv.x * camera.right + uv.y * camera.up + forward_scaled;
-  const glm::dvec3 bound = 8 * eps * (glm::abs(uv.x * camera.right) + glm::abs(uv.y * camera.up) + glm::abs(forward_scaled));
+  const glm::dvec3 right = camera.right_step(), up = camera.up_step(), forward_scaled = camera.centre_direction();
+  const glm::dvec3 ray = uv.x * right + uv.y * up + forward_scaled;
+  const glm::dvec3 bound = 8 * eps * (glm::abs(uv.x * right) + glm::abs(uv.y * up) + glm::abs(forward_scaled));
   const glm::dvec3 unit = glm::normalize(ray);
   // The worst error vector within the component bounds, across the ray: bound minus its part along it.
   const glm::dvec3 across = bound - glm::dot(bound, glm::abs(unit)) * glm::abs(unit);
@@ -106,8 +106,13 @@ double reach_radius(const Scene& scene, const glm::dvec3& anchor) {
   return radius;
 }
 
+// Orthographic and equirectangular cameras: the host computes each pixel's unit direction in double
+// and rounds each component to float once (cast as given rays), within eps of it: twice that.
+constexpr double given_direction_uncertainty = 2 * eps + eps * eps;
+
 struct PixelSamples {
   ReferenceHit hits[5];
+  glm::dvec3 origin;
   glm::dvec3 dir;
   double eta = 0.0;  // the angle the samples are turned by
 };
@@ -126,6 +131,7 @@ EnvelopeReport check_against_reference(const Scene& scene, const Frame& frame, u
   const uint32_t width = frame.width, height = frame.height;
   const ReferenceScene reference(scene);
   const CameraBasis camera = make_camera_basis(scene.camera, width, height);
+  const bool pinhole = scene.camera.projection == Projection::perspective;
   const double radius = reach_radius(scene, scene_anchor(scene));
   const double split_error = 0x1p-44 * radius;  // the hi/lo split's 2^-46 R, times 4
   const std::vector<double> triangle_reach = triangle_reaches(scene);
@@ -145,14 +151,18 @@ EnvelopeReport check_against_reference(const Scene& scene, const Frame& frame, u
   // The centre rays first: each pixel's position error subtends 2 eps (t + E) / t of its hit.
   std::vector<double> position_angle(samples.size(), 0.0);
   in_parallel([&](size_t p) {
-    const glm::dvec2 uv = pixel_uv(static_cast<uint32_t>(p % width), static_cast<uint32_t>(p / width), width, height);
-    samples[p].dir = camera.direction(uv);
-    samples[p].hits[0] = reference.trace(camera.origin, samples[p].dir);
+    const auto i = static_cast<uint32_t>(p % width), j = static_cast<uint32_t>(p / width);
+    const PixelRay ray = pixel_ray(scene.camera, camera, i, j, width, height);
+    samples[p].origin = ray.origin;
+    samples[p].dir = ray.direction;
+    samples[p].hits[0] = reference.trace(ray.origin, samples[p].dir);
     const ReferenceHit& hit = samples[p].hits[0];
     if (hit.kind != PrimitiveKind::none) {
-      position_angle[p] = 2 * eps * (hit.t + primitive_reach(scene, triangle_reach, hit)) / hit.t;
+      // E from the camera, and as far again as an orthographic pixel's origin lies from it.
+      const double reach = primitive_reach(scene, triangle_reach, hit) + glm::length(ray.origin - camera.origin);
+      position_angle[p] = 2 * eps * (hit.t + reach) / hit.t;
     }
-    samples[p].eta = direction_uncertainty(camera, uv);
+    samples[p].eta = pinhole ? direction_uncertainty(camera, pixel_uv(i, j, width, height)) : given_direction_uncertainty;
   });
   // A miss takes the largest angle of any hit: next to a silhouette it may legitimately hit.
   const double miss_angle = *std::max_element(position_angle.begin(), position_angle.end());
@@ -161,9 +171,16 @@ EnvelopeReport check_against_reference(const Scene& scene, const Frame& frame, u
     const double eta = samples[p].eta + angle;
     samples[p].eta = eta;
     const glm::dvec3& dir = samples[p].dir;
-    const glm::dvec3 turns[4] = {dir + eta * camera.right, dir - eta * camera.right, dir + eta * camera.up,
-                                 dir - eta * camera.up};
-    for (int k = 0; k < 4; ++k) samples[p].hits[k + 1] = reference.trace(camera.origin, glm::normalize(turns[k]));
+    // Turned across the ray: the camera's right and up for a pinhole; any two axes across it
+    // otherwise (an equirectangular ray near a pole runs along up).
+    glm::dvec3 across_1 = camera.right, across_2 = camera.up;
+    if (!pinhole) {
+      const glm::dvec3 helper = std::abs(glm::dot(dir, camera.up)) < 0.9 ? camera.up : camera.right;
+      across_1 = glm::normalize(glm::cross(dir, helper));
+      across_2 = glm::cross(dir, across_1);
+    }
+    const glm::dvec3 turns[4] = {dir + eta * across_1, dir - eta * across_1, dir + eta * across_2, dir - eta * across_2};
+    for (int k = 0; k < 4; ++k) samples[p].hits[k + 1] = reference.trace(samples[p].origin, glm::normalize(turns[k]));
   });
 
   // The checked rows alone, for the summary figures.

@@ -665,3 +665,19 @@ TEST(SceneJson, CameraIntrinsicsAndMatrixChecks) {
   expect_error(parse_error(R"({"camera": {"from": [0, 0, 1], "to": [0, 0, 0], "intrinsics": {"fx": 1, "fy": 1, "cx": 0}}})"),
                "t.json: camera.intrinsics: ", "missing required key 'cy'");
 }
+
+TEST(SceneJson, OrthographicAndEquirectangularCameras) {
+  const Scene ortho = parse(R"({"camera": {"from": [0, 0, 5], "to": [0, 0, 0], "projection": "orthographic", "view_height": 3}})");
+  EXPECT_EQ(ortho.camera.projection, vkray::Projection::orthographic);
+  EXPECT_EQ(ortho.camera.view_height, 3.0);
+  const Scene panorama = parse(R"({"camera": {"from": [0, 0, 5], "to": [0, 0, 0], "projection": "equirectangular"}})");
+  EXPECT_EQ(panorama.camera.projection, vkray::Projection::equirectangular);
+  expect_error(parse_error(R"({"camera": {"from": [0, 0, 5], "to": [0, 0, 0], "projection": "orthographic"}})"),
+               "t.json: camera: ", "an orthographic camera needs view_height");
+  expect_error(parse_error(R"({"camera": {"from": [0, 0, 5], "to": [0, 0, 0], "projection": "fisheye"}})"),
+               "t.json: camera.projection: ", "unknown projection 'fisheye' (perspective, orthographic, equirectangular)");
+  expect_error(parse_error(R"({"camera": {"from": [0, 0, 5], "to": [0, 0, 0], "projection": "equirectangular", "fovy": 40}})"),
+               "t.json: camera.fovy: ", "fovy describes a perspective camera");
+  expect_error(parse_error(R"({"camera": {"from": [0, 0, 5], "to": [0, 0, 0], "projection": "orthographic", "view_height": -1}})"),
+               "t.json: camera.view_height: ", "must be in (0, 1e15]");
+}

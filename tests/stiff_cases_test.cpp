@@ -138,8 +138,7 @@ TEST(Float64Shader, AgreesWithTheReferenceTo1e12) {
     if (size_t{stiff.scene.width} * stiff.scene.height > size_t{test_width} * test_height) continue;
     SCOPED_TRACE(stiff.name);
     const Frame frame = render_with(stiff.scene, options);
-    const auto reference = render_reference_hits(ReferenceScene(stiff.scene),
-                                                 make_camera_basis(stiff.scene.camera, stiff.scene.width, stiff.scene.height),
+    const auto reference = render_reference_hits(ReferenceScene(stiff.scene), stiff.scene.camera,
                                                  stiff.scene.width, stiff.scene.height);
     const FrameError error = measure_error(frame, reference);
     EXPECT_EQ(error.hit_mismatches, 0u) << error.summary();

@@ -83,7 +83,7 @@ TEST(SurfaceOutputs, SquareMatchesTheClosedForm) {
     const Scene scene = attributed_square(from);
     expect_square_closed_form(scene, render(scene, surface_aovs));
     const ReferenceScene reference(scene);
-    const auto hits = render_reference_hits(reference, make_camera_basis(scene.camera, scene.width, scene.height),
+    const auto hits = render_reference_hits(reference, scene.camera,
                                             scene.width, scene.height);
     expect_square_closed_form(scene, reference_frame(reference, scene, hits, scene.camera, scene.width, scene.height, surface_aovs));
   }
@@ -123,7 +123,7 @@ TEST(SurfaceOutputs, SharedModelsAgreeWithTheReference) {
     const Scene scene = framed_model(name, 96, 72);
     const Frame frame = render(scene, surface_aovs);
     const ReferenceScene reference(scene);
-    const auto hits = render_reference_hits(reference, make_camera_basis(scene.camera, scene.width, scene.height),
+    const auto hits = render_reference_hits(reference, scene.camera,
                                             scene.width, scene.height);
     const Frame expected = reference_frame(reference, scene, hits, scene.camera, scene.width, scene.height, surface_aovs);
     const size_t pixels = frame.pixel_count();

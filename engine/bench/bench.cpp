@@ -200,7 +200,7 @@ BenchSceneResult bench_scene(GpuDevice& device, const BenchScene& bench, const B
   const auto reference_start = Clock::now();
   const ReferenceScene reference_scene(scene);
   const std::vector<ReferenceHit> reference =
-      render_reference_hits(reference_scene, make_camera_basis(scene.camera, scene.width, scene.height), scene.width,
+      render_reference_hits(reference_scene, scene.camera, scene.width,
                             scene.height, settings.reference_progress);
   result.reference_ms = elapsed_ms(reference_start);
   if (settings.float32_ray_error) {

@@ -243,11 +243,14 @@ Imath::M44f row_vector_matrix(const Matrix4& m) {
   return transposed;
 }
 
-// The camera in OpenEXR's standard attributes worldToCamera and worldToNDC (float32, as the
-// standard defines them) and, exactly, as vkray:camera (engine/scene/camera_description.hpp).
+// The camera in OpenEXR's standard attributes worldToCamera and, for a perspective camera (the one
+// a matrix projects), worldToNDC (float32, as the standard defines them) and, exactly, as
+// vkray:camera (engine/scene/camera_description.hpp).
 void describe_camera(Imf::Header& header, const Camera& camera, uint32_t width, uint32_t height) {
   Imf::addWorldToCamera(header, row_vector_matrix(world_to_openexr_camera(camera, width, height)));
-  Imf::addWorldToNDC(header, row_vector_matrix(world_to_openexr_ndc(camera, width, height)));
+  if (camera.projection == Projection::perspective) {
+    Imf::addWorldToNDC(header, row_vector_matrix(world_to_openexr_ndc(camera, width, height)));
+  }
   header.insert("vkray:camera", Imf::StringAttribute(camera_description(camera, width, height).dump()));
 }
 

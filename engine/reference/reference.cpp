@@ -251,9 +251,10 @@ ObjectPrimitive ReferenceScene::source(const ReferenceHit& hit) const {
   }
 }
 
-std::vector<ReferenceHit> render_reference_hits(const ReferenceScene& scene, const CameraBasis& camera,
+std::vector<ReferenceHit> render_reference_hits(const ReferenceScene& scene, const Camera& camera,
                                                 uint32_t width, uint32_t height,
                                                 const std::function<void(double)>& progress) {
+  const CameraBasis basis = make_camera_basis(camera, width, height);
   std::vector<ReferenceHit> hits(size_t{width} * height);
   const unsigned workers = std::max(1u, std::min(std::thread::hardware_concurrency(), height));
   {  // the workers join at the end of this block, before `hits` is returned
@@ -262,7 +263,8 @@ std::vector<ReferenceHit> render_reference_hits(const ReferenceScene& scene, con
       threads.emplace_back([&, worker] {
         for (uint32_t j = worker; j < height; j += workers) {
           for (uint32_t i = 0; i < width; ++i) {
-            hits[size_t{j} * width + i] = scene.trace(camera.origin, camera.direction(pixel_uv(i, j, width, height)));
+            const PixelRay ray = pixel_ray(camera, basis, i, j, width, height);
+            hits[size_t{j} * width + i] = scene.trace(ray.origin, ray.direction);
           }
           if (progress && worker == 0) progress(static_cast<double>(j + 1) / height);
         }

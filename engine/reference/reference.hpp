@@ -76,7 +76,7 @@ class ReferenceScene {
 
 // Every pixel's hit for the scene's camera at width x height, on all cores. `progress`, when set,
 // receives the fraction of rows done from time to time, from a worker thread.
-std::vector<ReferenceHit> render_reference_hits(const ReferenceScene& scene, const CameraBasis& camera,
+std::vector<ReferenceHit> render_reference_hits(const ReferenceScene& scene, const Camera& camera,
                                                 uint32_t width, uint32_t height,
                                                 const std::function<void(double)>& progress = {});
 

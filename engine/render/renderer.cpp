@@ -825,6 +825,49 @@ Frame Renderer::render(const Camera& camera, uint32_t width, uint32_t height, Ao
   r.reset_timings();
   if (aovs.empty()) return frame;
   const AovSet device_aovs = aovs.on_device();
+  if (camera.projection != Projection::perspective) {
+    // Rays that do not leave one point through an image plane's pixels: the pixels' rays in double
+    // (pixel_ray), cast as given rays. cast_rays picks their walk: an equirectangular image's from
+    // its one origin in packets of its rows, an orthographic image's one by one.
+    if (device_aovs.needs_rays() || device_aovs.has(Aov::hit)) {
+      const CameraBasis basis = make_camera_basis(camera, width, height);
+      std::vector<GivenRay> rays(frame.pixel_count());
+      parallel_for_chunks(height, [&](size_t first_row, size_t end_row) {
+        for (auto j = static_cast<uint32_t>(first_row); j < end_row; ++j) {
+          for (uint32_t i = 0; i < width; ++i) {
+            const PixelRay ray = pixel_ray(camera, basis, i, j, width, height);
+            rays[size_t{j} * width + i] = {ray.origin.x, ray.origin.y, ray.origin.z, ray.direction.x, ray.direction.y, ray.direction.z};
+          }
+        }
+      }, 16);
+      const RayHits hits = cast_rays(rays);
+      const size_t pixels = frame.pixel_count();
+      parallel_for_chunks(pixels, [&](size_t begin, size_t end) {
+        for (size_t p = begin; p < end; ++p) {
+          if (!frame.depth.empty()) frame.depth[p] = hits.t[p];
+          if (!frame.depth64.empty()) frame.depth64[p] = hits.t64[p];
+          for (size_t c = 0; c < 3; ++c) {
+            if (!frame.normal.empty()) frame.normal[c * pixels + p] = hits.normal[c * pixels + p];
+            if (!frame.normal64.empty()) frame.normal64[c * pixels + p] = hits.normal64[c * pixels + p];
+          }
+          store_ids(frame, p, {hits.object[p], hits.primitive[p]});
+        }
+      });
+    }
+    if (!frame.uv.empty()) {
+      for (uint32_t j = 0; j < height; ++j) {
+        for (uint32_t i = 0; i < width; ++i) {
+          const glm::dvec2 uv = pixel_uv(i, j, width, height);
+          frame.uv[size_t{j} * width + i] = static_cast<float>(uv.x);
+          frame.uv[frame.pixel_count() + size_t{j} * width + i] = static_cast<float>(uv.y);
+        }
+      }
+    }
+    frame.round_doubles();
+    add_camera_outputs(frame);
+    add_surface_outputs(frame, r.host_scene);
+    return frame;
+  }
 
   with_vulkan_errors("rendering", [&] {
     const CameraBasis basis = make_camera_basis(camera, width, height);
@@ -927,6 +970,10 @@ RayHits Renderer::cast_rays(std::span<const GivenRay> rays) {
 DepthRange Renderer::render(const Camera& camera, Aov aov, ImageTarget& target) {
   const uint32_t width = target.width(), height = target.height();
   check_image_size(width, height);
+  if (camera.projection != Projection::perspective) {
+    throw InputError(std::string("the viewer draws perspective cameras; `vkray render` writes ") +
+                     projection_name(camera.projection) + " ones");
+  }
   Impl& r = *impl_;
   if (r.options.shader.generic || r.precision() != Precision::float32) {
     throw std::logic_error("the storage-image target takes a float32 shader specialized on its output");

@@ -19,6 +19,43 @@ glm::dvec3 CameraBasis::direction(glm::dvec2 uv) const {
   return glm::normalize(uv.x * right_step() + uv.y * up_step() + centre_direction());
 }
 
+std::optional<Projection> projection_from_name(std::string_view name) {
+  for (const Projection projection : {Projection::perspective, Projection::orthographic, Projection::equirectangular}) {
+    if (name == projection_name(projection)) return projection;
+  }
+  return std::nullopt;
+}
+
+const char* projection_name(Projection projection) {
+  switch (projection) {
+    case Projection::perspective: return "perspective";
+    case Projection::orthographic: return "orthographic";
+    case Projection::equirectangular: return "equirectangular";
+  }
+  return "?";
+}
+
+PixelRay pixel_ray(const Camera& camera, const CameraBasis& basis, uint32_t i, uint32_t j, uint32_t width, uint32_t height) {
+  switch (camera.projection) {
+    case Projection::perspective:
+      break;
+    case Projection::orthographic: {
+      // The image plane's coordinates scaled so that its height, 2 H / min(W, H) of them, spans view_height.
+      const glm::dvec2 uv = pixel_uv(i, j, width, height);
+      const double world_per_unit = camera.view_height * std::min(width, height) / (2.0 * height);
+      return {basis.origin + world_per_unit * (uv.x * basis.right + uv.y * basis.up), -basis.forward};
+    }
+    case Projection::equirectangular: {
+      const double longitude = 2.0 * std::numbers::pi * ((i + 0.5) / width - 0.5);
+      const double latitude = std::numbers::pi * (0.5 - (j + 0.5) / height);
+      const glm::dvec3 direction = std::cos(latitude) * (std::sin(longitude) * basis.right - std::cos(longitude) * basis.forward) +
+                                   std::sin(latitude) * basis.up;
+      return {basis.origin, glm::normalize(direction)};
+    }
+  }
+  return {basis.origin, basis.direction(pixel_uv(i, j, width, height))};
+}
+
 glm::dvec3 float32_ray_direction(const CameraBasis& camera, uint32_t i, uint32_t j, uint32_t width, uint32_t height) {
   const float shorter = static_cast<float>(std::min(width, height));
   const glm::vec2 uv = glm::vec2(static_cast<float>(2 * i + 1) - static_cast<float>(width),

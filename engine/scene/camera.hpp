@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <string_view>
 
 namespace vkray {
 
@@ -20,6 +21,15 @@ struct PinholeIntrinsics {
   bool operator==(const PinholeIntrinsics&) const = default;
 };
 
+// How a camera's pixels map to rays (README, "Output contract"):
+// - perspective: every ray from `from` through its pixel of the image plane (fovy or intrinsics);
+// - orthographic: every ray along the view direction, from its pixel of the image plane through
+//   `from`, which spans `view_height` world units vertically;
+// - equirectangular: every ray from `from`, longitude across the image (the view direction at its
+//   centre, 360 degrees in all, east to the right) and latitude down it (+90 at the top, towards
+//   the camera's up): a depth panorama.
+enum class Projection { perspective, orthographic, equirectangular };
+
 struct Camera {
   glm::dvec3 from{0.0, 0.0, 0.0};
   glm::dvec3 to{0.0, 0.0, -1.0};
@@ -28,7 +38,13 @@ struct Camera {
   // The image plane given in pixels instead of by fovy (vision code's cameras): any focal lengths
   // and principal point, for whatever image size is rendered.
   std::optional<PinholeIntrinsics> intrinsics = std::nullopt;
+  Projection projection = Projection::perspective;
+  double view_height = 0.0;  // orthographic: the image's height in world units (> 0)
 };
+
+// "perspective", "orthographic" or "equirectangular"; none for another name.
+std::optional<Projection> projection_from_name(std::string_view name);
+const char* projection_name(Projection projection);
 
 // UV of the centre of pixel (i, j), j counted from the top row: origin at the image centre, the
 // shorter side spans [-1, 1], +y up.
@@ -60,6 +76,13 @@ struct CameraBasis {
 // uv, the basis and the sum rounded to float32, then normalized. Tracing it in double separates the
 // error a float32 ray brings in from the error of the intersection arithmetic.
 glm::dvec3 float32_ray_direction(const CameraBasis& camera, uint32_t i, uint32_t j, uint32_t width, uint32_t height);
+
+// A pixel's primary ray in double, for every projection: its origin and unit direction.
+struct PixelRay {
+  glm::dvec3 origin;
+  glm::dvec3 direction;
+};
+PixelRay pixel_ray(const Camera& camera, const CameraBasis& basis, uint32_t i, uint32_t j, uint32_t width, uint32_t height);
 
 // Builds the course's frame: right = normalize(up x forward), up' = forward x right. When `up` is
 // parallel to the view direction (looking straight up or down) that cross product vanishes; the

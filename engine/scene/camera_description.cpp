@@ -13,6 +13,12 @@ nlohmann::ordered_json camera_description(const Camera& camera, uint32_t width, 
                                                  {"to", vector_json(camera.to)},
                                                  {"up", vector_json(camera.up)}};
   const PinholeIntrinsics intrinsics = pinhole_intrinsics(camera, width, height);
+  if (camera.projection != Projection::perspective) {
+    description["camera"]["projection"] = projection_name(camera.projection);
+    if (camera.projection == Projection::orthographic) description["camera"]["view_height"] = camera.view_height;
+    description["world_to_camera"] = world_to_camera(camera, width, height);
+    return description;  // no pinhole model: no intrinsics
+  }
   if (camera.intrinsics) {
     description["camera"]["intrinsics"] =
         nlohmann::ordered_json{{"fx", intrinsics.fx}, {"fy", intrinsics.fy}, {"cx", intrinsics.cx}, {"cy", intrinsics.cy}};

@@ -8,7 +8,8 @@
 //    "world_to_camera": [[...], [...], [...], [0, 0, 0, 1]]}
 //
 // Each record of a many-view manifest holds these keys, and the EXR header's vkray:camera attribute
-// holds the object.
+// holds the object. An orthographic or equirectangular camera has "projection" (and "view_height")
+// in place of fovy, and no intrinsics.
 #pragma once
 
 #include "engine/scene/camera.hpp"

@@ -193,7 +193,7 @@ PinholeIntrinsics parse_intrinsics(const Node& node) {
 // Where it stands: from, to and up, or OpenCV's world_to_camera; its image plane: fovy, or OpenCV's
 // intrinsics in pixels.
 Camera parse_camera(const Node& node, const Camera* base = nullptr) {
-  node.expect_object({"from", "to", "up", "fovy", "intrinsics", "world_to_camera"});
+  node.expect_object({"from", "to", "up", "fovy", "intrinsics", "world_to_camera", "projection", "view_height"});
   Camera camera = base ? *base : Camera{};
   if (node.has("world_to_camera")) {
     const Node matrix = node.at("world_to_camera");
@@ -211,6 +211,29 @@ Camera parse_camera(const Node& node, const Camera* base = nullptr) {
       node.at("from").fail("must differ from camera.to");
     }
     if (node.has("up")) camera.up = node.at("up").nonzero_vec3();
+  }
+  if (node.has("projection")) {
+    const Node name = node.at("projection");
+    const auto projection = projection_from_name(name.string());
+    if (!projection) name.fail("unknown projection '" + name.string() + "' (perspective, orthographic, equirectangular)");
+    camera.projection = *projection;
+  }
+  if (node.has("view_height")) {
+    const Node height = node.at("view_height");
+    camera.view_height = height.number();
+    if (!(camera.view_height > 0.0 && camera.view_height <= max_coordinate)) {
+      height.fail("the image's height in world units must be in (0, 1e15], got " + describe(height.json()));
+    }
+  }
+  if (camera.projection == Projection::orthographic && !(camera.view_height > 0.0)) {
+    node.fail("an orthographic camera needs view_height, the image's height in world units");
+  }
+  if (camera.projection != Projection::perspective) {
+    // fovy and intrinsics describe a perspective camera's image plane: none here.
+    if (node.has("intrinsics")) node.at("intrinsics").fail("intrinsics describe a perspective camera, not an " + std::string(projection_name(camera.projection)) + " one");
+    camera.intrinsics.reset();
+    if (node.has("fovy")) node.at("fovy").fail("fovy describes a perspective camera");
+    return camera;
   }
   if (node.has("intrinsics")) {
     if (node.has("fovy")) node.at("intrinsics").fail("give either fovy or intrinsics, not both");
