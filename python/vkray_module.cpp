@@ -101,7 +101,10 @@ py::dict camera_dict(const Camera& camera) {
   dict["from"] = std::vector<double>{camera.from.x, camera.from.y, camera.from.z};
   dict["to"] = std::vector<double>{camera.to.x, camera.to.y, camera.to.z};
   dict["up"] = std::vector<double>{camera.up.x, camera.up.y, camera.up.z};
-  if (camera.intrinsics) {
+  if (camera.projection != Projection::perspective) {
+    dict["projection"] = projection_name(camera.projection);
+    if (camera.projection == Projection::orthographic) dict["view_height"] = camera.view_height;
+  } else if (camera.intrinsics) {
     const PinholeIntrinsics& k = *camera.intrinsics;
     py::dict intrinsics;
     intrinsics["fx"] = k.fx, intrinsics["fy"] = k.fy, intrinsics["cx"] = k.cx, intrinsics["cy"] = k.cy;
