@@ -1045,7 +1045,8 @@ TEST_F(CliTest, BenchBasicSuiteJsonHasEveryFieldAndSaneFigures) {
       "upload_ms", "bvh_build_ms", "pipeline_ms", "gpu_median_ms", "gpu_min_ms", "frame_median_ms", "mrays_per_s",
       "unfinished_rays", "pixels", "hit_mismatches", "both_hit", "nan_pixels", "depth_rel_p50", "depth_rel_p99", "depth_rel_max",
       "depth_ulp_p50", "depth_ulp_p99", "depth_ulp_max",
-      "normal_deg_p50", "normal_deg_p99", "normal_deg_max", "pareto"};
+      "normal_deg_p50", "normal_deg_p99", "normal_deg_max", "pareto", "outputs_compared", "id_mismatches",
+      "planar_depth_rel_p99", "position_rel_p99", "barycentric_max", "shading_normal_deg_p99", "texcoord_max"};
   size_t rows = 0;
   for (size_t s = 0; s < names.size(); ++s) {
     const auto& scene = json.at("scenes").at(s);
@@ -1119,6 +1120,35 @@ TEST_F(CliTest, InterruptExits130AndKeepsTheOlderOutput) {
 
 // --plot runs the embedded matplotlib script on the report; it needs Debian's python3-matplotlib
 // (cmake/debian-packages.txt), so the test says so and skips where that is missing.
+// The "+..." rows time the outputs beside depth and normal and compare each with the reference's:
+// on the built-in scene every one is compared, the ids agree but for pixels on an edge, and each
+// figure is within what its output's bound allows (the camera outputs carry the depth's error, a
+// few 1e-7; the surface outputs of triangles are the reference's exactly where the ids agree).
+TEST_F(CliTest, BenchOutputRowsCompareEveryOutputWithTheReference) {
+  const RunResult run = vkray({"bench", "--size", "64x48", "--frames", "1", "--variants", "default,+ids,+every-output",
+                               "--json", "outputs.json"});
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_NE(run.out.find("outputs beside depth and normal"), std::string::npos) << run.out;
+  const auto json = nlohmann::json::parse(read_text(path("outputs.json")));
+  const auto& rows = json.at("scenes").at(0).at("rows");
+  ASSERT_EQ(rows.size(), 3u);
+  EXPECT_FALSE(rows.at(0).at("outputs_compared").get<bool>());
+  for (size_t r = 1; r < 3; ++r) {
+    const auto& row = rows.at(r);
+    SCOPED_TRACE(row.at("variant").get<std::string>());
+    EXPECT_TRUE(row.at("outputs_compared").get<bool>());
+    EXPECT_LT(row.at("id_mismatches").get<size_t>(), 64u * 48u / 50u);
+    EXPECT_LT(row.at("planar_depth_rel_p99").get<double>(), 1e-5);
+    EXPECT_LT(row.at("position_rel_p99").get<double>(), 1e-5);
+    EXPECT_EQ(row.at("barycentric_max").get<double>(), 0.0);
+    // The triangles' are the reference's exactly; the sphere's comes from the device's depth, as the
+    // normal output's error does (the suite's normal p99 bound).
+    EXPECT_LT(row.at("shading_normal_deg_p99").get<double>(), 0.01);
+    EXPECT_EQ(row.at("texcoord_max").get<double>(), 0.0);
+  }
+  EXPECT_GT(rows.at(2).at("planar_depth_rel_p99").get<double>(), 0.0);  // compared, and float32 rounding is not 0
+}
+
 TEST_F(CliTest, BenchPlotWritesAPng) {
   if (std::system("/usr/bin/python3 -c 'import matplotlib' >/dev/null 2>&1") != 0) {
     GTEST_SKIP() << "/usr/bin/python3 with matplotlib is missing (Debian: python3-matplotlib)";

@@ -49,6 +49,12 @@ BenchVariant views_variant(uint32_t views) {
   return variant;
 }
 
+BenchVariant outputs_variant(std::string name, std::string description, AovSet extra) {
+  BenchVariant variant{std::move(name), std::move(description), {}, CpuBaseline::none, [](const Scene&) { return true; }};
+  variant.extra_outputs = extra;
+  return variant;
+}
+
 BenchVariant cpu_baseline(std::string name, std::string description, CpuBaseline baseline) {
   BenchVariant variant{std::move(name), std::move(description), {}, baseline, [](const Scene& scene) {
                          return finite_primitives(scene) > 0;  // Embree has nothing to trace for planes alone
@@ -97,8 +103,12 @@ BenchRow run_views_variant(GpuDevice& device, const Scene& scene, const BenchVar
 }
 
 BenchRow run_variant(GpuDevice& device, const Scene& scene, const BenchVariant& variant, uint32_t frames,
-                     const std::vector<ReferenceHit>& reference) {
-  const AovSet aovs{Aov::depth, Aov::normal};
+                     const ReferenceScene& reference_scene, const std::vector<ReferenceHit>& reference) {
+  AovSet aovs{Aov::depth, Aov::normal};
+  for (const Aov extra : {Aov::planar_depth, Aov::position, Aov::camera_position, Aov::mesh_id, Aov::primitive_id,
+                          Aov::barycentric, Aov::shading_normal, Aov::texcoord}) {
+    if (variant.extra_outputs.has(extra)) aovs.add(extra);
+  }
   Renderer renderer(device, scene, variant.options);
   BenchRow row;
   row.variant = variant.name;
@@ -119,6 +129,10 @@ BenchRow run_variant(GpuDevice& device, const Scene& scene, const BenchVariant& 
   row.mrays_per_s = static_cast<double>(frame.pixel_count()) / (row.gpu.median_ms * 1e3);
   row.unfinished_rays = renderer.timings().unfinished_rays;
   row.error = measure_error(frame, reference);
+  if (!variant.extra_outputs.empty()) {
+    row.outputs = measure_output_errors(
+        frame, reference_frame(reference_scene, scene, reference, scene.camera, scene.width, scene.height, aovs));
+  }
   return row;
 }
 
@@ -171,6 +185,15 @@ const std::vector<BenchVariant>& bench_variants() {
                      naive),
       shader_variant("float64", "the shader in double precision (--precision double)", float64),
       views_variant(100),
+      outputs_variant("+planar-depth", "the default with the planar-depth output too", {Aov::planar_depth}),
+      outputs_variant("+position", "the default with the position output too", {Aov::position}),
+      outputs_variant("+camera-position", "the default with the camera-position output too", {Aov::camera_position}),
+      outputs_variant("+ids", "the default with the mesh-id and primitive-id outputs too", {Aov::mesh_id, Aov::primitive_id}),
+      outputs_variant("+surface", "the default with barycentric, shading-normal and texcoord too",
+                      {Aov::barycentric, Aov::shading_normal, Aov::texcoord}),
+      outputs_variant("+every-output", "the default with every output too",
+                      {Aov::planar_depth, Aov::position, Aov::camera_position, Aov::mesh_id, Aov::primitive_id,
+                       Aov::barycentric, Aov::shading_normal, Aov::texcoord}),
       cpu_baseline("embree-1", "Embree 3 on the CPU, all threads, one ray at a time", CpuBaseline::embree_single),
       cpu_baseline("embree-8", "Embree 3 on the CPU, all threads, packets of 8 rays", CpuBaseline::embree_packet),
   };
@@ -229,7 +252,7 @@ BenchSceneResult bench_scene(GpuDevice& device, const BenchScene& bench, const B
   for (const auto& name : settings.variants) chosen.push_back(&find_bench_variant(name));
   if (settings.variants.empty()) {
     for (const auto& variant : bench_variants()) {
-      if (variant.orbit_views == 0) chosen.push_back(&variant);
+      if (variant.orbit_views == 0 && variant.extra_outputs.empty()) chosen.push_back(&variant);
     }
   }
   std::optional<EmbreeResult> embree;  // one trace gives both Embree rows
@@ -252,7 +275,7 @@ BenchSceneResult bench_scene(GpuDevice& device, const BenchScene& bench, const B
     }
     try {
       result.rows.push_back(variant->orbit_views > 0 ? run_views_variant(device, scene, *variant, reference)
-                                                     : run_variant(device, scene, *variant, settings.frames, reference));
+                                                     : run_variant(device, scene, *variant, settings.frames, reference_scene, reference));
     } catch (const DeviceLostError&) {
       throw;  // nothing more can run on it
     } catch (const GpuError& error) {  // e.g. a workgroup shape or loop count this device lacks

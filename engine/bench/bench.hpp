@@ -30,6 +30,9 @@ struct BenchVariant {
   // OpenEXR files in one run (engine/views), writing overlapped with rendering; its time is the
   // whole run's wall time a view, its error the first view's. Run only where named (--variants).
   uint32_t orbit_views = 0;
+  // Outputs beside depth and normal (the camera, id and surface outputs): what each costs beside
+  // the default, and its error against the reference's. Run only where named (--variants).
+  AovSet extra_outputs = AovSet{};
 };
 
 // Every variant, by name: the default (what `vkray render` does) first, then one change each, then
@@ -53,6 +56,7 @@ struct BenchRow {
   double mrays_per_s = 0.0;         // pixels / median GPU time
   uint64_t unfinished_rays = 0;     // finished on the CPU (loop budget), last frame
   FrameError error;                 // last frame against the reference
+  OutputErrors outputs;             // its extra outputs against the reference's (BenchVariant::extra_outputs)
   bool pareto = false;              // on the Pareto front of its scene (see mark_pareto_front)
 };
 

@@ -57,6 +57,14 @@ const RowField row_fields[] = {
     {"normal_deg_p99", [](BenchRow& r) -> FieldRef { return &r.error.normal_deg_p99; }},
     {"normal_deg_max", [](BenchRow& r) -> FieldRef { return &r.error.normal_deg_max; }},
     {"pareto", [](BenchRow& r) -> FieldRef { return &r.pareto; }},
+    // The extra outputs of a "+..." row (zeros elsewhere, and for the outputs it lacks).
+    {"outputs_compared", [](BenchRow& r) -> FieldRef { return &r.outputs.compared; }},
+    {"id_mismatches", [](BenchRow& r) -> FieldRef { return &r.outputs.id_mismatches; }},
+    {"planar_depth_rel_p99", [](BenchRow& r) -> FieldRef { return &r.outputs.planar_depth_p99; }},
+    {"position_rel_p99", [](BenchRow& r) -> FieldRef { return &r.outputs.position_p99; }},
+    {"barycentric_max", [](BenchRow& r) -> FieldRef { return &r.outputs.barycentric_max; }},
+    {"shading_normal_deg_p99", [](BenchRow& r) -> FieldRef { return &r.outputs.shading_normal_deg_p99; }},
+    {"texcoord_max", [](BenchRow& r) -> FieldRef { return &r.outputs.texcoord_max; }},
 };
 
 Json row_json(BenchRow row) {
@@ -122,6 +130,26 @@ std::string pareto_summary(const BenchSceneResult& scene) {
                    row->error.depth_p99, row->error.normal_deg_p99);
   }
   return text;
+}
+
+// The "+..." rows: each extra output's cost beside the default (whole frames on the host, readback
+// and the host's derivation included) and its error against the reference's.
+std::string outputs_summary(const BenchSceneResult& scene) {
+  const BenchRow* baseline = nullptr;
+  std::string lines;
+  for (const auto& row : scene.rows) {
+    if (row.variant == "default") baseline = &row;
+    if (!row.outputs.compared) continue;
+    lines += format("  %-16s %8.2f ms %+8.2f ms  ids %6zu off  planar %8.2e  P %8.2e  bary %8.2e  Ns %8.2e deg  uv %8.2e\n",
+                    row.variant.c_str(), row.frame_median_ms, baseline ? row.frame_median_ms - baseline->frame_median_ms : 0.0,
+                    row.outputs.id_mismatches, row.outputs.planar_depth_p99, row.outputs.position_p99,
+                    row.outputs.barycentric_max, row.outputs.shading_normal_deg_p99, row.outputs.texcoord_max);
+  }
+  if (lines.empty()) return "";
+  return format("%s: outputs beside depth and normal: frame time (host%s), then the error of each against the reference's "
+                "(relative p99s, max for weights and texture coordinates):\n",
+                short_name(scene.name, 24).c_str(), baseline ? ", and its difference from default's" : "") +
+         lines;
 }
 
 }  // namespace
@@ -201,6 +229,7 @@ std::string bench_table_rows(const BenchSceneResult& scene, bool wide) {
     }
   }
   text += pareto_summary(scene);
+  text += outputs_summary(scene);
   for (const auto& skipped : scene.skipped) text += scene.name + ": skipped " + skipped + "\n";
   return text;
 }

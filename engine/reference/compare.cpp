@@ -15,6 +15,53 @@ double angle_between(const glm::dvec3& a, const glm::dvec3& b) {
   return std::atan2(glm::length(glm::cross(a, b)), glm::dot(a, b));
 }
 
+OutputErrors measure_output_errors(const Frame& frame, const Frame& reference) {
+  OutputErrors errors;
+  const AovSet derived{Aov::planar_depth, Aov::position, Aov::camera_position, Aov::mesh_id, Aov::primitive_id,
+                       Aov::barycentric, Aov::shading_normal, Aov::texcoord};
+  errors.compared = (frame.aovs.bits() & derived.bits()) != 0;
+  if (!errors.compared) return errors;
+  const size_t pixels = frame.pixel_count();
+  auto at = [&](const std::vector<float>& planes, size_t components, size_t p) {
+    glm::dvec3 value(0.0);
+    for (size_t c = 0; c < components; ++c) value[static_cast<int>(c)] = planes[c * pixels + p];
+    return value;
+  };
+  std::vector<double> planar, position, shading;
+  for (size_t p = 0; p < pixels; ++p) {
+    if (!frame.hit(p) || !reference.hit(p)) continue;
+    const double depth = reference.depth[p];
+    if (!frame.planar_depth.empty()) {
+      planar.push_back(std::abs(frame.planar_depth[p] - reference.planar_depth[p]) / std::abs(double{reference.planar_depth[p]}));
+    }
+    for (const auto* planes : {&frame.position, &frame.camera_position}) {
+      if (planes->empty()) continue;
+      const auto& theirs = planes == &frame.position ? reference.position : reference.camera_position;
+      position.push_back(glm::distance(at(*planes, 3, p), at(theirs, 3, p)) / depth);
+    }
+    if (frame.mesh_id.empty()) continue;
+    if (frame.mesh_id[p] != reference.mesh_id[p] || frame.primitive_id[p] != reference.primitive_id[p]) {
+      ++errors.id_mismatches;
+      continue;
+    }
+    if (!frame.barycentric.empty()) {
+      const glm::dvec3 d = glm::abs(at(frame.barycentric, 2, p) - at(reference.barycentric, 2, p));
+      errors.barycentric_max = std::max({errors.barycentric_max, d.x, d.y});
+    }
+    if (!frame.texcoord.empty()) {
+      const glm::dvec3 d = glm::abs(at(frame.texcoord, 2, p) - at(reference.texcoord, 2, p));
+      errors.texcoord_max = std::max({errors.texcoord_max, d.x, d.y});
+    }
+    if (!frame.shading_normal.empty()) {
+      shading.push_back(angle_between(at(frame.shading_normal, 3, p), at(reference.shading_normal, 3, p)) * 180.0 / std::numbers::pi);
+    }
+  }
+  errors.planar_depth_p99 = percentile(planar, 0.99);
+  errors.position_p99 = percentile(position, 0.99);
+  errors.shading_normal_deg_p99 = percentile(shading, 0.99);
+  return errors;
+}
+
 FrameError measure_error(const Frame& frame, const std::vector<ReferenceHit>& reference) {
   FrameError error;
   error.pixels = frame.pixel_count();

@@ -29,6 +29,20 @@ struct FrameError {
   std::string summary() const;  // one line
 };
 
+// The outputs the host derives (camera, id and surface outputs: engine/frame.hpp) against the
+// reference's own (reference_frame), over the pixels where both hit; those of an output the frame
+// lacks stay 0. The surface outputs over the pixels where both name the same triangle.
+struct OutputErrors {
+  bool compared = false;
+  size_t id_mismatches = 0;             // pixels whose mesh or primitive id differs
+  double planar_depth_p99 = 0.0;        // relative
+  double position_p99 = 0.0;            // |P - P_ref| / depth, the world and camera positions alike
+  double barycentric_max = 0.0;         // absolute
+  double shading_normal_deg_p99 = 0.0;  // degrees
+  double texcoord_max = 0.0;            // absolute
+};
+OutputErrors measure_output_errors(const Frame& frame, const Frame& reference);
+
 // Angle between unit vectors in radians, via atan2(|a x b|, a.b): accurate for tiny angles, where
 // acos(a.b) is not.
 double angle_between(const glm::dvec3& a, const glm::dvec3& b);
