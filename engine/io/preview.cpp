@@ -53,15 +53,7 @@ std::array<PreviewRamp, 2> preview_ramps(Aov aov, DepthRange depths) {
       };
       return {brightened(1.0), brightened(outside_brightness)};
     }
-    case Aov::planar_depth:
-    case Aov::position:
-    case Aov::camera_position:
-    case Aov::mesh_id:
-    case Aov::primitive_id:
-    case Aov::barycentric:
-    case Aov::shading_normal:
-    case Aov::texcoord:
-    case Aov::hit: break;  // not previewed: the depth they come with stands for them
+    default: break;  // the other outputs are not previewed: the depth they come with stands for them
   }
   throw std::invalid_argument("no preview for " + AovSet{aov}.names());
 }
@@ -106,15 +98,7 @@ std::vector<uint8_t> preview_rgb(const Frame& frame, Aov aov) {
         }
       }
       break;
-    case Aov::planar_depth:
-    case Aov::position:
-    case Aov::camera_position:
-    case Aov::mesh_id:
-    case Aov::primitive_id:
-    case Aov::barycentric:
-    case Aov::shading_normal:
-    case Aov::texcoord:
-    case Aov::hit: break;  // preview_ramps refused them
+    default: break;  // the other outputs: preview_ramps refused them
   }
   return rgb;
 }
