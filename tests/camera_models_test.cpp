@@ -1,5 +1,6 @@
-// Cameras as vision code gives them: OpenCV's intrinsics in pixels and its world-to-camera matrix
-// (engine/scene/camera.hpp), on the device and in the reference.
+// Cameras as vision code gives them: OpenCV's intrinsics in pixels and its world-to-camera matrix,
+// orthographic and equirectangular ones (engine/scene/camera.hpp), on the device and in the
+// reference; and one renderer serving cameras near and far with different outputs.
 #include "engine/reference/reference.hpp"
 #include "engine/scene/scene_loader.hpp"
 #include "tests/gpu_test_support.hpp"
@@ -152,6 +153,28 @@ TEST(CameraModels, MatricesThatAreNoRigidMotionAreRefused) {
   EXPECT_EQ(placed.from, glm::dvec3(0, 1, 5));
   EXPECT_EQ(placed.to, glm::dvec3(0, 1, 4));
   EXPECT_EQ(placed.up, glm::dvec3(0, 1, 0));
+}
+
+// A renderer keeps one pipeline per set of device outputs, lo parts (a camera near the scene) and
+// mode: renders that differ in only one of them must not share one. Near (lo parts) with depth
+// alone, then far with the ids (what each ray hit): the ids are a fresh renderer's.
+TEST(CameraModels, PipelinesApartForEveryOutputSetAndCameraDistance) {
+  const Scene scene = sized(default_scene(), 48, 36);
+  Camera near = scene.camera;
+  near.from = near.to + 0.2 * (near.from - near.to);  // among the objects, inside two radii: lo parts
+  Camera far = scene.camera;
+  far.from = far.to + 50.0 * (far.from - far.to);  // far outside them
+  const AovSet with_ids{Aov::depth, Aov::mesh_id, Aov::primitive_id};
+  Renderer shared(device(), scene);
+  shared.render(near, scene.width, scene.height, {Aov::depth});
+  const Frame after = shared.render(far, scene.width, scene.height, with_ids);
+  Renderer fresh(device(), scene);
+  const Frame alone = fresh.render(far, scene.width, scene.height, with_ids);
+  EXPECT_EQ(after.mesh_id, alone.mesh_id);
+  EXPECT_EQ(after.primitive_id, alone.primitive_id);
+  size_t hits = 0;
+  for (const uint32_t id : alone.mesh_id) hits += id != no_object;
+  EXPECT_GT(hits, 0u);
 }
 
 }  // namespace

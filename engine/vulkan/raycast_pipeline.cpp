@@ -67,7 +67,9 @@ RaycastPipeline::RaycastPipeline(VulkanContext& context, PipelineSpecialization 
 
 const vk::raii::Pipeline& RaycastPipeline::pipeline(AovSet aovs, bool lo_parts, RaycastMode mode, double& created_ms) {
   created_ms = 0.0;
-  const uint32_t key = aovs.bits() | (lo_parts ? 256u : 0u) | static_cast<uint32_t>(mode) * 512u;
+  // The output bits in the low word, then the lo parts and the mode above every output's bit (Aov::hit
+  // is 256, where the lo parts once were: two different pipelines shared a key).
+  const uint64_t key = uint64_t{aovs.bits()} | (uint64_t{lo_parts} << 32) | (uint64_t{static_cast<uint32_t>(mode)} << 33);
   if (auto found = pipelines_.find(key); found != pipelines_.end()) return found->second;
 
   const auto start = std::chrono::steady_clock::now();

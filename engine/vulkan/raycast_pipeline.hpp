@@ -78,7 +78,7 @@ class RaycastPipeline {
   vk::raii::ShaderModule shader_{nullptr};
   vk::raii::DescriptorPool pool_{nullptr};
   vk::raii::DescriptorSet set_{nullptr};
-  std::map<uint32_t, vk::raii::Pipeline> pipelines_;  // by AovSet bits, 256 with the lo parts, the mode times 512
+  std::map<uint64_t, vk::raii::Pipeline> pipelines_;  // by AovSet bits, bit 32 the lo parts, the mode from bit 33
 };
 
 }  // namespace vkray
