@@ -2,6 +2,7 @@
 // exactly one leaf, boxes that hold their subtrees, children after parents, depth within the
 // shader's stack), and the double-precision reference finds, through its tree, exactly what brute
 // force over every triangle finds: the same triangle and the same bits of t on every pixel.
+#include "engine/render/gpu_scene.hpp"
 #include "engine/scene/bvh.hpp"
 #include "engine/scene/camera.hpp"
 #include "engine/scene/mesh_generators.hpp"
@@ -320,6 +321,29 @@ void expect_tree_matches_brute_force(const Scene& scene, const std::vector<Camer
   EXPECT_EQ(check.mismatches, 0u) << check.mismatches << " of " << check.pixels << " pixels differ" << check.first_mismatches;
   EXPECT_GE(double(check.hits), min_hit_fraction * double(check.pixels)) << "the cameras must see the mesh";
   std::printf("    %zu pixels, %zu hits\n", check.pixels, check.hits);
+}
+
+// Brute force only for a handful of spheres where the packet walk runs (gpu_scene.cpp, choose_search:
+// it beats brute force from one triangle on), for a handful of any primitive where walks are per ray.
+TEST(SearchChoice, PacketWalkTakesTheTreeFromOneTriangle) {
+  EXPECT_EQ(choose_search(1, 0, true), PrimitiveSearch::bvh_per_ray);
+  EXPECT_EQ(choose_search(1, 8, true), PrimitiveSearch::bvh_per_ray);
+  EXPECT_EQ(choose_search(0, 8, true), PrimitiveSearch::brute_force);
+  EXPECT_EQ(choose_search(0, 9, true), PrimitiveSearch::bvh_per_ray);
+  EXPECT_EQ(choose_search(1, 0, false), PrimitiveSearch::brute_force);
+  EXPECT_EQ(choose_search(8, 0, false), PrimitiveSearch::brute_force);
+  EXPECT_EQ(choose_search(9, 0, false), PrimitiveSearch::bvh_per_ray);
+
+  Scene scene;
+  scene.meshes.push_back(Mesh{});
+  scene.meshes[0].positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+  scene.meshes[0].triangles = {{0u, 1u, 2u}};
+  GpuSceneOptions options;
+  options.packet_walk = true;
+  EXPECT_EQ(plan_gpu_scene(scene, options).search, PrimitiveSearch::bvh_packet);
+  EXPECT_EQ(make_gpu_scene(scene, options, ShaderVariant{}).search, PrimitiveSearch::bvh_packet);
+  options.packet_walk = false;
+  EXPECT_EQ(plan_gpu_scene(scene, options).search, PrimitiveSearch::brute_force);
 }
 
 TEST(ReferenceTree, MatchesBruteForceOnUniformSoup) {

@@ -224,10 +224,10 @@ TEST(GpuRenderer, FirstPipelineMadeBesideTheUploadRendersTheSame) {
   Scene dropped = sized(default_scene(), 48, 36);
   dropped.meshes.clear();
   dropped.spheres.clear();
-  Mesh mesh;  // 9 triangles planned, a tree; 5 of them zero-area
+  Mesh mesh;  // 9 triangles planned, a tree; all of them zero-area, so none is built
   for (int k = 0; k < 9; ++k) {
     const double x = k - 4.0;
-    mesh.positions.insert(mesh.positions.end(), {{x, 0, 0}, {x + 0.8, 0, 0}, {x, k < 4 ? 0.8 : 0.0, 0}});
+    mesh.positions.insert(mesh.positions.end(), {{x, 0, 0}, {x + 0.8, 0, 0}, {x + 0.4, 0, 0}});
     mesh.triangles.push_back({3u * k, 3u * k + 1, 3u * k + 2});
   }
   dropped.meshes.push_back(mesh);

@@ -14,7 +14,7 @@
 namespace vkray {
 
 // How the shader finds the nearest triangle or sphere. automatic: brute force for a handful of
-// them, the BVH per ray beyond (see choose_search). Planes are infinite and always tested one by one.
+// them, the BVH beyond (see choose_search). Planes are infinite and always tested one by one.
 enum class PrimitiveSearch : uint32_t {
   automatic,
   brute_force,
@@ -128,8 +128,9 @@ std::optional<PrimitiveSearch> traversal_from_name(std::string_view name);
 // The shader's VKRAY_SEARCH_* for `search` (never automatic).
 uint32_t search_mode(PrimitiveSearch search);
 
-// brute_force for scenes of a handful of triangles and spheres, bvh_per_ray otherwise.
-PrimitiveSearch choose_search(size_t triangle_count, size_t sphere_count);
+// brute_force for scenes of a handful of triangles and spheres, bvh_per_ray otherwise; with
+// `packet_walk` (the renderer favours it) a tree for any triangle.
+PrimitiveSearch choose_search(size_t triangle_count, size_t sphere_count, bool packet_walk = false);
 
 // What make_gpu_scene will build for `scene`, as far as it can be known without building it (see
 // GpuSceneShape): every triangle counted as kept, the tree shallow enough for the packet walk.
