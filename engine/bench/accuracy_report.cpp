@@ -10,11 +10,15 @@
 namespace vkray {
 namespace {
 
+// printf into a string of whatever length it takes (a fixed buffer cut the goals paragraph short).
 std::string format(const char* pattern, ...) {
-  char text[512];
-  va_list args;
+  va_list args, measured;
   va_start(args, pattern);
-  std::vsnprintf(text, sizeof text, pattern, args);
+  va_copy(measured, args);
+  const int length = std::vsnprintf(nullptr, 0, pattern, measured);
+  va_end(measured);
+  std::string text(static_cast<size_t>(std::max(length, 0)), '\0');
+  std::vsnprintf(text.data(), text.size() + 1, pattern, args);
   va_end(args);
   return text;
 }
