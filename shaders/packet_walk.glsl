@@ -27,9 +27,9 @@
 #include "gpu_layout.h"
 #include "primitives.glsl"
 
-// The device's subgroup size where it is 8 (lavapipe on 256-bit vectors), else 0: with 8, the vote
-// and minimum over a packet are made of constant-lane broadcasts, which llvmpipe 25 runs as vector
-// shuffles, where its subgroupAny and subgroupMin loop over the lanes.
+// The device's subgroup size where it is 8 (lavapipe on 256-bit vectors), else 0: with 8, the
+// bitwise or and the minimum over a packet are made of constant-lane broadcasts, which llvmpipe 25
+// runs as vector shuffles, where its subgroupOr and subgroupMin loop over the lanes.
 layout(constant_id = VKRAY_SPEC_SUBGROUP_SIZE) const uint SUBGROUP_SIZE = 0;
 
 uint packet_or(uint v) {
@@ -37,8 +37,6 @@ uint packet_or(uint v) {
   return ((subgroupBroadcast(v, 0u) | subgroupBroadcast(v, 1u)) | (subgroupBroadcast(v, 2u) | subgroupBroadcast(v, 3u))) |
          ((subgroupBroadcast(v, 4u) | subgroupBroadcast(v, 5u)) | (subgroupBroadcast(v, 6u) | subgroupBroadcast(v, 7u)));
 }
-
-bool packet_any(bool value) { return packet_or(value ? 1u : 0u) != 0u; }
 
 float packet_min(float value) {
   if (SUBGROUP_SIZE != 8u) return subgroupMin(value);
@@ -48,13 +46,8 @@ float packet_min(float value) {
                                select_min(subgroupBroadcast(value, 6u), subgroupBroadcast(value, 7u))));
 }
 
-float packet_max(float value) {
-  if (SUBGROUP_SIZE != 8u) return subgroupMax(value);
-  return max(max(max(subgroupBroadcast(value, 0u), subgroupBroadcast(value, 1u)),
-                 max(subgroupBroadcast(value, 2u), subgroupBroadcast(value, 3u))),
-             max(max(subgroupBroadcast(value, 4u), subgroupBroadcast(value, 5u)),
-                 max(subgroupBroadcast(value, 6u), subgroupBroadcast(value, 7u))));
-}
+// Exact: negation is, and the minimum of the negated values is the negated maximum.
+float packet_max(float value) { return -packet_min(-value); }
 
 vec3 packet_min(vec3 value) { return vec3(packet_min(value.x), packet_min(value.y), packet_min(value.z)); }
 vec3 packet_max(vec3 value) { return vec3(packet_max(value.x), packet_max(value.y), packet_max(value.z)); }
