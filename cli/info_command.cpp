@@ -34,18 +34,20 @@ Action add_info_command(CLI::App& app) {
               << "  subgroup size              " << d.subgroup_size << '\n'
               << "  timestamps                 "
               << (d.timestamp_period_ns > 0.0 ? std::to_string(d.timestamp_period_ns) + " ns per tick" : "none") << '\n'
-              << "  shaderFloat64              " << (d.shader_float64 ? "yes" : "no") << '\n'
-              << "  --transfer auto            "
-              << (d.main_memory_host_visible ? "direct (its main memory is host-visible)"
-                                             : "staging (its main memory is not host-visible)")
-              << '\n'
+              << "  shaderFloat64              " << (d.shader_float64 ? "yes" : "no")
+              << (d.fast_float64 ? " (fast: triangle edge functions in double)" : "") << '\n'
+              << "  --transfer auto            " << (automatic_transfer(d).mode == TransferMode::direct ? "direct" : "staging")
+              << " (" << automatic_transfer(d).reason << ")\n"
+              << "  transfer as opened         " << GpuDevice(std::to_string(chosen)).transfer_description() << '\n'
               << "  ray queries                "
               << (d.ray_query ? "yes (--traversal ray-query)" : "no") << '\n'
               << "  tree walk                  "
               << (d.favours_packet_walk ? "packets of 8x8 camera rays (llvmpipe from Mesa 25 on)" : "per ray") << '\n';
+    std::cout << "  Vulkan loader              " << vulkan_loader_description() << '\n';
     const std::filesystem::path cache = pipeline_cache_folder();
     std::cout << "  pipeline cache folder      "
               << (cache.empty() ? std::string("none (VKRAY_CACHE_DIR=off)") : cache.string()) << '\n';
+    if (!d.overridden.empty()) std::cout << "  described as overridden by VKRAY_DEVICE_OVERRIDE=" << d.overridden << '\n';
     print_cpu_device_note(d);
     const GeometryLayout layout;
     std::cout << "\ngeometry on the device, bytes (render --timings gives a scene's bytes a triangle)\n"

@@ -359,9 +359,7 @@ class PyRenderer {
     dict["readback_ms"] = t.readback_ms;
     dict["rays_ms"] = t.rays_ms;
     if (t.given_walk != GivenRayWalk::none) {
-      dict["rays_walk"] = t.given_walk == GivenRayWalk::one_by_one         ? "one by one"
-                          : t.given_walk == GivenRayWalk::packets_in_place ? "packets in place"
-                                                                           : "packets by direction";
+      dict["rays_walk"] = given_ray_walk_name(t.given_walk);
     }
     dict["dispatches"] = t.tiles;
     dict["cpu_finished_rays"] = t.unfinished_rays;

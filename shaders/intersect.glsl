@@ -167,16 +167,20 @@ float intersect_sphere_naive(vec3 f, float radius, vec3 dir, float t_max, out ve
   return (t > 0.0 && t < t_max) ? t : t_max;
 }
 
+// Every result that reaches an output is `precise` (here and in the other tests): the same pixel
+// must get the same bits from every pipeline that computes it (workgroup shapes, the generic and
+// storage-geometry variants; tests/shader_variant_test.cpp), and a compiler may otherwise fuse a
+// product and a sum into an FMA in one pipeline and not in another.
 float intersect_sphere(vec3 f_hi, vec3 f_lo, float r_hi, float r_lo, vec3 dir, float t_max, out vec3 normal) {
   if (SPHERE_FORMULA == VKRAY_SPHERE_NAIVE) return intersect_sphere_naive(f_hi + f_lo, r_hi, dir, t_max, normal);
   normal = vec3(0.0);
-  float a = dot(dir, dir);
+  precise float a = dot(dir, dir);
   vec3 f = f_hi + f_lo;
-  float ff = dot(f, f);
-  float rr = r_hi * r_hi;
-  float b = dot(f, dir);
-  vec3 f_perp = f - (b / a) * dir;
-  float disc = rr - dot(f_perp, f_perp);
+  precise float ff = dot(f, f);
+  precise float rr = r_hi * r_hi;
+  precise float b = dot(f, dir);
+  precise vec3 f_perp = f - (b / a) * dir;
+  precise float disc = rr - dot(f_perp, f_perp);
   // Misses first, cheaply: this f_perp is within ~11 eps |f| of the exact one, so its square within
   // ~21 eps |f|^2, and the roundings of disc add ~3 eps (|f|^2 + r^2). Below -32 eps (|f|^2 + r^2)
   // (eps = 2^-24) no ray can hit.
@@ -197,7 +201,8 @@ float intersect_sphere(vec3 f_hi, vec3 f_lo, float r_hi, float r_lo, vec3 dir, f
     c = ff - rr;
   } else {
     c = sphere_c(f_hi, f_lo, r_hi, r_lo);
-    if (b * b < a * rr) {
+    precise float b_squared = b * b, a_rr = a * rr;
+    if (b_squared < a_rr) {
       float sum, error;
       dot2(f_hi, dir, sum, error);
       b = sum + (error + dot(f_lo, dir));
@@ -205,8 +210,8 @@ float intersect_sphere(vec3 f_hi, vec3 f_lo, float r_hi, float r_lo, vec3 dir, f
     }
   }
   if (disc < 0.0) return t_max;
-  float root = sqrt(a * disc);
-  float q = -(b + (b >= 0.0 ? root : -root));
+  precise float root = sqrt(a * disc);
+  precise float q = -(b + (b >= 0.0 ? root : -root));
   if (q == 0.0) return t_max;  // origin on the surface and tangent ray: no hit in front
   float t0 = c / q;
   float t1 = q / a;
@@ -216,7 +221,7 @@ float intersect_sphere(vec3 f_hi, vec3 f_lo, float r_hi, float r_lo, vec3 dir, f
   // The hit relative to the centre: for a sphere far away f_perp -+ sqrt(disc / a) dir (minus for
   // the near root), not f + t dir, a difference of two vectors as long as the distance; near, f + t
   // dir is within ~10 eps r.
-  vec3 offset = far ? f_perp + ((near ? -root : root) / a) * dir : f + t * dir;
+  precise vec3 offset = far ? f_perp + ((near ? -root : root) / a) * dir : f + t * dir;
   normal = (near ? offset : -offset) / r_hi;  // facing the ray (see above)
   return (t > 0.0 && t < t_max) ? t : t_max;
 }
@@ -225,20 +230,21 @@ float intersect_sphere(vec3 f_hi, vec3 f_lo, float r_hi, float r_lo, vec3 dir, f
 
 double intersect_sphere(dvec3 f, double radius, dvec3 dir, double t_max, out dvec3 normal) {
   normal = dvec3(0.0);
-  double a = dot(dir, dir);
-  double b = dot(f, dir);
-  dvec3 f_perp = f - (b / a) * dir;
-  double disc = radius * radius - dot(f_perp, f_perp);
+  precise double a = dot(dir, dir);
+  precise double b = dot(f, dir);
+  precise dvec3 f_perp = f - (b / a) * dir;
+  precise double disc = radius * radius - dot(f_perp, f_perp);
   if (disc < 0.0) return t_max;
-  double c = dot(f, f) - radius * radius;
-  double root = sqrt(a * disc);
-  double q = -(b + (b >= 0.0 ? root : -root));
+  precise double c = dot(f, f) - radius * radius;
+  precise double root = sqrt(a * disc);
+  precise double q = -(b + (b >= 0.0 ? root : -root));
   if (q == 0.0) return t_max;
   double t0 = c / q;
   double t1 = q / a;
   bool near = min(t0, t1) > 0.0;
   double t = near ? min(t0, t1) : max(t0, t1);
-  normal = (near ? 1.0 : -1.0) * (f + t * dir) / radius;
+  precise dvec3 offset = f + t * dir;
+  normal = (near ? 1.0 : -1.0) * offset / radius;
   return (t > 0.0 && t < t_max) ? t : t_max;
 }
 
@@ -249,7 +255,7 @@ double intersect_sphere(dvec3 f, double radius, dvec3 dir, double t_max, out dve
 // ray origin along n (the host computes it per render in double: GpuPlane). A ray parallel to the
 // plane (n.d == 0) never hits it, which the explicit test states instead of relying on inf/NaN.
 real intersect_plane(real3 normal, real height, real3 dir, real t_max) {
-  real denom = dot(normal, dir);
+  precise real denom = dot(normal, dir);
   if (denom == 0.0) return t_max;
   real t = height / denom;
   return (t > 0.0 && t < t_max) ? t : t_max;
@@ -358,7 +364,7 @@ real intersect_triangle(RayFrame frame, real3 dir, real3 v0, real3 v1, real3 v2,
   real u = uvw.x, v = uvw.y, w = uvw.z;
   real det = u + v + w;
   if (det == 0.0) return t_max;  // ray in the triangle's plane, or a degenerate projection
-  real t = frame.shear.z * (u * a.z + v * b.z + w * c.z) / det;
+  precise real t = frame.shear.z * (u * a.z + v * b.z + w * c.z) / det;
   return (t > 0.0 && t < t_max) ? t : t_max;
 }
 

@@ -3,11 +3,12 @@
 // Writes the requested outputs (depth, normal, uv, and what each ray hit: WRITE_HIT) for one tile
 // of rows of the image into buffers, or one output into a storage image (IMAGE_TARGET, the
 // viewer's frame); or traces rays the caller gave (RAY_INPUT), writing depth, normal and what each
-// hit, or directions the caller gave from one origin. Compiled five times: float32;
-// float32 with VKRAY_DOUBLE_EDGES defined (triangle edge functions from exact double products, for
-// CPU devices: see intersect.glsl); each of those two with VKRAY_STORAGE_GEOMETRY (geometry in
-// storage buffers, not texel buffers: see primitives.glsl); and float64 with VKRAY_FLOAT64 defined
-// (`--precision double`), which writes depth and normals as doubles.
+// hit, or directions the caller gave from one origin. Compiled seven times (shaders/CMakeLists.txt):
+// float32; float32 with VKRAY_DOUBLE_EDGES defined (triangle edge functions from exact double
+// products, for CPU devices: see intersect.glsl); each of those two with VKRAY_STORAGE_GEOMETRY
+// (geometry in storage buffers, not texel buffers: see primitives.glsl) and with VKRAY_RAY_QUERY
+// (the device's acceleration structures: ray_query_walk.glsl); and float64 with VKRAY_FLOAT64
+// defined (`--precision double`), which writes depth and normals as doubles.
 #extension GL_GOOGLE_include_directive : require
 #extension GL_KHR_shader_subgroup_arithmetic : require
 
@@ -162,32 +163,45 @@ void main() {
     if (!WRITE_DEPTH && !WRITE_NORMAL) continue;
 
     // A GpuRay is two points; lanes past the last ray read the first (their t_max is 0). float32
-    // shaders take the direction rounded to float, as a camera's.
-    Point ray_origin = fetch_point(rays_in, GIVEN_ORIGINS && inside[r] ? 2 * int(ray_index) : 0);
+    // shaders take the direction rounded to float, as a camera's. The rays' buffer is read only
+    // where rays are given: for a camera it is a 16-byte placeholder, which a driver that keeps a
+    // dead read (of a storage buffer, in the storage-geometry variant) would read past.
 #ifdef VKRAY_FLOAT64
-    Point ray_direction = fetch_point(rays_in, RAY_INPUT && inside[r] ? 2 * int(ray_index) + 1 : 1);
-    dvec3 camera[4];  // origin, right, up, forward_scaled
-    for (int k = 0; k < 4; ++k) {
-      uvec4 first = params.camera[(3 * k) / 2];
-      uvec4 second = params.camera[(3 * k + 2) / 2];
-      uvec2 x = k % 2 == 0 ? first.xy : first.zw;
-      uvec2 y = k % 2 == 0 ? first.zw : second.xy;
-      uvec2 z = k % 2 == 0 ? second.xy : second.zw;
-      camera[k] = dvec3(packDouble2x32(x), packDouble2x32(y), packDouble2x32(z));
+    if (RAY_INPUT) {
+      origin = Origin(fetch_point(rays_in, inside[r] ? 2 * int(ray_index) : 0).value.xyz);
+      dirs[r] = fetch_point(rays_in, inside[r] ? 2 * int(ray_index) + 1 : 1).value.xyz;
+    } else {
+      dvec3 camera[4];  // origin, right, up, forward_scaled
+      for (int k = 0; k < 4; ++k) {
+        uvec4 first = params.camera[(3 * k) / 2];
+        uvec4 second = params.camera[(3 * k + 2) / 2];
+        uvec2 x = k % 2 == 0 ? first.xy : first.zw;
+        uvec2 y = k % 2 == 0 ? first.zw : second.xy;
+        uvec2 z = k % 2 == 0 ? second.xy : second.zw;
+        camera[k] = dvec3(packDouble2x32(x), packDouble2x32(y), packDouble2x32(z));
+      }
+      origin = Origin(camera[0]);
+      precise dvec3 toward = double(uv_numerator.x) / shorter * camera[1] + double(uv_numerator.y) / shorter * camera[2] +
+                             camera[3];
+      dirs[r] = normalize(toward);
     }
-    origin = Origin(RAY_INPUT ? ray_origin.value.xyz : camera[0]);
-    dirs[r] = RAY_INPUT ? ray_direction.value.xyz
-                        : normalize(double(uv_numerator.x) / shorter * camera[1] +
-                                    double(uv_numerator.y) / shorter * camera[2] + camera[3]);
 #else
-    Point ray_direction = GIVEN_ORIGINS ? fetch_point_hi(rays_in, inside[r] ? 2 * int(ray_index) + 1 : 1)
-                                        : Point(FETCH(rays_in, inside[r] ? int(ray_index) : 0), vec4(0.0));
-    origin = GIVEN_ORIGINS ? Origin(ray_origin.hi.xyz, ray_origin.lo.xyz)
-                           : Origin(uintBitsToFloat(params.camera[0].xyz),
-                                    use_lo_parts ? uintBitsToFloat(params.camera[1].xyz) : vec3(0.0));
-    dirs[r] = RAY_INPUT ? ray_direction.hi.xyz
-                        : normalize(uv.x * uintBitsToFloat(params.camera[2].xyz) + uv.y * uintBitsToFloat(params.camera[3].xyz) +
-                                    uintBitsToFloat(params.camera[4].xyz));
+    if (GIVEN_ORIGINS) {
+      Point ray_origin = fetch_point(rays_in, inside[r] ? 2 * int(ray_index) : 0);
+      origin = Origin(ray_origin.hi.xyz, ray_origin.lo.xyz);
+      dirs[r] = fetch_point_hi(rays_in, inside[r] ? 2 * int(ray_index) + 1 : 1).hi.xyz;
+    } else {
+      origin = Origin(uintBitsToFloat(params.camera[0].xyz), use_lo_parts ? uintBitsToFloat(params.camera[1].xyz) : vec3(0.0));
+      if (RAY_INPUT) {
+        dirs[r] = FETCH(rays_in, inside[r] ? int(ray_index) : 0).xyz;
+      } else {
+        // `precise`: the ray must be the same bits in every pipeline that renders this pixel (the
+        // workgroup shapes, the generic variant), so no compiler may fuse these products differently.
+        precise vec3 toward = uv.x * uintBitsToFloat(params.camera[2].xyz) + uv.y * uintBitsToFloat(params.camera[3].xyz) +
+                              uintBitsToFloat(params.camera[4].xyz);
+        dirs[r] = normalize(toward);
+      }
+    }
 #endif
     real3 dir = dirs[r];
 

@@ -31,16 +31,15 @@ const char* name_of(PrimitiveSearch search) {
 }
 
 using Searches = std::vector<PrimitiveSearch>;
-// The tree walks, and the device's structures where it has ray queries (see ray_queries()).
-Searches with_structures(Searches searches) {
-  if (ray_queries()) searches.push_back(PrimitiveSearch::ray_query);
-  return searches;
-}
+// The tree walks, and the device's structures, as far as the device runs them (runnable()).
 // Functions, not globals: asked inside a test, so listing the tests (gtest_discover_tests at build
 // time) never opens the device.
-Searches tree_walks() { return with_structures({PrimitiveSearch::bvh_per_ray, PrimitiveSearch::bvh_packet}); }
+Searches tree_walks() {
+  return runnable({PrimitiveSearch::bvh_per_ray, PrimitiveSearch::bvh_packet, PrimitiveSearch::ray_query});
+}
 Searches all_searches() {
-  return with_structures({PrimitiveSearch::brute_force, PrimitiveSearch::bvh_per_ray, PrimitiveSearch::bvh_packet});
+  return runnable({PrimitiveSearch::brute_force, PrimitiveSearch::bvh_per_ray, PrimitiveSearch::bvh_packet,
+                   PrimitiveSearch::ray_query});
 }
 
 // Renders the scene's camera with `search` and checks that this search is what ran, that the GPU

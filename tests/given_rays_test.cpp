@@ -103,9 +103,8 @@ void expect_given_rays_match_reference(const Scene& scene, RendererOptions optio
 // the tree one by one. Ray queries, where the device has them, in float32 (their only precision).
 TEST(GivenRays, DefaultSceneInEverySearchAndPrecision) {
   const Scene scene = sized(default_scene(), 64, 48);
-  std::vector<PrimitiveSearch> searches = {PrimitiveSearch::brute_force, PrimitiveSearch::bvh_per_ray, PrimitiveSearch::bvh_packet};
-  if (ray_queries()) searches.push_back(PrimitiveSearch::ray_query);
-  for (const PrimitiveSearch search : searches) {
+  for (const PrimitiveSearch search : runnable({PrimitiveSearch::brute_force, PrimitiveSearch::bvh_per_ray,
+                                                PrimitiveSearch::bvh_packet, PrimitiveSearch::ray_query})) {
     for (const Precision precision : {Precision::float32, Precision::float64}) {
       const bool float32_only = search == PrimitiveSearch::bvh_packet || search == PrimitiveSearch::ray_query;
       if (float32_only && precision == Precision::float64) continue;
@@ -163,7 +162,7 @@ TEST(GivenRays, LargeWorldCoordinates) {
 TEST(GivenRays, RaysBeyondTheLoopBudgetAreFinished) {
   Scene scene = sized(default_scene(), 24, 18);
   scene.meshes.push_back(quad_grid({-3, 0.01, -3}, {6, 0, 0}, {0, 0, 6}, 20));
-  for (const PrimitiveSearch search : {PrimitiveSearch::bvh_per_ray, PrimitiveSearch::bvh_packet}) {
+  for (const PrimitiveSearch search : runnable({PrimitiveSearch::bvh_per_ray, PrimitiveSearch::bvh_packet})) {
     RendererOptions options;
     options.loop_budget = 3;
     options.scene.search = search;

@@ -1,9 +1,9 @@
 // Rendering on the test machine's Vulkan device and checking the frame against the double-precision
-// reference within the error envelope (tests/reference_envelope.hpp). Shared by the GPU tests.
+// reference within the error envelope (engine/reference/envelope.hpp). Shared by the GPU tests.
 #pragma once
 
 #include "engine/render/renderer.hpp"
-#include "tests/reference_envelope.hpp"
+#include "engine/reference/envelope.hpp"
 #include "tests/test_scenes.hpp"
 
 #include <gtest/gtest.h>
@@ -12,6 +12,9 @@
 #include <cstdlib>
 
 namespace vkray::test {
+
+using vkray::check_against_reference;
+using vkray::EnvelopeReport;
 
 inline GpuDevice& device() {
   static GpuDevice gpu;  // fails the test with GpuError when no Vulkan device exists
@@ -24,12 +27,32 @@ inline GpuDevice& device() {
 // leaving the traversal untested. A GPU without them (an H100 has no ray-tracing units) tests the rest.
 inline bool ray_queries() {
   const GpuDeviceInfo& info = device().info();
-  const bool required = std::getenv("VKRAY_REQUIRE_RAY_QUERY") != nullptr && info.type == "cpu";
+  const bool required = std::getenv("VKRAY_REQUIRE_RAY_QUERY") != nullptr && info.type == "cpu" && info.overridden.empty();
   if (required && !info.ray_query) {
     ADD_FAILURE() << info.name << " (" << info.driver << ") has no ray queries; Mesa 25's lavapipe has them "
                   << "(cmake/install-deps.sh installs it from bookworm-backports)";
   }
   return info.ray_query;
+}
+
+// The searches of `wanted` this device runs with `shader`, ray queries among them only where it has
+// them (ray_queries()). A GPU refuses the packet walk (it takes double edge functions, which only CPU
+// devices choose) and may lack ray queries: each search left out is printed with the device's reason,
+// so a GPU run tests everything else instead of failing.
+inline std::vector<PrimitiveSearch> runnable(const std::vector<PrimitiveSearch>& wanted, const ShaderVariant& shader = {}) {
+  std::vector<PrimitiveSearch> kept;
+  for (const PrimitiveSearch search : wanted) {
+    if (search == PrimitiveSearch::ray_query && !ray_queries()) {
+      std::printf("    not run here: traversal 'ray-query' (%s has no ray queries)\n", device().info().name.c_str());
+      continue;
+    }
+    if (const std::string obstacle = search_obstacle(search, device().info(), shader); !obstacle.empty()) {
+      std::printf("    not run here: traversal '%s' (%s)\n", traversal_name(search), obstacle.c_str());
+      continue;
+    }
+    kept.push_back(search);
+  }
+  return kept;
 }
 
 inline Frame render(const Scene& scene, AovSet aovs = {Aov::depth, Aov::normal}) {
@@ -47,7 +70,7 @@ inline Frame render(const Scene& scene, const ShaderVariant& shader) {
 
 enum class Percentiles { checked, ill_conditioned };
 
-// Every pixel within the envelope derived in reference_envelope.cpp. On ordinary views also the
+// Every pixel within the envelope derived in engine/reference/envelope.cpp. On ordinary views also the
 // acceptance bar of the issue: 99th percentiles of the relative depth error below 1e-5 and of the
 // normal error below 0.01 degrees. Views dominated by ill-conditioned pixels are held to the
 // envelope alone: there the exact answer moves by more than that within float32's direction

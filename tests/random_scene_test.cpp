@@ -2,7 +2,7 @@
 // cameras, each scene at a magnitude 10^U(-8, 8) (its positions, sizes and camera distances within
 // about three decades of it). Whatever the scene, the GPU writes no NaN, every depth is +inf or
 // positive and finite, every normal is unit or zero, and every pixel lies within the reference
-// envelope of the other GPU tests (tests/reference_envelope.cpp).
+// envelope of the other GPU tests (engine/reference/envelope.cpp).
 //
 // A second set draws the magnitude per primitive instead, from 10^U(-4, 4): a 1e-6 triangle may sit
 // beside a 1e4 sphere, and the camera looks at either. float32 relative to the scene's centre

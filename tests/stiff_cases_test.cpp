@@ -1,5 +1,5 @@
 // The numerically hard cases (engine/bench/stiff_cases.hpp), each a test: the default shader writes no
-// NaN and stays within the reference envelope (tests/reference_envelope.cpp) on every pixel; the
+// NaN and stays within the reference envelope (engine/reference/envelope.cpp) on every pixel; the
 // textbook variant the case is about (StiffCase::fails_with) leaves it, so the test would notice
 // the fix being undone. Cases no variant fails say why in StiffCase::why.
 #include "engine/bench/bench.hpp"

@@ -13,7 +13,7 @@ namespace vkray {
 namespace {
 
 bool validation_layer_installed() {
-  vk::raii::Context context;
+  vk::raii::Context context(vulkan_loader_entry());
   for (const auto& layer : context.enumerateInstanceLayerProperties()) {
     if (std::string_view(layer.layerName.data()) == "VK_LAYER_KHRONOS_validation") return true;
   }

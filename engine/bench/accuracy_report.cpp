@@ -105,7 +105,7 @@ std::string accuracy_markdown(const BenchReport& report, const std::string& comm
           "the same in float32 ulps of z_ref (a correctly rounded float32 is within 0.5). **normal**: angle in "
           "degrees, atan2(|n x m|, n.m) in double. **ms/frame**: median GPU time. The stiff cases are "
           "engine/bench/stiff_cases.cpp; each is also a test (tests/stiff_cases_test.cpp) that holds the default to the "
-          "error envelope of tests/reference_envelope.cpp and, where a textbook variant is named, shows that "
+          "error envelope of engine/reference/envelope.cpp and, where a textbook variant is named, shows that "
           "variant leaving it.\n\n";
 
   text += "## Summary: the default shader on the stiff cases\n\n";

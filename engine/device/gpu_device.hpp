@@ -34,12 +34,12 @@ class NoWindowError : public GpuError {
       : GpuError("cannot open a window: " + reason + "; 'vkray render' renders without one") {}
 };
 
-// How scene data reaches the device and results come back (`--transfer`). direct: the device
-// reads and writes memory the host maps; staging: through host buffers and copies on the device,
-// what discrete GPUs need, since their fast memory is not the host's. automatic: direct when the
-// largest device-local memory heap is also host-visible (integrated GPUs, lavapipe, resizable
-// BAR), staging otherwise; the environment variable VKRAY_TRANSFER (staging or direct) overrides
-// it, which is how the test suite runs every path on lavapipe.
+// How scene data reaches the device and results come back (`--transfer`). direct: the shaders'
+// buffers are memory the host maps (device-local where a type is also host-visible and coherent,
+// else host memory the device reads across the bus); staging: device-local buffers filled and read
+// through host buffers and copies on the device. automatic: see automatic_transfer; the environment
+// variable VKRAY_TRANSFER (staging or direct) overrides it, which is how the test suite runs every
+// path on lavapipe.
 enum class TransferMode { automatic, staging, direct };
 
 struct GpuDeviceInfo {
@@ -60,6 +60,11 @@ struct GpuDeviceInfo {
   uint32_t subgroup_size = 0;
   double timestamp_period_ns = 0.0;  // 0: the compute queue has no timestamps
   bool shader_float64 = false;
+  // Doubles cost the triangle test less than float's error-free fallback: CPU devices with
+  // shaderFloat64, and the GPUs measured so (data-centre GPUs that run doubles at half the float
+  // rate: an H200 took 0.63 against 0.68 ms for the bunny at 3840x2160 in `vkray report`; consumer
+  // GPUs run doubles at 1/32 to 1/64 of it). Chooses double edge functions (EdgeArithmetic).
+  bool fast_float64 = false;
   // Its largest device-local memory heap is also host-visible: TransferMode::automatic is direct.
   bool main_memory_host_visible = false;
   // Loop iterations a shader invocation may run before the driver silently stops it: llvmpipe
@@ -77,7 +82,19 @@ struct GpuDeviceInfo {
   bool ray_query = false;
   uint64_t max_structure_primitives = 0;
   uint32_t structure_scratch_alignment = 0;
+  // VKRAY_DEVICE_OVERRIDE as it changed this description (engine/vulkan/context.cpp); empty: as the driver says.
+  std::string overridden;
 };
+
+// What TransferMode::automatic takes on `device`, and why in a few words: direct where its main
+// memory is the host's (integrated GPUs, lavapipe) and host-visible, staging elsewhere, also on a
+// discrete GPU whose memory is host-visible (resizable BAR), since the host's reads of it are
+// uncached across the bus.
+struct TransferChoice {
+  TransferMode mode;
+  const char* reason;
+};
+TransferChoice automatic_transfer(const GpuDeviceInfo& device);
 
 // Every Vulkan device, in enumeration order. Throws GpuError when Vulkan itself is unavailable.
 std::vector<GpuDeviceInfo> list_gpu_devices();
@@ -93,6 +110,15 @@ size_t choose_gpu_device(const std::vector<GpuDeviceInfo>& devices, std::string_
 // seems present (a GPU device node without a Vulkan driver for it, or an NVIDIA container without
 // the graphics capability). Empty for any other device.
 std::string cpu_device_note(const GpuDeviceInfo& device);
+
+// The Vulkan loader in use, in words: its file and whether it is the machine's or a bundle's copy
+// (engine/vulkan/loader.hpp); "none (...)" where there is none.
+std::string vulkan_loader_description();
+
+// What to do when Vulkan lists no driver, in a sentence: where an NVIDIA driver's manifest lies
+// outside the loader's search path (a container's /usr/local/nvidia), point VK_DRIVER_FILES at it;
+// otherwise install one (lavapipe always works).
+std::string vulkan_driver_advice();
 
 // Where pipelines compiled by the driver are kept between runs (engine/vulkan/pipeline_cache.hpp):
 // VKRAY_CACHE_DIR when set ("off": nowhere), else $XDG_CACHE_HOME/vkray, else $HOME/.cache/vkray
@@ -118,6 +144,10 @@ class GpuDevice {
   const GpuDeviceInfo& info() const;
   // staging or direct, as chosen when the device opened.
   TransferMode transfer() const;
+  // That, and the memory type the shaders' buffers take: "staging (shaders' buffers in memory type 1: device-local)".
+  std::string transfer_description() const;
+  // Whether the Khronos validation layer checks this device's calls (VKRAY_VALIDATION).
+  bool validation() const;
   VulkanContext& vulkan() { return *context_; }
   // The device's pipeline cache file (empty: none), and how many bytes of it the driver was given
   // when the device opened (0: every pipeline is compiled from scratch).

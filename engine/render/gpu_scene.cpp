@@ -403,13 +403,25 @@ GpuSceneShape GpuScene::shape() const {
           tree_has_spheres};
 }
 
+namespace {
+constexpr std::pair<PrimitiveSearch, const char*> traversal_names[] = {
+    {PrimitiveSearch::automatic, "auto"},          {PrimitiveSearch::brute_force, "brute-force"},
+    {PrimitiveSearch::bvh_per_ray, "per-ray"},     {PrimitiveSearch::bvh_packet, "packet"},
+    {PrimitiveSearch::ray_query, "ray-query"}};
+}  // namespace
+
 std::optional<PrimitiveSearch> traversal_from_name(std::string_view name) {
-  if (name == "auto") return PrimitiveSearch::automatic;
-  if (name == "brute-force") return PrimitiveSearch::brute_force;
-  if (name == "per-ray") return PrimitiveSearch::bvh_per_ray;
-  if (name == "packet") return PrimitiveSearch::bvh_packet;
-  if (name == "ray-query") return PrimitiveSearch::ray_query;
+  for (const auto& [search, search_name] : traversal_names) {
+    if (name == search_name) return search;
+  }
   return std::nullopt;
+}
+
+const char* traversal_name(PrimitiveSearch search) {
+  for (const auto& [known, name] : traversal_names) {
+    if (known == search) return name;
+  }
+  return "?";
 }
 
 uint32_t search_mode(PrimitiveSearch search) {

@@ -124,6 +124,8 @@ glm::dvec3 scene_anchor(const Scene& scene);
 // The traversals by the names `--traversal` and Python's `traversal=` take; nothing for another name.
 inline constexpr const char* traversal_names_help = "auto, brute-force, per-ray, packet, ray-query";
 std::optional<PrimitiveSearch> traversal_from_name(std::string_view name);
+// The name traversal_from_name takes for `search`.
+const char* traversal_name(PrimitiveSearch search);
 
 // The shader's VKRAY_SEARCH_* for `search` (never automatic).
 uint32_t search_mode(PrimitiveSearch search);

@@ -84,11 +84,18 @@ size_t packet_order_index(size_t position) {
 }
 
 // One output of one tile: the buffer the shader writes and, where that buffer is not host-visible,
-// the buffer it is copied into for reading.
+// the buffer it is copied into for reading. A dispatch of n pixels writes its first
+// header_bytes + n * pixel_bytes (planes packed to the dispatch's rows, see raycast.comp): only
+// those are copied back (at 8K a whole normal buffer is 400 MB).
 struct OutputBuffer {
   GpuBuffer written;
   std::optional<GpuBuffer> readback;
+  vk::DeviceSize pixel_bytes = 0;
+  vk::DeviceSize header_bytes = 0;
   const void* host() const { return readback ? readback->mapped : written.mapped; }
+  vk::DeviceSize bytes_written(vk::DeviceSize pixels) const {
+    return std::min(written.size, header_bytes + pixels * pixel_bytes);
+  }
 };
 
 // Output buffers for tiles of `width` x `rows`, kept between renders of the same shape; with the
@@ -146,7 +153,8 @@ uint32_t tree_loop_budget(const GpuSceneShape& shape, const GpuDeviceInfo& devic
 std::string packet_walk_obstacle(const GpuDeviceInfo& device, const ShaderVariant& shader) {
   if (shader.precision != Precision::float32) return "the float64 shader walks the tree per ray";
   if (resolve_edges(device, shader.edges) != EdgeArithmetic::double_products) {
-    return "it takes its edge planes in double (a CPU device with shaderFloat64, double edge functions)";
+    return "it takes its edge planes in double (double edge functions: the automatic choice where the device runs "
+           "doubles fast; elsewhere asked for, where it has shaderFloat64)";
   }
   if (shader.generic) return "the generic shader walks the tree per ray";
   if (!shader.stack_in_registers) return "it keeps its stack in registers";
@@ -236,6 +244,32 @@ class DispatchSizer {
 
 }  // namespace
 
+const char* given_ray_walk_name(GivenRayWalk walk) {
+  switch (walk) {
+    case GivenRayWalk::one_by_one: return "one by one";
+    case GivenRayWalk::packets_in_place: return "packets in place";
+    case GivenRayWalk::packets_by_direction: return "packets by direction";
+    default: return "none";
+  }
+}
+
+std::string search_obstacle(PrimitiveSearch search, const GpuDeviceInfo& device, const ShaderVariant& shader) {
+  switch (search) {
+    case PrimitiveSearch::bvh_packet:
+      return packet_walk_obstacle(device, shader);
+    case PrimitiveSearch::ray_query:
+      if (!device.ray_query) {
+        return "it has no ray queries (VK_KHR_ray_query, VK_KHR_acceleration_structure and buffer device addresses)";
+      }
+      if (shader.precision != Precision::float32 || shader.storage_geometry || shader.generic) {
+        return "the ray-query traversal exists for the float32 shader, with texel buffers, specialized";
+      }
+      return {};
+    default:
+      return {};
+  }
+}
+
 struct Renderer::Impl {
   Impl(VulkanContext& vulkan_context, RendererOptions renderer_options)
       : context(vulkan_context), options(renderer_options) {}
@@ -293,10 +327,12 @@ struct Renderer::Impl {
     return std::min<vk::DeviceSize>(binding, context.info.max_allocation_bytes);
   }
 
-  OutputBuffer make_output(vk::DeviceSize bytes) {
+  // An output of `pixels` pixels of `pixel_bytes` each after `header_bytes`.
+  OutputBuffer make_output(vk::DeviceSize pixels, vk::DeviceSize pixel_bytes, vk::DeviceSize header_bytes = 0) {
+    const vk::DeviceSize bytes = header_bytes + pixels * pixel_bytes;
     OutputBuffer output{create_storage_buffer(context, bytes,
                                               vk::BufferUsageFlagBits::eTransferSrc | vk::BufferUsageFlagBits::eTransferDst),
-                        std::nullopt};
+                        std::nullopt, pixel_bytes, header_bytes};
     if (!output.written.mapped) output.readback = create_readback_buffer(context, bytes);
     return output;
   }
@@ -318,9 +354,9 @@ struct Renderer::Impl {
       tile = TileOutputs{width, rows, aovs.bits(), image_id, mode, {}, {}, {}, {}, {}, {}};
       const vk::DeviceSize pixels = vk::DeviceSize{width} * rows;
       if (!target) {
-        if (aovs.has(Aov::depth)) tile.depth = make_output(pixels * depth_bytes(precision()));
-        if (aovs.has(Aov::normal)) tile.normal = make_output(pixels * normal_bytes(precision()));
-        if (aovs.has(Aov::uv)) tile.uv = make_output(pixels * uv_bytes);
+        if (aovs.has(Aov::depth)) tile.depth = make_output(pixels, depth_bytes(precision()));
+        if (aovs.has(Aov::normal)) tile.normal = make_output(pixels, normal_bytes(precision()));
+        if (aovs.has(Aov::uv)) tile.uv = make_output(pixels, uv_bytes);
       }
       if (is_given(mode)) {
         const vk::DeviceSize bytes = pixels * given_ray_bytes(mode);
@@ -328,8 +364,8 @@ struct Renderer::Impl {
         tile.rays->floats = create_texel_view(context, tile.rays->buffer, vk::Format::eR32G32B32A32Sfloat);
         tile.rays->uints = create_texel_view(context, tile.rays->buffer, vk::Format::eR32G32B32A32Uint);
       }
-      if (is_given(mode) || (!target && aovs.has(Aov::hit))) tile.hits = make_output(pixels * sizeof(uint32_t));
-      if (stats.loop_budget > 0 && aovs.needs_rays()) tile.overflow = make_output((pixels + 1) * sizeof(uint32_t));
+      if (is_given(mode) || (!target && aovs.has(Aov::hit))) tile.hits = make_output(pixels, sizeof(uint32_t));
+      if (stats.loop_budget > 0 && aovs.needs_rays()) tile.overflow = make_output(pixels, sizeof(uint32_t), sizeof(uint32_t));
     }
     auto floats = [&](const std::optional<TexelBuffer>& texels) {
       return *(texels ? texels->floats : placeholder_texels.floats);
@@ -596,8 +632,9 @@ struct Renderer::Impl {
       for (const auto* output :
            {&tile.depth, &tile.normal, &tile.uv, &tile.overflow, &tile.hits, to_image ? &depth_range : nullptr}) {
         if (output && *output && (*output)->readback) {
-          commands.copyBuffer(*(*output)->written.buffer, *(*output)->readback->buffer,
-                              vk::BufferCopy(0, 0, (*output)->written.size));
+          const vk::DeviceSize bytes = (*output)->bytes_written(vk::DeviceSize{tile.width} * params.image.w);
+          commands.copyBuffer(*(*output)->written.buffer, *(*output)->readback->buffer, vk::BufferCopy(0, 0, bytes));
+          timings.readback_bytes += bytes;
           copied = true;
         }
       }
@@ -621,6 +658,52 @@ struct Renderer::Impl {
     ++timings.tiles;
     timings.longest_dispatch_ms = std::max(timings.longest_dispatch_ms, dispatch_ms);
     return dispatch_ms;
+  }
+
+  // The GPU time of `repeats` passes over a camera's whole image in one submission, back to back,
+  // with nothing read back: see Renderer::sustained_dispatch_ms.
+  double sustained_dispatch_ms(const Camera& camera, uint32_t width, uint32_t height, AovSet aovs, uint32_t repeats) {
+    uint32_t tile_rows = 0;
+    const vk::raii::Pipeline& chosen = begin_render(camera, width, height, aovs, nullptr, tile_rows);
+    const CameraBasis basis = make_camera_basis(camera, width, height);
+    std::vector<gpu::RayGenParams> tiles;
+    for (uint32_t first_row = 0; first_row < height; first_row += tile_rows) {
+      tiles.push_back(make_ray_gen_params(basis, anchor, precision(), width, height, first_row,
+                                          std::min(tile_rows, height - first_row), counts));
+    }
+    const vk::Extent2D group = workgroup_footprint(RaycastMode::image_buffers);
+    const auto submitted = Clock::now();
+    context.submit_and_wait([&](const vk::raii::CommandBuffer& commands) {
+      if (*timestamps) {
+        commands.resetQueryPool(*timestamps, 0, 2);
+        commands.writeTimestamp(vk::PipelineStageFlagBits::eTopOfPipe, *timestamps, 0);
+      }
+      // Each pass writes the outputs the last one wrote, and starts the list of unfinished rays
+      // anew (its count would otherwise run past the list's end).
+      const vk::MemoryBarrier written(vk::AccessFlagBits::eShaderWrite | vk::AccessFlagBits::eTransferWrite,
+                                      vk::AccessFlagBits::eShaderWrite | vk::AccessFlagBits::eShaderRead |
+                                          vk::AccessFlagBits::eTransferWrite);
+      const auto stages = vk::PipelineStageFlagBits::eComputeShader | vk::PipelineStageFlagBits::eTransfer;
+      for (uint32_t pass = 0; pass < repeats; ++pass) {
+        for (const gpu::RayGenParams& params : tiles) {
+          if (tile.overflow) {
+            commands.fillBuffer(*tile.overflow->written.buffer, 0, sizeof(uint32_t), 0u);
+            commands.pipelineBarrier(stages, stages, {}, written, {}, {});
+          }
+          pipeline->bind(commands, chosen, params);
+          commands.dispatch((width + group.width - 1) / group.width, (params.image.w + group.height - 1) / group.height, 1);
+          commands.pipelineBarrier(stages, stages, {}, written, {}, {});
+        }
+      }
+      if (*timestamps) commands.writeTimestamp(vk::PipelineStageFlagBits::eBottomOfPipe, *timestamps, 1);
+    });
+    double total_ms = elapsed_ms(submitted);
+    if (*timestamps) {
+      const auto [result, ticks] = timestamps.getResults<uint64_t>(
+          0, 2, 2 * sizeof(uint64_t), sizeof(uint64_t), vk::QueryResultFlagBits::e64 | vk::QueryResultFlagBits::eWait);
+      total_ms = static_cast<double>(ticks[1] - ticks[0]) * context.info.timestamp_period_ns * 1e-6;
+    }
+    return total_ms / repeats;
   }
 
   // Writes the pixels the CPU finished into `target`, after the shader's writes.
@@ -673,6 +756,13 @@ Renderer::Renderer(GpuDevice& device, const Scene& scene, RendererOptions option
   with_vulkan_errors("uploading the scene", [&] {
     const auto start = Clock::now();
     Impl& r = *impl_;
+    r.context.check_usable();
+    // A search asked for by name is refused before anything is built or uploaded (a ray-query
+    // upload asks for device features a device without them never enabled).
+    if (const std::string obstacle = search_obstacle(options.scene.search, r.context.info, options.shader); !obstacle.empty()) {
+      throw GpuError("traversal '" + std::string(traversal_name(options.scene.search)) + "' cannot run on " +
+                     r.context.info.name + ": " + obstacle);
+    }
     const std::string packet_obstacle = packet_walk_obstacle(r.context.info, options.shader);
     GpuSceneOptions scene_options = options.scene;
     scene_options.packet_walk = r.context.info.favours_packet_walk && packet_obstacle.empty();
@@ -702,9 +792,6 @@ Renderer::Renderer(GpuDevice& device, const Scene& scene, RendererOptions option
       }
     } joiner{early_creation};
     const GpuScene gpu_scene = make_gpu_scene(scene, scene_options, options.shader);
-    if (gpu_scene.search == PrimitiveSearch::bvh_packet && !packet_obstacle.empty()) {
-      throw GpuError("the packet walk cannot run here: " + packet_obstacle);
-    }
     if (gpu_scene.search == PrimitiveSearch::bvh_packet && gpu_scene.bvh_depth > VKRAY_STACK_REGISTERS_MAX) {
       throw GpuError("the packet walk keeps its stack in registers, for trees up to " +
                      std::to_string(VKRAY_STACK_REGISTERS_MAX) + " deep; this one is " + std::to_string(gpu_scene.bvh_depth));
@@ -916,6 +1003,19 @@ Frame Renderer::render(const Camera& camera, uint32_t width, uint32_t height, Ao
   return frame;
 }
 
+double Renderer::sustained_dispatch_ms(const Camera& camera, uint32_t width, uint32_t height, AovSet aovs,
+                                       uint32_t repeats) {
+  check_image_size(width, height);
+  if (camera.projection != Projection::perspective) {
+    throw InputError("sustained dispatches are timed for perspective cameras, whose rays the device makes");
+  }
+  Impl& r = *impl_;
+  r.reset_timings();
+  double ms = 0.0;
+  with_vulkan_errors("rendering", [&] { ms = r.sustained_dispatch_ms(camera, width, height, aovs.on_device(), std::max(repeats, 1u)); });
+  return ms;
+}
+
 RayHits Renderer::cast_rays(std::span<const GivenRay> rays) {
   check_given_rays(rays);
   Impl& r = *impl_;
@@ -982,7 +1082,7 @@ DepthRange Renderer::render(const Camera& camera, Aov aov, ImageTarget& target) 
   DepthRange depths;
   with_vulkan_errors("rendering", [&] {
     const CameraBasis basis = make_camera_basis(camera, width, height);
-    if (!r.depth_range) r.depth_range = r.make_output(sizeof(gpu::DepthRangeBits));
+    if (!r.depth_range) r.depth_range = r.make_output(0, 0, sizeof(gpu::DepthRangeBits));
     uint32_t tile_rows = 0;
     const vk::raii::Pipeline& pipeline = r.begin_render(camera, width, height, AovSet{aov}, &target, tile_rows);
     std::vector<PixelPatch> patches;

@@ -24,6 +24,9 @@ enum class GivenRayWalk {
   packets_by_direction,  // rays from one origin in another order: packets of 64 ordered by direction
 };
 
+// "one by one", "packets in place", "packets by direction" ("none" for none).
+const char* given_ray_walk_name(GivenRayWalk walk);
+
 struct RenderTimings {
   double upload_ms = 0.0;          // scene conversion and upload (once, in the constructor), BVH build included
   double bvh_build_ms = 0.0;       // of which building the BVH
@@ -35,6 +38,7 @@ struct RenderTimings {
   bool has_gpu_times = false;      // the device has timestamps; else dispatch_gpu_ms is not measured
   double dispatch_gpu_ms = 0.0;    // GPU time of the ray-casting dispatches (timestamp queries)
   double readback_ms = 0.0;        // copying results back into the Frame (or the few the host reads)
+  uint64_t readback_bytes = 0;     // copied on the device into host-visible memory (staging), all dispatches
   double rays_ms = 0.0;            // cast_rays: ordering the rays and writing them for the device
   GivenRayWalk given_walk = GivenRayWalk::none;  // how cast_rays walked the tree
   uint32_t tiles = 0;              // dispatches the image was split into
@@ -111,6 +115,10 @@ struct RendererOptions {
   AovSet first_aovs;
 };
 
+// Why `search` cannot run on `device` with `shader` (the packet walk's and the ray queries' needs);
+// empty where it can, and for the searches every device runs.
+std::string search_obstacle(PrimitiveSearch search, const GpuDeviceInfo& device, const ShaderVariant& shader);
+
 class Renderer {
  public:
   Renderer(GpuDevice& device, const Scene& scene, RendererOptions options = {});
@@ -127,6 +135,13 @@ class Renderer {
   // Returns the range of finite depths when `aov` is depth. Takes a float32 shader specialized on
   // its outputs (not the generic or float64 variants).
   DepthRange render(const Camera& camera, Aov aov, ImageTarget& target);
+
+  // The GPU time one pass over `camera`'s whole image takes, averaged over `repeats` passes back to
+  // back in one submission with nothing read back (wall time where the device has no timestamps):
+  // the device's throughput with its clocks up. Frames rendered one at a time, each waited for and
+  // read back, leave a GPU idle most of the time, and it slows down (an H100 ran identical pipelines
+  // at 0.68 and 3.8 ms, its clock at 1980 and 345 MHz). The outputs are left unread.
+  double sustained_dispatch_ms(const Camera& camera, uint32_t width, uint32_t height, AovSet aovs, uint32_t repeats);
 
   // Traces each ray (checked first: check_given_rays) to its nearest hit, with the precision
   // contract of images: the origin relative to the scene's anchor, the direction normalized in

@@ -9,17 +9,6 @@ constexpr auto host_access = vk::MemoryPropertyFlagBits::eHostVisible | vk::Memo
 
 }  // namespace
 
-uint32_t find_memory_type(const VulkanContext& context, uint32_t type_bits, vk::MemoryPropertyFlags required,
-                          vk::MemoryPropertyFlags preferred) {
-  const auto& memory = context.memory_properties;
-  for (const auto wanted : {required | preferred, required}) {
-    for (uint32_t i = 0; i < memory.memoryTypeCount; ++i) {
-      if ((type_bits & (1u << i)) && (memory.memoryTypes[i].propertyFlags & wanted) == wanted) return i;
-    }
-  }
-  throw GpuError("no suitable Vulkan memory type for a buffer or image");
-}
-
 namespace {
 
 // What a buffer is for: the shaders' (mapped only with TransferMode::direct) or the host's (always
@@ -50,8 +39,8 @@ GpuBuffer create_buffer(VulkanContext& context, vk::DeviceSize size, vk::BufferU
 }  // namespace
 
 GpuBuffer create_storage_buffer(VulkanContext& context, vk::DeviceSize size, vk::BufferUsageFlags extra_usage) {
-  return create_buffer(context, size, vk::BufferUsageFlagBits::eStorageBuffer | extra_usage, {},
-                       vk::MemoryPropertyFlagBits::eDeviceLocal, Side::device);
+  return create_buffer(context, size, vk::BufferUsageFlagBits::eStorageBuffer | extra_usage,
+                       shader_memory_required(context), vk::MemoryPropertyFlagBits::eDeviceLocal, Side::device);
 }
 
 vk::DeviceAddress device_address(const VulkanContext& context, const GpuBuffer& buffer) {
@@ -72,8 +61,8 @@ GpuBuffer create_upload_buffer(VulkanContext& context, vk::DeviceSize size, vk::
 }
 
 GpuBuffer upload_buffer(VulkanContext& context, const void* data, size_t bytes, vk::BufferUsageFlags usage) {
-  GpuBuffer target = create_buffer(context, bytes, usage | vk::BufferUsageFlagBits::eTransferDst, {},
-                                   vk::MemoryPropertyFlagBits::eDeviceLocal, Side::device);
+  GpuBuffer target = create_buffer(context, bytes, usage | vk::BufferUsageFlagBits::eTransferDst,
+                                   shader_memory_required(context), vk::MemoryPropertyFlagBits::eDeviceLocal, Side::device);
   if (target.mapped) {
     std::memcpy(target.mapped, data, bytes);
     return target;

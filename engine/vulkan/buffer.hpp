@@ -13,14 +13,9 @@ struct GpuBuffer {
   void* mapped = nullptr;  // set when the memory is host-visible and coherent
 };
 
-// First memory type allowed by `type_bits` with all `required` flags, preferring one that also has
-// all `preferred` flags.
-uint32_t find_memory_type(const VulkanContext& context, uint32_t type_bits, vk::MemoryPropertyFlags required,
-                          vk::MemoryPropertyFlags preferred);
-
-// A storage buffer in device-local memory where the device has it. With TransferMode::direct
-// (devices whose main memory is also host-visible: integrated GPUs, lavapipe, resizable BAR) the
-// buffer is mapped, so uploads and readbacks skip the staging copy; with staging it never is.
+// A storage buffer in the shaders' memory (shader_memory_required): with TransferMode::direct
+// host-visible and mapped, so uploads and readbacks skip the staging copy; with staging
+// device-local, never mapped.
 GpuBuffer create_storage_buffer(VulkanContext& context, vk::DeviceSize size, vk::BufferUsageFlags extra_usage = {});
 
 // A buffer in device-local memory where the device has it, for `usage`, mapped as storage buffers

@@ -6,18 +6,18 @@
 #include <charconv>
 #include <cstdio>
 #include <cstdlib>
+#include <mutex>
 
 namespace vkray {
 namespace {
 
-constexpr const char* no_vulkan_fix =
-    "install a Vulkan driver: on Debian, 'apt-get install mesa-vulkan-drivers' provides lavapipe, a "
-    "software GPU that always works";
 
 // VKRAY_VALIDATION=1 runs vkray under the Khronos validation layer with synchronization
 // validation; the test suite sets it for every test (tests/CMakeLists.txt). Any error prints the
 // layer's message and aborts, so the test (or command) that caused it fails, and a debugger or core
-// dump shows where. VKRAY_VALIDATION=verbose prints warnings too: the best-practices checks are on,
+// dump shows where. VKRAY_VALIDATION=if-installed does the same where the layer is installed and
+// says once that it runs without it elsewhere (a GPU server seldom has it; the GPU report records
+// which). VKRAY_VALIDATION=verbose prints warnings too: the best-practices checks are on,
 // and the warnings they leave are accepted, each for its reason:
 // - BestPractices-vkAllocateMemory-small-allocation and -vkBindMemory-small-dedicated-allocation:
 //   every buffer has its own allocation. A scene has at most ten buffers, created once, and the
@@ -26,12 +26,33 @@ constexpr const char* no_vulkan_fix =
 //   extension; it is enabled only in this mode, for this messenger.
 constexpr const char* validation_layer = "VK_LAYER_KHRONOS_validation";
 
-enum class Validation { off, errors, verbose };
+enum class Validation { off, errors, verbose, errors_if_installed };
 
 Validation validation_mode() {
   const char* value = std::getenv("VKRAY_VALIDATION");
   if (!value || !*value || std::string_view(value) == "0") return Validation::off;
+  if (std::string_view(value) == "if-installed") return Validation::errors_if_installed;
   return std::string_view(value) == "verbose" ? Validation::verbose : Validation::errors;
+}
+
+bool validation_layer_installed(const vk::raii::Context& context) {
+  const auto layers = context.enumerateInstanceLayerProperties();
+  return std::any_of(layers.begin(), layers.end(), [](const vk::LayerProperties& layer) {
+    return std::string_view(layer.layerName.data()) == validation_layer;
+  });
+}
+
+// The mode in effect: errors_if_installed becomes errors or off, the latter said once a process.
+Validation effective_validation(const vk::raii::Context& context) {
+  const Validation mode = validation_mode();
+  if (mode != Validation::errors_if_installed) return mode;
+  if (validation_layer_installed(context)) return Validation::errors;
+  static std::once_flag said;
+  std::call_once(said, [] {
+    std::fprintf(stderr, "vkray: note: VKRAY_VALIDATION=if-installed, and the Khronos validation layer is not installed: "
+                         "running without it\n");
+  });
+  return Validation::off;
 }
 
 // Errors of the validation layer abort; the loader's own messages (type "general", e.g. a driver
@@ -72,15 +93,11 @@ vk::raii::Instance create_instance(const vk::raii::Context& context, std::vector
       extension_names.push_back(VK_KHR_PORTABILITY_ENUMERATION_EXTENSION_NAME);
       flags |= vk::InstanceCreateFlagBits::eEnumeratePortabilityKHR;
     }
-    const Validation mode = validation_mode();
+    const Validation mode = effective_validation(context);
     if (mode == Validation::off) {
       return vk::raii::Instance(context, vk::InstanceCreateInfo(flags, &application, {}, extension_names));
     }
-    const auto layers = context.enumerateInstanceLayerProperties();
-    const bool has_layer = std::any_of(layers.begin(), layers.end(), [](const vk::LayerProperties& layer) {
-      return std::string_view(layer.layerName.data()) == validation_layer;
-    });
-    if (!has_layer) {
+    if (!validation_layer_installed(context)) {
       throw GpuError("VKRAY_VALIDATION is set, but the Khronos validation layer is missing: on Debian, "
                      "'apt-get install vulkan-validationlayers'");
     }
@@ -94,13 +111,17 @@ vk::raii::Instance create_instance(const vk::raii::Context& context, std::vector
         vk::ValidationFeaturesEXT(enabled_features), messenger_info(mode));
     return vk::raii::Instance(context, chain.get<vk::InstanceCreateInfo>());
   } catch (const vk::SystemError& error) {
-    throw GpuError(std::string("cannot start Vulkan (") + error.what() + "): " + no_vulkan_fix);
+    if (static_cast<vk::Result>(error.code().value()) == vk::Result::eErrorIncompatibleDriver) {
+      throw GpuError("no Vulkan driver found by the Vulkan loader " + vulkan_loader_description() + ": " + vulkan_driver_advice());
+    }
+    throw GpuError(std::string("cannot start Vulkan (") + error.what() + "): " + vulkan_driver_advice());
   }
 }
 
 // The messenger for the whole life of the device (see create_instance); none without validation.
-vk::raii::DebugUtilsMessengerEXT create_validation_messenger(const vk::raii::Instance& instance) {
-  const Validation mode = validation_mode();
+vk::raii::DebugUtilsMessengerEXT create_validation_messenger(const vk::raii::Context& context,
+                                                             const vk::raii::Instance& instance) {
+  const Validation mode = effective_validation(context);
   if (mode == Validation::off) return vk::raii::DebugUtilsMessengerEXT(nullptr);
   return vk::raii::DebugUtilsMessengerEXT(instance, messenger_info(mode));
 }
@@ -184,6 +205,46 @@ bool has_ray_queries(const vk::raii::PhysicalDevice& physical_device) {
          features.get<vk::PhysicalDeviceRayQueryFeaturesKHR>().rayQuery;
 }
 
+// The GPUs measured to run the triangle test's doubles faster than float's error-free fallback
+// (`vkray report`, docs/gpu-reports/): NVIDIA's Hopper data-centre parts, whose float64 rate is half
+// their float32 rate. By name: Vulkan tells no float64 rate.
+bool runs_doubles_at_half_rate(std::string_view name) {
+  for (const std::string_view measured : {"NVIDIA H100", "NVIDIA H200", "NVIDIA GH200"}) {
+    if (name.starts_with(measured)) return true;
+  }
+  return false;
+}
+
+// VKRAY_DEVICE_OVERRIDE: a comma-separated list that makes a device present itself as a GPU would,
+// so that the paths a GPU takes run on lavapipe in the test suite: `discrete` (its type: float edge
+// functions, no packet walk, staging by default), `no-ray-query`, `no-float64`. What it cannot
+// change stays: lavapipe's loop limit, its memory types.
+void apply_device_override(GpuDeviceInfo& info) {
+  const char* value = std::getenv("VKRAY_DEVICE_OVERRIDE");
+  if (!value || !*value) return;
+  std::string_view list(value);
+  while (!list.empty()) {
+    const size_t comma = list.find(',');
+    const std::string_view word = list.substr(0, comma);
+    if (word == "discrete") {
+      info.type = "discrete";
+      info.favours_packet_walk = false;
+      info.fast_float64 = runs_doubles_at_half_rate(info.name);
+    } else if (word == "no-ray-query") {
+      info.ray_query = false;
+    } else if (word == "no-float64") {
+      info.shader_float64 = false;
+      info.fast_float64 = false;
+      info.favours_packet_walk = false;
+    } else {
+      throw GpuError("VKRAY_DEVICE_OVERRIDE: unknown word '" + std::string(word) +
+                     "' (it takes a comma-separated list of discrete, no-ray-query, no-float64)");
+    }
+    list = comma == std::string_view::npos ? std::string_view() : list.substr(comma + 1);
+  }
+  info.overridden = value;
+}
+
 GpuDeviceInfo describe(const vk::raii::PhysicalDevice& physical_device) {
   const auto chain = physical_device.getProperties2<vk::PhysicalDeviceProperties2, vk::PhysicalDeviceSubgroupProperties,
                                                     vk::PhysicalDeviceMaintenance3Properties>();
@@ -227,6 +288,7 @@ GpuDeviceInfo describe(const vk::raii::PhysicalDevice& physical_device) {
   info.max_storage_buffer_range = limits.maxStorageBufferRange;
   info.subgroup_size = chain.get<vk::PhysicalDeviceSubgroupProperties>().subgroupSize;
   info.shader_float64 = physical_device.getFeatures().shaderFloat64 == VK_TRUE;
+  info.fast_float64 = info.shader_float64 && (info.type == "cpu" || runs_doubles_at_half_rate(info.name));
   info.main_memory_host_visible = main_memory_is_host_visible(physical_device.getMemoryProperties());
   const uint32_t family = compute_queue_family(physical_device);
   const auto& subgroups = chain.get<vk::PhysicalDeviceSubgroupProperties>();
@@ -250,10 +312,27 @@ GpuDeviceInfo describe(const vk::raii::PhysicalDevice& physical_device) {
   if (info.can_compute && physical_device.getQueueFamilyProperties()[family].timestampValidBits > 0) {
     info.timestamp_period_ns = limits.timestampPeriod;
   }
+  apply_device_override(info);
   return info;
 }
 
 }  // namespace
+
+uint32_t find_memory_type(const VulkanContext& context, uint32_t type_bits, vk::MemoryPropertyFlags required,
+                          vk::MemoryPropertyFlags preferred) {
+  const auto& memory = context.memory_properties;
+  for (const auto wanted : {required | preferred, required}) {
+    for (uint32_t i = 0; i < memory.memoryTypeCount; ++i) {
+      if ((type_bits & (1u << i)) && (memory.memoryTypes[i].propertyFlags & wanted) == wanted) return i;
+    }
+  }
+  throw GpuError("no suitable Vulkan memory type for a buffer or image");
+}
+
+vk::MemoryPropertyFlags shader_memory_required(const VulkanContext& context) {
+  if (context.staging) return {};
+  return vk::MemoryPropertyFlagBits::eHostVisible | vk::MemoryPropertyFlagBits::eHostCoherent;
+}
 
 std::string describe_vulkan_failure(const vk::SystemError& error) {
   const auto result = static_cast<vk::Result>(error.code().value());
@@ -273,7 +352,7 @@ std::string describe_vulkan_failure(const vk::SystemError& error) {
 
 std::vector<GpuDeviceInfo> list_gpu_devices() {
   return with_vulkan_errors("listing Vulkan devices", [] {
-    vk::raii::Context context;
+    vk::raii::Context context(vulkan_loader_entry());
     const vk::raii::Instance instance = create_instance(context);
     std::vector<GpuDeviceInfo> devices;
     for (const auto& physical_device : vk::raii::PhysicalDevices(instance)) devices.push_back(describe(physical_device));
@@ -282,7 +361,7 @@ std::vector<GpuDeviceInfo> list_gpu_devices() {
 }
 
 size_t choose_gpu_device(const std::vector<GpuDeviceInfo>& devices, std::string_view name_filter) {
-  if (devices.empty()) throw GpuError(std::string("no Vulkan device found: ") + no_vulkan_fix);
+  if (devices.empty()) throw GpuError(std::string("no Vulkan device found: ") + vulkan_driver_advice());
   // By index or UUID, as `vkray info` prints them: that device or none.
   const bool is_index = !name_filter.empty() && name_filter.size() < 6 &&
                         std::all_of(name_filter.begin(), name_filter.end(), [](unsigned char c) { return std::isdigit(c); });
@@ -321,6 +400,7 @@ size_t choose_gpu_device(const std::vector<GpuDeviceInfo>& devices, std::string_
 }
 
 void VulkanContext::submit_and_wait(const std::function<void(const vk::raii::CommandBuffer&)>& record) {
+  check_usable();
   command_pool.reset();  // the pool's one command buffer, recorded anew for every submission
   command_buffer.begin(vk::CommandBufferBeginInfo(vk::CommandBufferUsageFlagBits::eOneTimeSubmit));
   record(command_buffer);
@@ -328,21 +408,58 @@ void VulkanContext::submit_and_wait(const std::function<void(const vk::raii::Com
   device.resetFences(*fence);
   const vk::CommandBuffer buffers[] = {*command_buffer};
   queue.submit(vk::SubmitInfo({}, {}, buffers), *fence);
-  if (device.waitForFences(*fence, VK_TRUE, UINT64_MAX) != vk::Result::eSuccess) {
-    throw GpuError("waiting for the GPU failed");
+  const vk::Result waited = device.waitForFences(*fence, VK_TRUE, fence_timeout_ns);
+  if (waited == vk::Result::eSuccess) return;
+  if (waited != vk::Result::eTimeout) throw GpuError("waiting for the GPU failed: " + vk::to_string(waited));
+  timed_out = true;
+  // A short grace before the objects the work uses are destroyed while the error unwinds: work
+  // that only overran its time ends here, and nothing is destroyed under it.
+  constexpr uint64_t grace_ns = 2'000'000'000;
+  (void)device.waitForFences(*fence, VK_TRUE, grace_ns);
+  throw DeviceLostError("the GPU did not finish a submission within " + std::to_string(fence_timeout_ns / 1'000'000) +
+                        " ms (VKRAY_FENCE_TIMEOUT_MS): a shader that never ends, or work far over its dispatch "
+                        "budget; the device is treated as lost");
+}
+
+void VulkanContext::check_usable() const {
+  if (timed_out) throw DeviceLostError("the device did not finish earlier work in time; nothing more runs on it");
+}
+
+uint64_t fence_timeout_from_environment() {
+  const char* value = std::getenv("VKRAY_FENCE_TIMEOUT_MS");
+  if (!value || !*value) return default_fence_timeout_ms * 1'000'000;
+  uint64_t ms = 0;
+  const std::string_view text(value);
+  const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), ms);
+  if (error != std::errc() || end != text.data() + text.size() || ms == 0 || ms > UINT64_MAX / 1'000'000) {
+    throw GpuError("VKRAY_FENCE_TIMEOUT_MS is '" + std::string(text) + "': it takes a whole number of milliseconds, at least 1");
   }
+  return ms * 1'000'000;
 }
 
 namespace {
 
-TransferMode resolve_transfer(TransferMode requested, const vk::PhysicalDeviceMemoryProperties& memory) {
+TransferMode resolve_transfer(TransferMode requested, const GpuDeviceInfo& info) {
   if (requested != TransferMode::automatic) return requested;
   if (const char* forced = std::getenv("VKRAY_TRANSFER"); forced && *forced) {
     if (std::string_view(forced) == "staging") return TransferMode::staging;
     if (std::string_view(forced) == "direct") return TransferMode::direct;
     throw GpuError("VKRAY_TRANSFER is '" + std::string(forced) + "': it takes staging or direct");
   }
-  return main_memory_is_host_visible(memory) ? TransferMode::direct : TransferMode::staging;
+  return automatic_transfer(info).mode;
+}
+
+// "memory type 4: device-local, host-visible, coherent".
+std::string describe_memory_type(const vk::PhysicalDeviceMemoryProperties& memory, uint32_t type) {
+  const auto flags = memory.memoryTypes[type].propertyFlags;
+  std::string words;
+  for (const auto& [bit, name] : {std::pair{vk::MemoryPropertyFlagBits::eDeviceLocal, "device-local"},
+                                  {vk::MemoryPropertyFlagBits::eHostVisible, "host-visible"},
+                                  {vk::MemoryPropertyFlagBits::eHostCoherent, "coherent"},
+                                  {vk::MemoryPropertyFlagBits::eHostCached, "cached"}}) {
+    if (flags & bit) words += std::string(words.empty() ? "" : ", ") + name;
+  }
+  return "memory type " + std::to_string(type) + ": " + (words.empty() ? "no flags" : words);
 }
 
 
@@ -351,7 +468,7 @@ void open_device(VulkanContext& vk_context, std::string_view name_filter, const 
   with_vulkan_errors("opening the Vulkan device", [&] {
     vk_context.instance =
         create_instance(vk_context.context, presentation ? presentation->instance_extensions : std::vector<const char*>{});
-    vk_context.validation_messenger = create_validation_messenger(vk_context.instance);
+    vk_context.validation_messenger = create_validation_messenger(vk_context.context, vk_context.instance);
     vk::raii::PhysicalDevices physical_devices(vk_context.instance);
     std::vector<GpuDeviceInfo> infos;
     for (const auto& physical_device : physical_devices) {
@@ -374,7 +491,7 @@ void open_device(VulkanContext& vk_context, std::string_view name_filter, const 
     vk_context.info = infos[chosen];
     vk_context.limits = vk_context.physical_device.getProperties().limits;
     vk_context.memory_properties = vk_context.physical_device.getMemoryProperties();
-    vk_context.staging = resolve_transfer(transfer, vk_context.memory_properties) == TransferMode::staging;
+    vk_context.staging = resolve_transfer(transfer, vk_context.info) == TransferMode::staging;
     vk_context.queue_family = compute_queue_family(vk_context.physical_device, presentation, *vk_context.instance);
     // Timestamps as the queue in use has them (the viewer's may be another family than describe's).
     if (vk_context.physical_device.getQueueFamilyProperties()[vk_context.queue_family].timestampValidBits == 0) {
@@ -396,7 +513,7 @@ void open_device(VulkanContext& vk_context, std::string_view name_filter, const 
     vk::StructureChain<vk::PhysicalDeviceFeatures2, vk::PhysicalDeviceVulkan12Features,
                        vk::PhysicalDeviceAccelerationStructureFeaturesKHR, vk::PhysicalDeviceRayQueryFeaturesKHR>
         features;
-    features.get<vk::PhysicalDeviceFeatures2>().features.shaderFloat64 = vk_context.physical_device.getFeatures().shaderFloat64;
+    features.get<vk::PhysicalDeviceFeatures2>().features.shaderFloat64 = vk_context.info.shader_float64 ? VK_TRUE : VK_FALSE;
     if (vk_context.info.ray_query) {
       device_extensions.insert(device_extensions.end(), std::begin(ray_query_extensions), std::end(ray_query_extensions));
       features.get<vk::PhysicalDeviceVulkan12Features>().bufferDeviceAddress = VK_TRUE;
@@ -418,6 +535,14 @@ void open_device(VulkanContext& vk_context, std::string_view name_filter, const 
         vk_context.device,
         vk::CommandBufferAllocateInfo(*vk_context.command_pool, vk::CommandBufferLevel::ePrimary, 1))[0]);
     vk_context.fence = vk::raii::Fence(vk_context.device, vk::FenceCreateInfo());
+    vk_context.fence_timeout_ns = fence_timeout_from_environment();
+    // The memory the shaders' buffers take (create_storage_buffer), read off a small one: what the
+    // transfer really is, for `vkray info`, the bench and the GPU report.
+    const vk::raii::Buffer probe(vk_context.device, vk::BufferCreateInfo({}, 16, vk::BufferUsageFlagBits::eStorageBuffer));
+    vk_context.shader_memory = describe_memory_type(
+        vk_context.memory_properties,
+        find_memory_type(vk_context, probe.getMemoryRequirements().memoryTypeBits, shader_memory_required(vk_context),
+                         vk::MemoryPropertyFlagBits::eDeviceLocal));
     vk_context.pipeline_cache = std::make_unique<PipelineCache>(
         vk_context.device, vk_context.physical_device.getProperties(), pipeline_cache_folder());
   });
@@ -435,6 +560,20 @@ GpuDevice::GpuDevice(std::string_view choice, const PresentationSupport& present
 }
 
 TransferMode GpuDevice::transfer() const { return context_->staging ? TransferMode::staging : TransferMode::direct; }
+
+std::string GpuDevice::transfer_description() const {
+  return std::string(context_->staging ? "staging" : "direct") + " (shaders' buffers in " + context_->shader_memory + ")";
+}
+
+bool GpuDevice::validation() const { return static_cast<bool>(*context_->validation_messenger); }
+
+TransferChoice automatic_transfer(const GpuDeviceInfo& device) {
+  if (!device.main_memory_host_visible) return {TransferMode::staging, "its main memory is not host-visible"};
+  if (device.type == "discrete") {
+    return {TransferMode::staging, "a discrete GPU: the host would read its memory uncached across the bus"};
+  }
+  return {TransferMode::direct, "its main memory is the host's and host-visible"};
+}
 
 GpuDevice::~GpuDevice() = default;
 

@@ -14,7 +14,7 @@ namespace vkray {
 
 EdgeArithmetic resolve_edges(const GpuDeviceInfo& device, EdgeArithmetic requested) {
   if (requested != EdgeArithmetic::automatic) return requested;
-  return device.type == "cpu" && device.shader_float64 ? EdgeArithmetic::double_products : EdgeArithmetic::float_error_free;
+  return device.fast_float64 ? EdgeArithmetic::double_products : EdgeArithmetic::float_error_free;
 }
 
 RaycastPipeline::RaycastPipeline(VulkanContext& context, PipelineSpecialization specialization)

@@ -37,7 +37,8 @@ enum class RaycastMode : uint32_t {
 inline bool is_given(RaycastMode mode) { return mode == RaycastMode::given_rays || mode == RaycastMode::given_directions; }
 
 // How float32 shaders on `device` take the triangle edge functions for `requested` (see
-// EdgeArithmetic): automatic is double products on CPU devices with shaderFloat64, float elsewhere.
+// EdgeArithmetic): automatic is double products where the device runs doubles fast
+// (GpuDeviceInfo::fast_float64), float elsewhere.
 EdgeArithmetic resolve_edges(const GpuDeviceInfo& device, EdgeArithmetic requested);
 
 class RaycastPipeline {

@@ -16,9 +16,10 @@ enum class Precision : uint32_t { float32, float64 };
 
 // How float32 shaders evaluate the watertight triangle test's edge functions exactly in sign
 // (shaders/intersect.glsl): in float with an error-free fallback where they are small, or as
-// differences of products of floats taken in double (exact products). automatic: double on CPU
-// devices with shaderFloat64 (lavapipe runs the fallback masked on every test; doubles cost it less),
-// float elsewhere (most GPUs run doubles at a fraction of float speed, and skip the fallback).
+// differences of products of floats taken in double (exact products). automatic: double where the
+// device runs doubles fast (GpuDeviceInfo::fast_float64: lavapipe, which runs the fallback masked on
+// every test; the data-centre GPUs measured), float elsewhere (most GPUs run doubles at a small
+// fraction of float speed, and skip the fallback).
 enum class EdgeArithmetic : uint32_t { automatic, float_error_free, double_products };
 
 struct ShaderVariant {

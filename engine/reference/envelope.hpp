@@ -1,5 +1,6 @@
 // Pixel-by-pixel check of a GPU frame against the double-precision reference, with tolerances
-// derived from float32 error bounds (see reference_envelope.cpp for the derivation).
+// derived from float32 error bounds (see envelope.cpp for the derivation): what the tests and the
+// GPU report's checks hold every float32 frame to.
 #pragma once
 
 #include "engine/reference/compare.hpp"
@@ -9,7 +10,7 @@
 #include <string>
 #include <vector>
 
-namespace vkray::test {
+namespace vkray {
 
 struct EnvelopeReport {
   size_t pixels = 0;
@@ -27,4 +28,4 @@ struct EnvelopeReport {
 EnvelopeReport check_against_reference(const Scene& scene, const Frame& frame, uint32_t row_step = 1,
                                        const std::vector<ObjectPrimitive>* hit_ids = nullptr);
 
-}  // namespace vkray::test
+}  // namespace vkray

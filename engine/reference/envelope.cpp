@@ -38,7 +38,7 @@
 // position term; a normal within the samples' spread of one of the sample normals, and where the
 // samples hit a sphere's silhouette, of any normal between theirs and the silhouette's (a ray in
 // between grazes it: its normal is across the ray, asin |n.d| from a sample's).
-#include "tests/reference_envelope.hpp"
+#include "engine/reference/envelope.hpp"
 
 #include "engine/render/gpu_scene.hpp"
 #include "engine/reference/reference.hpp"
@@ -50,7 +50,7 @@
 #include <cstdio>
 #include <thread>
 
-namespace vkray::test {
+namespace vkray {
 namespace {
 
 constexpr double eps = 0x1p-24;
@@ -281,4 +281,4 @@ EnvelopeReport check_against_reference(const Scene& scene, const Frame& frame, u
   return report;
 }
 
-}  // namespace vkray::test
+}  // namespace vkray
