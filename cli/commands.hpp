@@ -16,5 +16,6 @@ Action add_info_command(CLI::App& app);
 Action add_bench_command(CLI::App& app);
 Action add_view_command(CLI::App& app);
 Action add_manifest_command(CLI::App& app);
+Action add_report_command(CLI::App& app);
 
 }  // namespace vkray::cli

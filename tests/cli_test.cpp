@@ -1042,7 +1042,7 @@ TEST_F(CliTest, BenchBasicSuiteJsonHasEveryFieldAndSaneFigures) {
   ASSERT_EQ(json.at("scenes").size(), names.size());
   const std::vector<std::string> row_fields = {
       "variant", "on_gpu", "device_triangles", "device_geometry_bytes", "bvh_nodes", "bvh_depth", "loop_budget",
-      "upload_ms", "bvh_build_ms", "pipeline_ms", "gpu_median_ms", "gpu_min_ms", "frame_median_ms", "mrays_per_s",
+      "upload_ms", "bvh_build_ms", "pipeline_ms", "gpu_median_ms", "gpu_min_ms", "frame_median_ms", "gpu_sustained_ms", "mrays_per_s",
       "unfinished_rays", "pixels", "hit_mismatches", "both_hit", "nan_pixels", "depth_rel_p50", "depth_rel_p99", "depth_rel_max",
       "depth_ulp_p50", "depth_ulp_p99", "depth_ulp_max",
       "normal_deg_p50", "normal_deg_p99", "normal_deg_max", "pareto", "outputs_compared", "id_mismatches",
@@ -1404,3 +1404,61 @@ TEST_F(CliTest, HelpSpeaksOfScenes) {
 }
 
 }  // namespace
+
+// The GPU report (engine/bench/gpu_report.hpp), its reduced sizes: the sections that take seconds
+// here (CI's bundle check runs all of them). Every row ran, JSON and Markdown hold them, exit 0.
+TEST_F(CliTest, ReportReducedWritesJsonAndMarkdown) {
+  const RunResult run = vkray({"report", "report", "--reduced", "--only", "rays,views", "--models", VKRAY_MODELS_DIR});
+  ASSERT_EQ(run.exit_code, 0) << run.out << run.err;
+  EXPECT_TRUE(starts_with(run.out, "vkray on ")) << "the first line names the device: " << run.out;
+  const auto json = nlohmann::json::parse(read_text(path("report/report.json")));
+  EXPECT_EQ(json.at("schema"), "vkray-gpu-report-1");
+  EXPECT_FALSE(json.at("device").at("name").get<std::string>().empty());
+  size_t rays = 0, views = 0;
+  for (const auto& row : json.at("rows")) {
+    EXPECT_EQ(row.at("status"), "ok") << row.dump();
+    if (row.at("section") == "rays") {
+      ++rays;
+      EXPECT_EQ(row.at("hit_mismatches"), 0) << row.dump();
+      EXPECT_GT(row.at("vkray_median_ms").get<double>(), 0.0);
+      EXPECT_GT(row.at("embree_median_ms").get<double>(), 0.0);
+    }
+    views += row.at("section") == "views";
+  }
+  EXPECT_EQ(rays, 3u);
+  EXPECT_EQ(views, 1u);
+  const std::string markdown = read_text(path("report/report.md"));
+  for (const char* heading : {"# vkray on ", "## Given rays", "## Many views", "| camera-rows | 65536 |"}) {
+    EXPECT_NE(markdown.find(heading), std::string::npos) << heading;
+  }
+}
+
+// Asked for a GPU and given a CPU implementation of Vulkan, the report names the device in its
+// first line and exits 1.
+TEST_F(CliTest, ReportRequireGpuRefusesACpuDevice) {
+  const RunResult run = vkray({"report", "report", "--reduced", "--require-gpu"});
+  EXPECT_EQ(run.exit_code, 1) << run.err;
+  EXPECT_TRUE(starts_with(run.out, "vkray on llvmpipe")) << run.out;
+  EXPECT_NE(run.err.find("--require-gpu"), std::string::npos) << run.err;
+}
+
+// A device lost in a row (here: a fence timeout of 1 ms) ends that row with its reason; the report
+// goes on, tries a failed variant no more, writes its files and exits 1, without hanging.
+TEST_F(CliTest, ReportEndsRowsThatLoseTheDeviceAndGoesOn) {
+  const RunResult run = vkray({"report", "report", "--reduced", "--only", "rays", "--models", VKRAY_MODELS_DIR},
+                              "VKRAY_FENCE_TIMEOUT_MS=1");
+  EXPECT_EQ(run.exit_code, 1) << run.out << run.err;
+  const auto json = nlohmann::json::parse(read_text(path("report/report.json")));
+  size_t failed = 0;
+  for (const auto& row : json.at("rows")) {
+    if (row.at("section") != "rays") continue;
+    ASSERT_NE(row.at("status"), "ok") << row.dump();
+    if (row.at("status") == "failed") {
+      ++failed;
+      EXPECT_NE(row.at("reason").get<std::string>().find("did not finish a submission within 1 ms"), std::string::npos)
+          << row.dump();
+    }
+  }
+  EXPECT_GE(failed, 1u);
+  EXPECT_NE(read_text(path("report/report.md")).find("**failed**"), std::string::npos);
+}

@@ -4,12 +4,14 @@
 #pragma once
 
 #include "engine/bench/bench_suites.hpp"
+#include "engine/bench/embree_baseline.hpp"
 #include "engine/reference/compare.hpp"
 #include "engine/device/gpu_device.hpp"
 #include "engine/render/renderer.hpp"
 #include "engine/statistics.hpp"
 
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -53,6 +55,9 @@ struct BenchRow {
   double pipeline_ms = 0.0;         // pipeline creation, never in frame times
   TimeStats gpu;                    // GPU time per frame, from timestamps (CPU rows: wall time of the trace)
   double frame_median_ms = 0.0;     // host wall time per frame, readback included (GPU rows)
+  // GPU time a frame in passes back to back (Renderer::sustained_dispatch_ms), the fastest of three
+  // bursts; 0 where not measured (BenchSettings::sustained_ms).
+  double sustained_ms = 0.0;
   double mrays_per_s = 0.0;         // pixels / median GPU time
   uint64_t unfinished_rays = 0;     // finished on the CPU (loop budget), last frame
   FrameError error;                 // last frame against the reference
@@ -74,15 +79,55 @@ struct BenchSceneResult {
   std::vector<std::string> skipped;  // variants asked for that do not apply to this scene
 };
 
+// How long a row runs: a GPU idling between rows (a BVH build, a reference) drops its clocks, and
+// timed frames of a fraction of a millisecond each never bring them back up (seen on an H100:
+// identical pipelines timed 0.68 and 3.05 ms at 3840x2160 one after the other).
+struct BenchTiming {
+  uint32_t frames = 5;        // timed frames at least, after the warm-up
+  double warm_up_ms = 0.0;    // frames not timed, after the caller's first, until this much wall time
+  double min_timed_ms = 0.0;  // and timed frames until this much wall time
+  double sustained_burst_ms = 0.0;  // BenchRow::sustained_ms from bursts this long; 0: not measured
+};
+
+// Calls `frame` (which returns its own time, ms) until `timing.warm_up_ms` have passed, then
+// `timing.frames` times and on until `timing.min_timed_ms` have passed: the times of the timed calls.
+std::vector<double> timed_runs(const BenchTiming& timing, const std::function<double()>& frame);
+
 struct BenchSettings {
   uint32_t frames = 5;                       // timed frames per variant, after one warm-up
+  // The report's rows: warm-up and timing by wall time (BenchTiming) on top of `frames`, and
+  // BenchRow::sustained_ms from bursts of about this many ms each (0: not measured).
+  double warm_up_ms = 0.0, min_timed_ms = 0.0, sustained_burst_ms = 0.0;
   std::vector<std::string> variants;         // names; empty: every variant that applies
   bool float32_ray_error = false;            // also BenchSceneResult::float32_ray (docs/accuracy.md)
   std::function<void(double)> reference_progress;  // fraction done of the reference, from any thread
 };
 
+// The many-views row of `views` views (bench_variants() has views-100).
+BenchVariant views_variant(uint32_t views);
+
 // Throws InputError naming the known variants when `name` is not one.
 const BenchVariant& find_bench_variant(const std::string& name);
+
+// One scene's rows, one at a time (the GPU report runs each in a process that may die): the
+// reference is traced once, when made; Embree's trace, which gives both its rows, on first use.
+class BenchSceneRun {
+ public:
+  BenchSceneRun(const BenchScene& scene, const BenchSettings& settings);
+  // The row of `variant` (which must apply to the scene), measured against the reference. Throws
+  // GpuError where the device cannot run it.
+  BenchRow row(GpuDevice& device, const BenchVariant& variant);
+  // The scene's figures, without rows: the caller collects those.
+  BenchSceneResult& result() { return result_; }
+
+ private:
+  const Scene& scene_;
+  BenchTiming timing_;
+  ReferenceScene reference_scene_;
+  std::vector<ReferenceHit> reference_;
+  std::optional<EmbreeResult> embree_;
+  BenchSceneResult result_;
+};
 
 // Renders the scene with each variant and Embree, measures each against the reference, and marks
 // the Pareto front.

@@ -41,6 +41,7 @@ const RowField row_fields[] = {
     {"gpu_median_ms", [](BenchRow& r) -> FieldRef { return &r.gpu.median_ms; }},
     {"gpu_min_ms", [](BenchRow& r) -> FieldRef { return &r.gpu.min_ms; }},
     {"frame_median_ms", [](BenchRow& r) -> FieldRef { return &r.frame_median_ms; }},
+    {"gpu_sustained_ms", [](BenchRow& r) -> FieldRef { return &r.sustained_ms; }},
     {"mrays_per_s", [](BenchRow& r) -> FieldRef { return &r.mrays_per_s; }},
     {"unfinished_rays", [](BenchRow& r) -> FieldRef { return &r.unfinished_rays; }},
     {"pixels", [](BenchRow& r) -> FieldRef { return &r.error.pixels; }},
@@ -154,10 +155,13 @@ std::string outputs_summary(const BenchSceneResult& scene) {
 
 }  // namespace
 
+std::string build_version() { return VKRAY_VERSION; }
+std::string build_commit() { return VKRAY_GIT_COMMIT; }
+
 BenchReport new_bench_report(const GpuDeviceInfo& device, std::string suite, uint32_t frames) {
   BenchReport report;
-  report.vkray_version = VKRAY_VERSION;
-  report.git_commit = VKRAY_GIT_COMMIT;
+  report.vkray_version = build_version();
+  report.git_commit = build_commit();
   report.device = device.name;
   report.device_type = device.type;
   report.driver = device.driver;

@@ -22,6 +22,10 @@ struct BenchReport {
   std::vector<BenchSceneResult> scenes;
 };
 
+// This build's version and the git commit it was built from ("unknown" outside a checkout).
+std::string build_version();
+std::string build_commit();
+
 // An empty report of this build (version, commit) on this device.
 BenchReport new_bench_report(const GpuDeviceInfo& device, std::string suite, uint32_t frames);
 

@@ -96,6 +96,9 @@ class EmbreeScene {
   RTCScene scene_ = nullptr;
 };
 
+// Rays a call of rtcIntersect1M takes: the chunk Open3D's RaycastingScene hands to it.
+constexpr size_t rays_a_call = 1024;
+
 // Runs `trace_tile(tile_x, tile_y)` over every 8x8 tile on all hardware threads; returns the time.
 template <typename TraceTile>
 double run_tiles(uint32_t width, uint32_t height, unsigned threads, TraceTile trace_tile) {
@@ -206,6 +209,59 @@ EmbreeResult trace_with_embree(const Scene& scene, uint32_t width, uint32_t heig
   result.packet = time_stats(packet_ms);
   run_tiles(width, height, result.threads, [&](uint32_t x, uint32_t y) { trace_packets(x, y, true); });
   embree.check_errors("tracing");
+  return result;
+}
+
+EmbreeRays trace_rays_with_embree(const Scene& scene, std::span<const GivenRay> rays, uint32_t repeats) {
+  const glm::dvec3 anchor = scene_anchor(scene);
+  EmbreeScene embree(scene, anchor);
+  EmbreeRays result;
+  result.threads = std::max(1u, std::thread::hardware_concurrency());
+  std::vector<RTCRayHit> queries(rays.size());
+  std::vector<glm::vec3> origins(rays.size()), directions(rays.size());
+  for (size_t k = 0; k < rays.size(); ++k) {
+    origins[k] = glm::vec3(glm::dvec3(rays[k][0], rays[k][1], rays[k][2]) - anchor);
+    directions[k] = glm::vec3(unit_vector(glm::dvec3(rays[k][3], rays[k][4], rays[k][5])));
+  }
+  const size_t calls = (rays.size() + rays_a_call - 1) / rays_a_call;
+  auto trace = [&] {
+    std::atomic<size_t> next{0};
+    const auto start = Clock::now();
+    {
+      std::vector<std::jthread> workers;
+      for (unsigned t = 0; t < result.threads; ++t) {
+        workers.emplace_back([&] {
+          RTCIntersectContext context;
+          rtcInitIntersectContext(&context);
+          for (size_t call = next++; call < calls; call = next++) {
+            const size_t first = call * rays_a_call, count = std::min(rays_a_call, rays.size() - first);
+            for (size_t k = first; k < first + count; ++k) {  // a query is also its answer: set anew each run
+              const glm::vec3 &o = origins[k], &d = directions[k];
+              queries[k] = {};
+              queries[k].ray = {o.x, o.y, o.z, 0.0f, d.x, d.y, d.z, 0.0f, std::numeric_limits<float>::infinity(), ~0u, 0, 0};
+              queries[k].hit.geomID = RTC_INVALID_GEOMETRY_ID;
+            }
+            rtcIntersect1M(embree.handle(), &context, &queries[first], static_cast<unsigned>(count), sizeof(RTCRayHit));
+          }
+        });
+      }
+    }
+    return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+  };
+  trace();  // warm-up
+  std::vector<double> times_ms;
+  for (uint32_t r = 0; r < std::max(repeats, 1u); ++r) times_ms.push_back(trace());
+  result.time = time_stats(times_ms);
+  embree.check_errors("tracing given rays");
+  result.t.resize(rays.size());
+  for (size_t k = 0; k < rays.size(); ++k) {
+    float t = queries[k].hit.geomID == RTC_INVALID_GEOMETRY_ID ? std::numeric_limits<float>::infinity() : queries[k].ray.tfar;
+    for (const auto& plane : scene.planes) {
+      const glm::dvec3 origin(rays[k][0], rays[k][1], rays[k][2]);
+      t = static_cast<float>(std::min<double>(t, intersect_plane(plane.normal, plane.point, origin, glm::dvec3(directions[k]), t)));
+    }
+    result.t[k] = t;
+  }
   return result;
 }
 

@@ -1,0 +1,159 @@
+#include "engine/bench/given_rays_bench.hpp"
+
+#include "engine/bench/embree_baseline.hpp"
+#include "engine/reference/reference.hpp"
+#include "engine/render/gpu_scene.hpp"
+#include "engine/render/renderer.hpp"
+#include "engine/scene/camera.hpp"
+
+#include <glm/geometric.hpp>
+
+#include <chrono>
+#include <cmath>
+#include <numbers>
+#include <random>
+
+namespace vkray {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double elapsed_ms(Clock::time_point start) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+}
+
+// Rings of the spinning sensor: what a 64-beam LiDAR has.
+constexpr size_t sensor_rings = 64;
+GivenRay ray_from(const glm::dvec3& origin, const glm::dvec3& direction) {
+  return {origin.x, origin.y, origin.z, direction.x, direction.y, direction.z};
+}
+
+// Relative distance errors of `t` against the reference where both hit, and the hit/miss flips.
+struct DistanceErrors {
+  size_t mismatches = 0, both_hit = 0;
+  double p99 = 0.0, max = 0.0;
+};
+
+template <typename Distance>
+DistanceErrors distance_errors(const std::vector<ReferenceHit>& reference, Distance&& t) {
+  DistanceErrors errors;
+  std::vector<double> relative;
+  for (size_t k = 0; k < reference.size(); ++k) {
+    const double exact = reference[k].t;
+    const double found = t(k);
+    if (std::isfinite(exact) != std::isfinite(found)) {
+      ++errors.mismatches;
+    } else if (std::isfinite(exact)) {
+      relative.push_back(std::abs(found - exact) / exact);
+    }
+  }
+  errors.both_hit = relative.size();
+  errors.p99 = percentile(relative, 0.99);
+  errors.max = relative.empty() ? 0.0 : *std::max_element(relative.begin(), relative.end());
+  return errors;
+}
+
+}  // namespace
+
+const std::vector<RayKindInfo>& ray_kinds() {
+  static const std::vector<RayKindInfo> kinds = {
+      {RayKind::camera_rows, "camera-rows", "one origin, a camera's pixel rays listed row by row"},
+      {RayKind::sensor, "sensor", "one origin, a spinning 64-ring sensor (rings x azimuths all the way round)"},
+      {RayKind::incoherent, "incoherent", "random origins around the model towards random points within it"},
+  };
+  return kinds;
+}
+
+std::optional<RayKind> ray_kind_from_name(const std::string& name) {
+  for (const auto& info : ray_kinds()) {
+    if (name == info.name) return info.kind;
+  }
+  return std::nullopt;
+}
+
+std::vector<GivenRay> make_rays(RayKind kind, const Scene& scene, size_t count) {
+  std::vector<GivenRay> rays;
+  switch (kind) {
+    case RayKind::camera_rows: {
+      const auto side = static_cast<uint32_t>(std::max(1.0, std::floor(std::sqrt(static_cast<double>(count)))));
+      const CameraBasis basis = make_camera_basis(scene.camera, side, side);
+      rays.resize(size_t{side} * side);
+      for (uint32_t j = 0; j < side; ++j) {
+        for (uint32_t i = 0; i < side; ++i) {
+          const PixelRay ray = pixel_ray(scene.camera, basis, i, j, side, side);
+          rays[size_t{j} * side + i] = ray_from(ray.origin, ray.direction);
+        }
+      }
+      break;
+    }
+    case RayKind::sensor: {
+      const CameraBasis basis = make_camera_basis(scene.camera, 1, 1);
+      const glm::dvec3 axis = basis.up, forward = -basis.forward, side = basis.right;  // the camera looks along -forward
+      const size_t azimuths = std::max<size_t>(1, count / sensor_rings);
+      const double half_fov = 0.5 * scene.camera.fovy_degrees * std::numbers::pi / 180.0;
+      rays.reserve(sensor_rings * azimuths);
+      for (size_t ring = 0; ring < sensor_rings; ++ring) {
+        const double elevation = -half_fov + 2.0 * half_fov * (static_cast<double>(ring) + 0.5) / sensor_rings;
+        for (size_t a = 0; a < azimuths; ++a) {
+          const double azimuth = 2.0 * std::numbers::pi * static_cast<double>(a) / static_cast<double>(azimuths);
+          const glm::dvec3 around = std::cos(azimuth) * forward + std::sin(azimuth) * side;
+          rays.push_back(ray_from(scene.camera.from, std::cos(elevation) * around + std::sin(elevation) * axis));
+        }
+      }
+      break;
+    }
+    case RayKind::incoherent: {
+      const glm::dvec3 centre = scene_anchor(scene);
+      const double radius = std::max(scene_radius(scene, centre), 1e-300);
+      std::mt19937_64 random(20261126);
+      std::normal_distribution<double> gaussian;
+      std::uniform_real_distribution<double> uniform;
+      auto on_sphere = [&] {
+        glm::dvec3 v(gaussian(random), gaussian(random), gaussian(random));
+        while (glm::length(v) == 0.0) v = {gaussian(random), gaussian(random), gaussian(random)};
+        return glm::normalize(v);
+      };
+      rays.reserve(count);
+      for (size_t k = 0; k < count; ++k) {
+        const glm::dvec3 origin = centre + 2.0 * radius * on_sphere();
+        const glm::dvec3 target = centre + radius * std::cbrt(uniform(random)) * on_sphere();
+        rays.push_back(ray_from(origin, target - origin));
+      }
+      break;
+    }
+  }
+  return rays;
+}
+
+GivenRaysRow bench_given_rays(GpuDevice& device, const Scene& scene, const std::string& kind,
+                              const std::vector<GivenRay>& rays, const BenchTiming& timing) {
+  GivenRaysRow row;
+  row.kind = kind;
+  row.rays = rays.size();
+  const ReferenceScene reference_scene(scene);
+  const std::vector<ReferenceHit> reference = trace_reference_rays(reference_scene, rays);
+
+  Renderer renderer(device, scene);
+  RayHits hits = renderer.cast_rays(rays);  // the first call: the pipeline
+  row.vkray = time_stats(timed_runs(timing, [&] {
+    const auto start = Clock::now();
+    hits = renderer.cast_rays(rays);
+    return elapsed_ms(start);
+  }));
+  row.walk = given_ray_walk_name(renderer.timings().given_walk);
+  const DistanceErrors vkray_errors = distance_errors(reference, [&](size_t k) { return double{hits.t[k]}; });
+  row.hit_mismatches = vkray_errors.mismatches;
+  row.both_hit = vkray_errors.both_hit;
+  row.t_rel_p99 = vkray_errors.p99;
+  row.t_rel_max = vkray_errors.max;
+
+  const EmbreeRays embree = trace_rays_with_embree(scene, rays, timing.frames);
+  row.embree = embree.time;
+  row.embree_threads = embree.threads;
+  const DistanceErrors embree_errors = distance_errors(reference, [&](size_t k) { return double{embree.t[k]}; });
+  row.embree_hit_mismatches = embree_errors.mismatches;
+  row.embree_t_rel_p99 = embree_errors.p99;
+  return row;
+}
+
+}  // namespace vkray

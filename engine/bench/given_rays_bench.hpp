@@ -1,0 +1,57 @@
+// Rays that are not an image's pixels, timed against Embree on the same rays and measured against
+// the reference in the same run: the rays of LiDAR and depth-sensor simulation, visibility and
+// sampling, cast through Renderer::cast_rays (what Python's cast_rays runs).
+#pragma once
+
+#include "engine/bench/bench.hpp"
+#include "engine/device/gpu_device.hpp"
+#include "engine/scene/scene.hpp"
+#include "engine/statistics.hpp"
+
+#include <cstddef>
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace vkray {
+
+enum class RayKind { camera_rows, sensor, incoherent };
+
+struct RayKindInfo {
+  RayKind kind;
+  const char* name;
+  const char* description;
+};
+
+// Every kind, by the name rows carry.
+const std::vector<RayKindInfo>& ray_kinds();
+std::optional<RayKind> ray_kind_from_name(const std::string& name);
+
+// About `count` rays of `kind` for a framed scene (deterministic: the same rays on every machine):
+// - camera_rows: the scene camera's pixel rays at sqrt(count) x sqrt(count), row by row;
+// - sensor: a spinning sensor at the camera, its axis the camera's up: 64 rings spread over the
+//   vertical field of view around the view direction, each count / 64 azimuths all the way round;
+// - incoherent: from random points on the sphere of the geometry's bounding box's diagonal around
+//   its centre towards random points in the box.
+std::vector<GivenRay> make_rays(RayKind kind, const Scene& scene, size_t count);
+
+struct GivenRaysRow {
+  std::string kind;
+  size_t rays = 0;
+  std::string walk;  // how cast_rays walked them (given_ray_walk_name)
+  TimeStats vkray;   // wall time of a whole cast_rays call: ordering, writing, dispatch, reading back
+  TimeStats embree;  // rtcIntersect1M in chunks of 1024 rays on every core, what Open3D's cast_rays does
+  unsigned embree_threads = 0;
+  // vkray's and Embree's answers against the reference's (distances relative to it, where both hit).
+  size_t hit_mismatches = 0, embree_hit_mismatches = 0;
+  size_t both_hit = 0;
+  double t_rel_p99 = 0.0, t_rel_max = 0.0, embree_t_rel_p99 = 0.0;
+};
+
+// Casts `rays` as `timing` says after a first call, through a Renderer of `scene` made with the
+// device's defaults, and `timing.frames` times through Embree; `kind` names the row.
+GivenRaysRow bench_given_rays(GpuDevice& device, const Scene& scene, const std::string& kind,
+                              const std::vector<GivenRay>& rays, const BenchTiming& timing);
+
+}  // namespace vkray
