@@ -1,7 +1,6 @@
 #include "engine/bench/embree_baseline.hpp"
 
 #include "engine/scene/camera.hpp"
-#include "engine/render/gpu_scene.hpp"
 #include "engine/reference/reference.hpp"
 #include "engine/unit_vector.hpp"
 

@@ -2,7 +2,6 @@
 
 #include "engine/bench/embree_baseline.hpp"
 #include "engine/reference/reference.hpp"
-#include "engine/render/gpu_scene.hpp"
 #include "engine/render/renderer.hpp"
 #include "engine/scene/camera.hpp"
 

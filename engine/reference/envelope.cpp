@@ -40,7 +40,6 @@
 // between grazes it: its normal is across the ray, asin |n.d| from a sample's).
 #include "engine/reference/envelope.hpp"
 
-#include "engine/render/gpu_scene.hpp"
 #include "engine/reference/reference.hpp"
 
 #include <glm/geometric.hpp>

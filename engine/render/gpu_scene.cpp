@@ -32,15 +32,6 @@ gpu::GpuPoint encode_point(const glm::dvec4& value, Precision precision) {
   return point;
 }
 
-struct Bounds {
-  glm::dvec3 lower{std::numeric_limits<double>::infinity()};
-  glm::dvec3 upper{-std::numeric_limits<double>::infinity()};
-  void add(const glm::dvec3& p) {
-    lower = glm::min(lower, p);
-    upper = glm::max(upper, p);
-  }
-};
-
 struct FloatBox {
   glm::vec3 lower;
   glm::vec3 upper;
@@ -208,21 +199,6 @@ void lay_out_for_ray_queries(GpuScene& gpu, const Scene& scene, std::vector<Enco
 
 }  // namespace
 
-glm::dvec3 scene_anchor(const Scene& scene) {
-  Bounds bounds;
-  for (const auto& sphere : scene.spheres) {
-    bounds.add(sphere.center - sphere.radius);
-    bounds.add(sphere.center + sphere.radius);
-  }
-  for (const auto& mesh : scene.meshes) {
-    for (const auto& position : mesh.positions) bounds.add(position);
-  }
-  // Only a scene of planes alone has no bounds; its camera is then the natural origin. The camera
-  // is otherwise left out, so a Renderer gives the same bits whatever camera it was built with.
-  if (bounds.lower.x > bounds.upper.x) bounds.add(scene.camera.from);
-  return 0.5 * (bounds.lower + bounds.upper);
-}
-
 // The packet walk, where the renderer allows it, is chosen once the tree's depth is known (see
 // GpuSceneOptions::packet_walk). Where it is, triangles always go into a tree: brute force tests
 // each triangle per ray in batches of VKRAY_TRIANGLE_BATCH, and the packet walk beats it from one
@@ -254,15 +230,6 @@ GpuSceneShape plan_gpu_scene(const Scene& scene, const GpuSceneOptions& options)
   shape.tree_has_triangles = triangles > 0;
   shape.tree_has_spheres = spheres > 0 && !apart;
   return shape;
-}
-
-double scene_radius(const Scene& scene, const glm::dvec3& anchor) {
-  double radius = 0.0;
-  for (const auto& sphere : scene.spheres) radius = std::max(radius, glm::length(sphere.center - anchor) + sphere.radius);
-  for (const auto& mesh : scene.meshes) {
-    for (const auto& position : mesh.positions) radius = std::max(radius, glm::length(position - anchor));
-  }
-  return radius;
 }
 
 GpuScene make_gpu_scene(const Scene& scene, const GpuSceneOptions& options, const ShaderVariant& shader) {

@@ -117,10 +117,6 @@ struct GeometryLayout {
   size_t tree_node = sizeof(gpu::GpuBvhNode);
 };
 
-// The centre of the bounding box of the finite primitives (spheres, meshes); the camera for a
-// scene of planes alone.
-glm::dvec3 scene_anchor(const Scene& scene);
-
 // The traversals by the names `--traversal` and Python's `traversal=` take; nothing for another name.
 inline constexpr const char* traversal_names_help = "auto, brute-force, per-ray, packet, ray-query";
 std::optional<PrimitiveSearch> traversal_from_name(std::string_view name);
@@ -137,9 +133,6 @@ PrimitiveSearch choose_search(size_t triangle_count, size_t sphere_count, bool p
 // What make_gpu_scene will build for `scene`, as far as it can be known without building it (see
 // GpuSceneShape): every triangle counted as kept, the tree shallow enough for the packet walk.
 GpuSceneShape plan_gpu_scene(const Scene& scene, const GpuSceneOptions& options);
-
-// The largest distance from `anchor` of a sphere's surface or a mesh vertex (0 without either).
-double scene_radius(const Scene& scene, const glm::dvec3& anchor);
 
 // Positions encoded for `shader`'s precision and coordinates.
 GpuScene make_gpu_scene(const Scene& scene, const GpuSceneOptions& options = {}, const ShaderVariant& shader = {});

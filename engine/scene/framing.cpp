@@ -23,20 +23,9 @@ std::optional<FramingView> framing_view_from_name(std::string_view name) {
 }
 
 Camera frame_scene(const Scene& scene, uint32_t width, uint32_t height, const FramingView& view) {
-  glm::dvec3 lower(std::numeric_limits<double>::infinity()), upper(-std::numeric_limits<double>::infinity());
-  for (const auto& mesh : scene.meshes) {
-    for (const auto& p : mesh.positions) lower = glm::min(lower, p), upper = glm::max(upper, p);
-  }
-  for (const auto& sphere : scene.spheres) {
-    lower = glm::min(lower, sphere.center - sphere.radius), upper = glm::max(upper, sphere.center + sphere.radius);
-  }
-  if (!(lower.x <= upper.x)) throw InputError("nothing to frame: the scene has no mesh or sphere");
-  const glm::dvec3 centre = 0.5 * (lower + upper);
-  double radius = 0.0;
-  for (const auto& mesh : scene.meshes) {
-    for (const auto& p : mesh.positions) radius = std::max(radius, glm::length(p - centre));
-  }
-  for (const auto& sphere : scene.spheres) radius = std::max(radius, glm::length(sphere.center - centre) + sphere.radius);
+  if (finite_bounds(scene).empty()) throw InputError("nothing to frame: the scene has no mesh or sphere");
+  const glm::dvec3 centre = scene_anchor(scene);
+  double radius = scene_radius(scene, centre);
   // A single point still needs a camera somewhere: one unit away.
   if (radius == 0.0) radius = 0.5;
 

@@ -134,4 +134,33 @@ void check_given_rays(std::span<const GivenRay> rays) {
   }
 }
 
+Bounds finite_bounds(const Scene& scene) {
+  Bounds bounds;
+  for (const auto& sphere : scene.spheres) {
+    bounds.add(sphere.center - sphere.radius);
+    bounds.add(sphere.center + sphere.radius);
+  }
+  for (const auto& mesh : scene.meshes) {
+    for (const auto& position : mesh.positions) bounds.add(position);
+  }
+  return bounds;
+}
+
+glm::dvec3 scene_anchor(const Scene& scene) {
+  Bounds bounds = finite_bounds(scene);
+  // Only a scene of planes alone has no bounds; its camera is then the natural origin. The camera
+  // is otherwise left out, so a Renderer gives the same bits whatever camera it was built with.
+  if (bounds.empty()) bounds.add(scene.camera.from);
+  return 0.5 * (bounds.lower + bounds.upper);
+}
+
+double scene_radius(const Scene& scene, const glm::dvec3& anchor) {
+  double radius = 0.0;
+  for (const auto& sphere : scene.spheres) radius = std::max(radius, glm::length(sphere.center - anchor) + sphere.radius);
+  for (const auto& mesh : scene.meshes) {
+    for (const auto& position : mesh.positions) radius = std::max(radius, glm::length(position - anchor));
+  }
+  return radius;
+}
+
 }  // namespace vkray

@@ -4,10 +4,12 @@
 
 #include "engine/scene/camera.hpp"
 
+#include <glm/common.hpp>
 #include <glm/vec3.hpp>
 
 #include <array>
 #include <cstdint>
+#include <limits>
 #include <span>
 #include <stdexcept>
 #include <string>
@@ -84,6 +86,27 @@ struct ObjectPrimitive {
   uint32_t primitive = no_object;
   bool operator==(const ObjectPrimitive&) const = default;
 };
+
+// A box grown point by point; lower > upper while it holds none.
+struct Bounds {
+  glm::dvec3 lower{std::numeric_limits<double>::infinity()};
+  glm::dvec3 upper{-std::numeric_limits<double>::infinity()};
+  void add(const glm::dvec3& p) {
+    lower = glm::min(lower, p);
+    upper = glm::max(upper, p);
+  }
+  bool empty() const { return !(lower.x <= upper.x); }
+};
+
+// The box of the finite primitives: every sphere and mesh vertex (planes are infinite).
+Bounds finite_bounds(const Scene& scene);
+
+// The centre of finite_bounds: where the GPU's positions are stored from and the framed camera
+// looks; the camera for a scene of planes alone.
+glm::dvec3 scene_anchor(const Scene& scene);
+
+// The largest distance from `anchor` of a sphere's surface or a mesh vertex (0 without either).
+double scene_radius(const Scene& scene, const glm::dvec3& anchor);
 
 // Throws InputError naming `path` unless every coordinate of `point` is finite and within
 // max_coordinate.
