@@ -7,7 +7,9 @@
 #   vkray manifest merge "$OUT"/manifest-shard-*-of-*.jsonl -o "$OUT"/manifest.jsonl
 #
 # A task that is requeued or run again renders only the views it has not finished. The settings
-# below may also be given in the environment (sbatch --export).
+# below may also be given in the environment (sbatch --export). VKRAY is the relocatable bundle's
+# bin/vkray unpacked on the shared file system (README, "Installing on a GPU server"), e.g.
+# VKRAY=$HOME/vkray-0.1.0-linux-x86_64/bin/vkray; add #SBATCH --gpus=1 on GPU partitions.
 #SBATCH --job-name=vkray-views
 #SBATCH --array=0-3
 #SBATCH --cpus-per-task=2

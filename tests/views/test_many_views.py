@@ -5,6 +5,7 @@ README run locally with the environment their schedulers set. ctest runs this wi
 import json
 import math
 import os
+import re
 import signal
 import subprocess
 import time
@@ -255,6 +256,24 @@ def test_the_kubernetes_indexed_job_runs_as_its_pods_would(whole_run, tmp_path):
     for index in range(spec["completions"]):
         vkray("render", *local, env=dict(os.environ, JOB_COMPLETION_INDEX=str(index)))
     check_sharded_views(whole_run, tmp_path, spec["completions"])
+
+
+def test_the_dockerfile_adds_the_bundle_the_job_runs():
+    """No Docker engine runs here: the image docs/Dockerfile makes holds the bundle that
+    cmake/make-bundle.sh names, with its bin/vkray on the PATH, which the Job's command uses."""
+    with open(os.path.join(SOURCE, "CMakeLists.txt")) as text:
+        version = re.search(r"project\(vkray VERSION ([0-9.]+)", text.read()).group(1)
+    bundle = f"vkray-{version}-linux-x86_64"
+    with open(os.path.join(SOURCE, "docs", "Dockerfile")) as text:
+        lines = [line.strip() for line in text if not line.startswith("#")]
+    assert f"ADD build/{bundle}.tar.gz /opt/" in lines
+    (path,) = [line for line in lines if line.startswith("ENV PATH=")]
+    assert path.startswith(f"ENV PATH=/opt/{bundle}/bin:$PATH")
+    with open(os.path.join(SOURCE, "cmake", "make-bundle.sh")) as text:
+        script = text.read()
+    assert 'name="vkray-$version-linux-$(uname -m)"' in script and '"$stage/bin/vkray"' in script
+    with open(os.path.join(SOURCE, "docs", "kubernetes-views-job.yaml")) as text:
+        assert yaml.safe_load(text)["spec"]["template"]["spec"]["containers"][0]["command"][0] == "vkray"
 
 
 def check_sharded_views(whole_run, folder, shards):

@@ -1,0 +1,70 @@
+#!/bin/sh
+# The relocatable bundle where a user meets it (README, "Installing on a GPU server"): in a fresh
+# Debian 12 (debootstrap minbase: no compiler, no -dev package, no build tree), unpacked into a
+# folder of a user who is not root and run from another one:
+# 1. before the machine has any Vulkan package, it starts on its own loader and says in one line
+#    that no driver is there and what to install, exit 1;
+# 2. with only what a user would install (libvulkan1 and mesa-vulkan-drivers for lavapipe,
+#    python3-numpy for Python) it lists the device on the machine's loader, renders the bunny (the
+#    built-in scene where ../shared/models is absent), passes the report's checks at reduced sizes
+#    (`vkray report --reduced`: every row ran, every check passed) and renders from Python.
+# CI runs it after the suite (.ci/run). Usage: sh cmake/check-bundle.sh [BUILD_DIR], as root, after
+# sh cmake/make-bundle.sh; it installs debootstrap (cmake/debian-packages-bundle.txt).
+set -eu
+cd "$(dirname "$0")/.."
+build="${1:-build}"
+bundle=$(ls "$build"/vkray-*-linux-*.tar.gz 2>/dev/null | head -n 1)
+[ -n "$bundle" ] || { echo "vkray: no bundle in $build: sh cmake/make-bundle.sh $build first" >&2; exit 2; }
+sh cmake/install-deps.sh cmake/debian-packages-bundle.txt
+
+root=$(mktemp -d)
+chmod 755 "$root"  # the root of the new system: every user walks through it
+cleanup() {
+  umount "$root/proc" 2>/dev/null || true
+  rm -rf "$root"
+}
+trap cleanup EXIT
+mirror=$(awk '/^URIs:/ {print $2; exit}' /etc/apt/sources.list.d/debian.sources 2>/dev/null || true)
+echo "vkray: making a fresh Debian 12 root in $root"
+debootstrap --variant=minbase bookworm "$root" "${mirror:-http://deb.debian.org/debian}" >"$root.debootstrap.log" 2>&1 ||
+  { tail -n 20 "$root.debootstrap.log"; exit 1; }
+rm -f "$root.debootstrap.log"
+cp /etc/resolv.conf "$root/etc/resolv.conf"
+mount -t proc proc "$root/proc"
+chroot "$root" useradd --create-home newcomer
+cp "$bundle" "$root/tmp/vkray.tar.gz"
+model=/tmp/models/stanford-bunny.obj
+if [ -f ../shared/models/stanford-bunny.obj ]; then
+  mkdir -p "$root/tmp/models"
+  cp ../shared/models/stanford-bunny.obj ../shared/models/stanford-dragon-100k.obj "$root/tmp/models/"
+else
+  echo "vkray: ../shared/models is absent: the built-in scene and a generated mesh stand in for the models"
+  model=""
+fi
+# As the user, in a folder of theirs, from another folder.
+as_newcomer() {
+  chroot --userspec=newcomer:newcomer "$root" /usr/bin/env -i HOME=/home/newcomer PATH=/usr/bin:/bin LANG=C.UTF-8 \
+    sh -c "cd /home/newcomer/elsewhere && $1"
+}
+chroot --userspec=newcomer:newcomer "$root" sh -c \
+  'mkdir -p /home/newcomer/tools /home/newcomer/elsewhere && tar -C /home/newcomer/tools -xzf /tmp/vkray.tar.gz'
+vkray='../tools/vkray-*/bin/vkray'
+
+echo "vkray: 1. no Vulkan package on the machine"
+if as_newcomer "$vkray info" >"$root/tmp/no-loader.log" 2>&1; then
+  cat "$root/tmp/no-loader.log"; echo "vkray: without a Vulkan driver, 'vkray info' succeeded" >&2; exit 1
+fi
+cat "$root/tmp/no-loader.log"
+grep -q "no Vulkan driver found by the Vulkan loader .*(the bundle's: this machine has none)" "$root/tmp/no-loader.log" || { echo "vkray: not the one line expected" >&2; exit 1; }
+
+echo "vkray: 2. with libvulkan1, mesa-vulkan-drivers and python3-numpy"
+chroot "$root" sh -c 'DEBIAN_FRONTEND=noninteractive apt-get install -y -q --no-install-recommends libvulkan1 mesa-vulkan-drivers python3-numpy' \
+  >"$root/tmp/apt.log" 2>&1 || { tail -n 20 "$root/tmp/apt.log"; exit 1; }
+as_newcomer "$vkray info"
+as_newcomer "$vkray info" | grep -q "Vulkan loader .*(the machine's)"
+as_newcomer "$vkray render $model -o render.exr && ls -l render.exr render.png"
+models="--models /tmp/models"
+[ -n "$model" ] || models="--models /nonexistent"
+as_newcomer "$vkray report report $models --reduced && cat report/report.md | head -n 12"
+as_newcomer "PYTHONPATH=\$(echo ../tools/vkray-*/python) python3 -c 'import vkray, numpy; r = vkray.Renderer(vkray.load(\"\", 64, 48)); d = r.render()[\"depth\"]; assert d.shape == (48, 64) and numpy.isfinite(d).any(); print(\"python: rendered on\", r.device_name)'"
+echo "vkray: the bundle works in a fresh Debian 12"
