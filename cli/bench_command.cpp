@@ -7,6 +7,7 @@
 #include "engine/bench/bench_plot.hpp"
 #include "engine/bench/bench_report.hpp"
 #include "engine/io/image_io.hpp"
+#include "engine/typed_names.hpp"
 
 #include <unistd.h>
 
@@ -31,17 +32,6 @@ struct BenchOptions {
   std::string json, csv, plot, markdown;
   std::vector<std::string> compare;
 };
-
-std::vector<std::string> split_list(const std::string& list) {
-  std::vector<std::string> items;
-  size_t start = 0;
-  while (start <= list.size() && !list.empty()) {
-    const size_t comma = std::min(list.find(',', start), list.size());
-    items.push_back(list.substr(start, comma - start));
-    start = comma + 1;
-  }
-  return items;
-}
 
 // The options that decide what was measured, as a command: the accuracy document names it.
 std::string command_line(const BenchOptions& options) {

@@ -3,7 +3,7 @@
 #include "cli/commands.hpp"
 #include "engine/device/gpu_device.hpp"
 #include "engine/io/image_io.hpp"
-#include "engine/nearest_name.hpp"
+#include "engine/typed_names.hpp"
 #include "engine/scene/scene.hpp"
 
 #include <unistd.h>

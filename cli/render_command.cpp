@@ -6,6 +6,7 @@
 #include "engine/reference/compare.hpp"
 #include "engine/host_memory.hpp"
 #include "engine/io/image_io.hpp"
+#include "engine/typed_names.hpp"
 #include "engine/reference/reference.hpp"
 #include "engine/render/renderer.hpp"
 #include "engine/scene/scene_loader.hpp"
@@ -49,15 +50,12 @@ struct RenderOptions {
 
 AovSet parse_aov_list(const std::string& list) {
   AovSet aovs;
-  size_t start = 0;
-  while (start <= list.size()) {
-    const size_t comma = std::min(list.find(',', start), list.size());
-    const std::string name = list.substr(start, comma - start);
+  for (const std::string& name : split_list(list)) {
     const auto aov = aov_from_name(name);
-    if (!aov) throw InputError("--aov: unknown output '" + name + "' (choose from " + aov_names_help + ")");
+    if (!aov) throw InputError("--aov: " + unknown_output_message(name));
     aovs.add(*aov);
-    start = comma + 1;
   }
+  if (aovs.empty()) throw InputError("--aov: name at least one output (" + output_names() + ")");
   return aovs;
 }
 
@@ -347,7 +345,7 @@ Action add_render_command(CLI::App& app) {
                             ->capture_default_str();
   command->add_option("--width", options->width, "Image width in pixels (overrides the scene)");
   command->add_option("--height", options->height, "Image height in pixels (overrides the scene)");
-  command->add_option("--aov", options->aovs, std::string("Outputs to compute, comma-separated: ") + aov_names_help)
+  command->add_option("--aov", options->aovs, "Outputs to compute, comma-separated ('_' or '-' between words): " + output_names())
       ->capture_default_str();
   CLI::Option* preview = command->add_option("--preview", options->preview, "PNG preview to write (default: the output with .png)");
   command->add_flag("--no-preview", options->no_preview, "Write no PNG preview")->excludes(preview);

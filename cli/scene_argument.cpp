@@ -1,6 +1,6 @@
 #include "cli/scene_argument.hpp"
 
-#include "engine/nearest_name.hpp"
+#include "engine/typed_names.hpp"
 #include "engine/scene/scene_loader.hpp"
 #include "engine/scene/scene_or_model.hpp"
 

@@ -1,5 +1,6 @@
 #include "engine/frame.hpp"
 
+#include "engine/typed_names.hpp"
 #include "engine/parallel.hpp"
 
 #include <glm/geometric.hpp>
@@ -11,54 +12,126 @@
 namespace vkray {
 
 namespace {
-struct NamedAov {
-  Aov aov;
-  const char* name;
+
+// The outputs, in the order files and dicts list them. EXR channel names: Z and N for depth and
+// normal, as OpenEXR's standard names them; U and V the image plane's coordinates; the camera
+// outputs as layers ("layer.channel"), P for positions as pbrt-v4 names them; the ids as Python's
+// cast_rays names them; Ns, pbrt-v4's name for the shading normal; texcoord and barycentric in
+// layers of their own, apart from U and V (a texture's coordinates, not the image plane's).
+const OutputInfo output_table[] = {
+    {Aov::depth, "depth", "distance along the ray", 1, false, OutputSource::device, {"Z"}, true, OutputError::none, "", "",
+     &Frame::depth},
+    {Aov::normal, "normal", "unit geometric normal facing the ray", 3, false, OutputSource::device, {"N.X", "N.Y", "N.Z"},
+     false, OutputError::none, "", "", &Frame::normal},
+    {Aov::uv, "uv", "the pixel centre on the image plane", 2, false, OutputSource::device, {"U", "V"}, false,
+     OutputError::none, "", "", &Frame::uv},
+    {Aov::planar_depth, "planar-depth", "distance from the image plane", 1, false, OutputSource::camera, {"planar.Z"},
+     true, OutputError::relative_p99, "planar_depth_rel_p99", "planar", &Frame::planar_depth},
+    {Aov::position, "position", "hit point, world", 3, false, OutputSource::camera, {"P.X", "P.Y", "P.Z"}, false,
+     OutputError::over_depth_p99, "position_rel_p99", "P", &Frame::position},
+    {Aov::camera_position, "camera-position", "hit point, camera space", 3, false, OutputSource::camera,
+     {"camera.P.X", "camera.P.Y", "camera.P.Z"}, false, OutputError::over_depth_p99, "position_rel_p99", "P",
+     &Frame::camera_position},
+    {Aov::mesh_id, "mesh-id", "mesh, sphere or plane hit", 1, true, OutputSource::ids, {"mesh_id"}, false,
+     OutputError::mismatches, "id_mismatches", "ids", nullptr, &Frame::mesh_id},
+    {Aov::primitive_id, "primitive-id", "triangle hit, in its file", 1, true, OutputSource::ids, {"primitive_id"}, false,
+     OutputError::mismatches, "id_mismatches", "ids", nullptr, &Frame::primitive_id},
+    {Aov::barycentric, "barycentric", "weights of the triangle's second and third vertices", 2, false,
+     OutputSource::surface, {"barycentric.U", "barycentric.V"}, false, OutputError::absolute_max, "barycentric_max",
+     "bary", &Frame::barycentric},
+    {Aov::shading_normal, "shading-normal", "interpolated vertex normal facing the ray", 3, false,
+     OutputSource::surface, {"Ns.X", "Ns.Y", "Ns.Z"}, false, OutputError::degrees_p99, "shading_normal_deg_p99",
+     "Ns", &Frame::shading_normal},
+    {Aov::texcoord, "texcoord", "interpolated texture coordinates", 2, false, OutputSource::surface,
+     {"texcoord.U", "texcoord.V"}, false, OutputError::absolute_max, "texcoord_max", "uv", &Frame::texcoord},
 };
-constexpr NamedAov named_aovs[] = {{Aov::depth, "depth"},
-                                   {Aov::normal, "normal"},
-                                   {Aov::uv, "uv"},
-                                   {Aov::planar_depth, "planar-depth"},
-                                   {Aov::position, "position"},
-                                   {Aov::camera_position, "camera-position"},
-                                   {Aov::mesh_id, "mesh-id"},
-                                   {Aov::primitive_id, "primitive-id"},
-                                   {Aov::barycentric, "barycentric"},
-                                   {Aov::shading_normal, "shading-normal"},
-                                   {Aov::texcoord, "texcoord"}};
+
+// The name with every '_' read as '-'.
+std::string dashed(std::string_view name) {
+  std::string text(name);
+  std::replace(text.begin(), text.end(), '_', '-');
+  return text;
+}
+
 }  // namespace
+
+std::span<const OutputInfo> outputs() { return output_table; }
+
+const OutputInfo& output_info(Aov aov) {
+  for (const auto& output : output_table) {
+    if (output.aov == aov) return output;
+  }
+  throw std::logic_error("no output " + std::to_string(static_cast<uint32_t>(aov)));
+}
+
+bool AovSet::has_source(OutputSource source) const {
+  return std::any_of(std::begin(output_table), std::end(output_table),
+                     [&](const OutputInfo& output) { return output.source == source && has(output.aov); });
+}
+
+AovSet AovSet::on_device() const {
+  AovSet device;
+  for (const auto& output : output_table) {
+    if (output.source == OutputSource::device && has(output.aov)) device.add(output.aov);
+  }
+  if (has(Aov::hit)) device.add(Aov::hit);
+  if (has_camera_outputs() || has_ids() || has_surface_outputs()) device.add(Aov::depth);
+  if (has_ids() || has_surface_outputs()) device.add(Aov::hit);
+  return device;
+}
 
 std::string AovSet::names() const {
   std::string list;
-  for (const auto& entry : named_aovs) {
-    if (!has(entry.aov)) continue;
+  for (const auto& output : output_table) {
+    if (!has(output.aov)) continue;
     if (!list.empty()) list += ',';
-    list += entry.name;
+    list += output.name;
   }
   return list;
 }
 
 std::optional<Aov> aov_from_name(std::string_view name) {
-  for (const auto& entry : named_aovs) {
-    if (name == entry.name) return entry.aov;
+  const std::string wanted = dashed(name);
+  for (const auto& output : output_table) {
+    if (wanted == output.name) return output.aov;
   }
   return std::nullopt;
 }
 
+std::string output_names() {
+  std::string list;
+  for (const auto& output : output_table) list += (list.empty() ? "" : ", ") + std::string(output.name);
+  return list;
+}
+
+std::string unknown_output_message(std::string_view name) {
+  std::vector<std::string> names;
+  for (const auto& output : output_table) names.emplace_back(output.name);
+  const std::optional<std::string> nearest = nearest_name(dashed(name), names);
+  return "unknown output '" + std::string(name) + "'" +
+         (nearest ? "; did you mean '" + *nearest + "'?" : " (choose from " + output_names() + ")");
+}
+
+std::string python_key(const OutputInfo& output) {
+  std::string key = output.name;
+  std::replace(key.begin(), key.end(), '-', '_');
+  return key;
+}
+
 void Frame::allocate(bool doubles) {
-  const AovSet device = aovs.on_device();
-  depth.assign(device.has(Aov::depth) ? pixel_count() : 0, 0.0f);
-  normal.assign(device.has(Aov::normal) ? 3 * pixel_count() : 0, 0.0f);
-  uv.assign(device.has(Aov::uv) ? 2 * pixel_count() : 0, 0.0f);
-  planar_depth.assign(aovs.has(Aov::planar_depth) ? pixel_count() : 0, 0.0f);
-  position.assign(aovs.has(Aov::position) ? 3 * pixel_count() : 0, 0.0f);
-  camera_position.assign(aovs.has(Aov::camera_position) ? 3 * pixel_count() : 0, 0.0f);
-  // The surface outputs are found from both ids.
-  mesh_id.assign(aovs.has(Aov::mesh_id) || aovs.has_surface_outputs() ? pixel_count() : 0, no_object);
-  primitive_id.assign(aovs.has(Aov::primitive_id) || aovs.has_surface_outputs() ? pixel_count() : 0, no_object);
-  barycentric.assign(aovs.has(Aov::barycentric) ? 2 * pixel_count() : 0, 0.0f);
-  shading_normal.assign(aovs.has(Aov::shading_normal) ? 3 * pixel_count() : 0, 0.0f);
-  texcoord.assign(aovs.has(Aov::texcoord) ? 2 * pixel_count() : 0, 0.0f);
+  // What is computed: the outputs asked for, what the device computes for them, and both ids,
+  // from which the surface outputs are found.
+  AovSet computed = aovs;
+  for (const auto& output : output_table) {
+    if (aovs.on_device().has(output.aov)) computed.add(output.aov);
+  }
+  if (aovs.has_surface_outputs()) computed.add(Aov::mesh_id), computed.add(Aov::primitive_id);
+  for (const auto& output : output_table) {
+    const size_t size = computed.has(output.aov) ? output.components * pixel_count() : 0;
+    if (output.floats) (this->*output.floats).assign(size, 0.0f);
+    // Ids name no primitive until one is stored.
+    if (output.integers) (this->*output.integers).assign(size, output.source == OutputSource::ids ? no_object : 0u);
+  }
   depth64.assign(doubles ? depth.size() : 0, 0.0);
   normal64.assign(doubles ? normal.size() : 0, 0.0);
 }
@@ -72,6 +145,19 @@ bool Frame::hit(size_t pixel) const {
   if (!depth.empty()) return std::isfinite(depth[pixel]);
   if (!normal.empty()) return normal_at(pixel) != glm::vec3(0.0f);
   return false;
+}
+
+void fill_pixel_uv(Frame& frame) {
+  const size_t pixels = frame.pixel_count();
+  parallel_for_chunks(frame.height, [&](size_t first_row, size_t end_row) {
+    for (auto j = static_cast<uint32_t>(first_row); j < end_row; ++j) {
+      for (uint32_t i = 0; i < frame.width; ++i) {
+        const glm::dvec2 uv = pixel_uv(i, j, frame.width, frame.height);
+        frame.uv[size_t{j} * frame.width + i] = static_cast<float>(uv.x);
+        frame.uv[pixels + size_t{j} * frame.width + i] = static_cast<float>(uv.y);
+      }
+    }
+  }, 16);
 }
 
 void store_ids(Frame& frame, size_t pixel, ObjectPrimitive source) {

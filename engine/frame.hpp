@@ -7,21 +7,20 @@
 #include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
 
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <optional>
+#include <span>
 #include <string>
 #include <string_view>
 #include <vector>
 
 namespace vkray {
 
-// depth, normal and uv come from the device; planar_depth, position and camera_position are the
-// camera outputs, computed on the host from the depth and the camera (add_camera_outputs);
-// mesh_id and primitive_id are the host's names for the primitive the device says each ray hit
-// (hit, which only the device computes and no user names); barycentric, shading_normal and
-// texcoord are the surface outputs, computed on the host from that primitive and the pixel's ray
-// (add_surface_outputs).
+// Every output a render can write, as a bit of AovSet. Each is described once, in outputs()
+// below: adding one takes its bit here, its planes in Frame, its row in output_table, its
+// computation and its test.
 enum class Aov : uint32_t {
   depth = 1,
   normal = 2,
@@ -31,10 +30,41 @@ enum class Aov : uint32_t {
   camera_position = 32,
   mesh_id = 64,
   primitive_id = 128,
-  hit = 256,
+  hit = 256,  // what each ray hit, as the device numbers it: computed for the ids, named by no user
   barycentric = 512,
   shading_normal = 1024,
-  texcoord = 2048
+  texcoord = 2048,
+};
+
+// Where an output is computed: on the device (depth, normal, uv); on the host from the depth and
+// the camera (add_camera_outputs); the host's names for what each ray hit (store_ids); on the host
+// from what each ray hit and the pixel's ray (add_surface_outputs).
+enum class OutputSource { device, camera, ids, surface };
+
+// How the bench measures an output against the reference's (measure_output_errors), where both
+// hit: the relative error, its 99th percentile; the distance over the pixel's depth, p99; pixels
+// that differ (surface outputs: where both name the same primitive); the largest absolute
+// difference; the angle in degrees, p99. none: the device outputs, measured by FrameError.
+enum class OutputError { none, relative_p99, over_depth_p99, mismatches, absolute_max, degrees_p99 };
+
+struct Frame;
+
+// One output as every part of vkray sees it: the CLI's --aov, the EXR's channels, Python's dict
+// and the reference's frame, the bench's error report.
+struct OutputInfo {
+  Aov aov;
+  const char* name;         // --aov, vkray:outputs and the manifest; Python's key with '_' for '-'
+  const char* description;  // a few words, for the help texts
+  uint32_t components;
+  bool integer;             // 32-bit unsigned planes (ids, flags); float32 otherwise
+  OutputSource source;
+  std::array<const char*, 3> channels;  // the EXR's channel of each component
+  bool takes_miss_value;    // --miss sets it where the ray missed (a depth)
+  OutputError error;
+  const char* error_field;  // the bench's figure (JSON, CSV); outputs measured together share one
+  const char* error_label;  // and its label in the bench's table
+  std::vector<float> Frame::*floats = nullptr;     // its planes in a Frame, by type
+  std::vector<uint32_t> Frame::*integers = nullptr;
 };
 
 // A set of outputs as a bit mask of Aov values.
@@ -48,41 +78,37 @@ class AovSet {
   constexpr void add(Aov aov) { bits_ |= static_cast<uint32_t>(aov); }
   constexpr bool empty() const { return bits_ == 0; }
   constexpr uint32_t bits() const { return bits_; }
-  constexpr bool has_camera_outputs() const {
-    return has(Aov::planar_depth) || has(Aov::position) || has(Aov::camera_position);
-  }
-  constexpr bool has_ids() const { return has(Aov::mesh_id) || has(Aov::primitive_id); }
-  constexpr bool has_surface_outputs() const {
-    return has(Aov::barycentric) || has(Aov::shading_normal) || has(Aov::texcoord);
-  }
-  // Depth, normal, a camera, id or surface output need a ray cast; uv alone does not.
-  constexpr bool needs_rays() const {
-    return has(Aov::depth) || has(Aov::normal) || has_camera_outputs() || has_ids() || has_surface_outputs();
-  }
+  // Whether it holds an output computed from `source`.
+  bool has_source(OutputSource source) const;
+  bool has_camera_outputs() const { return has_source(OutputSource::camera); }
+  bool has_ids() const { return has_source(OutputSource::ids); }
+  bool has_surface_outputs() const { return has_source(OutputSource::surface); }
+  // Every output but uv needs a ray cast.
+  bool needs_rays() const { return (bits_ & ~static_cast<uint32_t>(Aov::uv)) != 0; }
   // What the device computes for these outputs: the camera outputs need its depth, the ids what
   // each ray hit, and its depth too (which pixels hit: the A channel); the surface outputs both.
-  constexpr AovSet on_device() const {
-    AovSet device;
-    device.bits_ = bits_ & (static_cast<uint32_t>(Aov::depth) | static_cast<uint32_t>(Aov::normal) |
-                            static_cast<uint32_t>(Aov::uv) | static_cast<uint32_t>(Aov::hit));
-    if (has_camera_outputs() || has_ids() || has_surface_outputs()) device.add(Aov::depth);
-    if (has_ids() || has_surface_outputs()) device.add(Aov::hit);
-    return device;
-  }
-  // What `vkray view` and Python show: depth, normal and uv.
-  constexpr bool device_outputs_only() const { return (bits_ & ~on_device().bits_) == 0 && !has(Aov::hit); }
+  AovSet on_device() const;
+  // What `vkray view` and Python's Reference show in double: depth, normal and uv.
+  bool device_outputs_only() const { return (bits_ & ~on_device().bits_) == 0 && !has(Aov::hit); }
   std::string names() const;  // "depth,normal"
 
  private:
   uint32_t bits_ = 0;
 };
 
-// "depth", "normal", "uv", "planar-depth", "position", "camera-position", "mesh-id",
-// "primitive-id", "barycentric", "shading-normal" or "texcoord"; nullopt for anything else.
+// Every output, in the order files and dicts list them.
+std::span<const OutputInfo> outputs();
+const OutputInfo& output_info(Aov aov);
+
+// The output named `name`, with '-' or '_' between words ("planar-depth", "planar_depth"); none
+// for any other name.
 std::optional<Aov> aov_from_name(std::string_view name);
-inline constexpr const char* aov_names_help =
-    "depth, normal, uv, planar-depth, position, camera-position, mesh-id, primitive-id, barycentric, shading-normal, "
-    "texcoord";
+// Every output's name, comma-separated, for help texts; and the error for an unknown name, with the
+// nearest known one where it is close ("unknown output 'planer-depth'; did you mean 'planar-depth'?").
+std::string output_names();
+std::string unknown_output_message(std::string_view name);
+// Python's key for an output: its name with '_' for '-'.
+std::string python_key(const OutputInfo& output);
 
 // Multi-component outputs are stored as planes (all x, then all y, ...), the layout the shader
 // writes: neighbouring invocations then store to neighbouring addresses.
@@ -121,8 +147,8 @@ struct Frame {
   std::vector<double> normal64;
 
   size_t pixel_count() const { return size_t{width} * height; }
-  // Sizes the buffers of the outputs in `aovs` for width x height (depth also for the camera
-  // outputs), with the double ones if asked.
+  // Sizes the planes of the outputs in `aovs` and of what the device computes for them, for
+  // width x height (outputs()), with the double ones if asked.
   void allocate(bool doubles = false);
   // depth and normal from depth64 and normal64, where those are there.
   void round_doubles();
@@ -136,6 +162,9 @@ struct Frame {
 
 // mesh_id and primitive_id of `pixel`, where the frame has them (for the ids or the surface outputs).
 void store_ids(Frame& frame, size_t pixel, ObjectPrimitive source);
+
+// The uv output: every pixel's image-plane coordinates (pixel_uv).
+void fill_pixel_uv(Frame& frame);
 
 // Fills the camera outputs `frame.aovs` asks for from its depth (depth64 where the float64 shader or
 // the reference left it: the hit point then rounds to float once) and its camera, in double:

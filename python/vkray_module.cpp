@@ -8,6 +8,7 @@
 #include "engine/render/renderer.hpp"
 #include "engine/scene/scene_loader.hpp"
 #include "engine/scene/scene_or_model.hpp"
+#include "engine/typed_names.hpp"
 
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
@@ -119,12 +120,8 @@ py::dict camera_dict(const Camera& camera) {
 AovSet aovs_from(py::handle argument) {
   std::vector<std::string> names;
   if (py::isinstance<py::str>(argument)) {
-    const std::string text = argument.cast<std::string>();
-    for (size_t start = 0; start <= text.size();) {
-      const size_t comma = std::min(text.find(',', start), text.size());
-      if (comma > start) names.push_back(text.substr(start, comma - start));
-      start = comma + 1;
-    }
+    names = split_list(argument.cast<std::string>());
+    std::erase(names, "");  // "depth," names one output
   } else {
     try {
       names = argument.cast<std::vector<std::string>>();
@@ -133,32 +130,61 @@ AovSet aovs_from(py::handle argument) {
     }
   }
   AovSet aovs;
-  for (std::string name : names) {
-    std::replace(name.begin(), name.end(), '_', '-');  // the dict's keys name them with '_'
+  for (const std::string& name : names) {
     const auto aov = aov_from_name(name);
-    if (!aov) throw InputError("aovs: unknown output '" + name + "' (known: " + aov_names_help + ")");
+    if (!aov) throw InputError("aovs: " + unknown_output_message(name));
     aovs.add(*aov);
   }
-  if (aovs.empty()) throw InputError(std::string("aovs: name at least one output (") + aov_names_help + ")");
+  if (aovs.empty()) throw InputError("aovs: name at least one output (" + output_names() + ")");
   return aovs;
 }
 
-// The camera, id and surface outputs of `frame` into `result`, as the EXR has them (float32; ids
-// uint32), keyed by their names with '_'.
-void add_derived_outputs(Frame& frame, AovSet aovs, py::dict& result) {
+// The outputs of `frame` in `aovs` into `result`, keyed by python_key, as the EXR has them
+// (float32; ids and flags uint32), a component on the last axis; `doubles`: depth and normal as the
+// float64 shader left them.
+void add_outputs(Frame& frame, AovSet aovs, py::dict& result) {
   const auto rows = static_cast<py::ssize_t>(frame.height), columns = static_cast<py::ssize_t>(frame.width);
-  if (aovs.has(Aov::planar_depth)) result["planar_depth"] = scalar_plane(std::move(frame.planar_depth), rows, columns);
-  if (aovs.has(Aov::position)) result["position"] = planes_as_last_axis(std::move(frame.position), rows, columns, 3);
-  if (aovs.has(Aov::camera_position)) {
-    result["camera_position"] = planes_as_last_axis(std::move(frame.camera_position), rows, columns, 3);
+  const bool doubles = !frame.depth64.empty() || !frame.normal64.empty();
+  for (const OutputInfo& output : outputs()) {
+    if (!aovs.has(output.aov)) continue;
+    auto array = [&](auto&& planes) {
+      return output.components == 1 ? scalar_plane(std::move(planes), rows, columns)
+                                    : planes_as_last_axis(std::move(planes), rows, columns, output.components);
+    };
+    if (doubles && output.aov == Aov::depth) {
+      result[python_key(output).c_str()] = array(std::move(frame.depth64));
+    } else if (doubles && output.aov == Aov::normal) {
+      result[python_key(output).c_str()] = array(std::move(frame.normal64));
+    } else if (output.integers) {
+      result[python_key(output).c_str()] = array(std::move(frame.*output.integers));
+    } else {
+      result[python_key(output).c_str()] = array(std::move(frame.*output.floats));
+    }
   }
-  if (aovs.has(Aov::mesh_id)) result["mesh_id"] = scalar_plane(std::move(frame.mesh_id), rows, columns);
-  if (aovs.has(Aov::primitive_id)) result["primitive_id"] = scalar_plane(std::move(frame.primitive_id), rows, columns);
-  if (aovs.has(Aov::barycentric)) result["barycentric"] = planes_as_last_axis(std::move(frame.barycentric), rows, columns, 2);
-  if (aovs.has(Aov::shading_normal)) {
-    result["shading_normal"] = planes_as_last_axis(std::move(frame.shading_normal), rows, columns, 3);
-  }
-  if (aovs.has(Aov::texcoord)) result["texcoord"] = planes_as_last_axis(std::move(frame.texcoord), rows, columns, 2);
+}
+
+// render()'s docstring: every output it gives, by its key (kept for the module's life: pybind11
+// keeps the pointer).
+const std::string& render_help() {
+  static const std::string text = [] {
+    std::string help = "camera: a dict as the scene file's, each key optional over the scene's; aovs: a list of "
+                       "output names (or one string, comma-separated). A dict of arrays, H x W, with a last axis of "
+                       "the components where there are several:";
+    for (const OutputInfo& output : outputs()) {
+      help += " " + python_key(output) + " (" + output.description +
+              (output.components > 1 ? ", " + std::to_string(output.components) + " components" : "") +
+              (output.integers ? ", uint32" : "") + ");";
+    }
+    help.back() = '.';
+    return help;
+  }();
+  return text;
+}
+
+// Reference.render()'s: the same, depth and normal in float64.
+const std::string& reference_render_help() {
+  static const std::string text = render_help() + " Depth and normal in float64.";
+  return text;
 }
 
 // The rays argument of cast_rays: N x 6 (origin, direction), any real dtype.
@@ -313,18 +339,8 @@ class PyRenderer {
       const std::lock_guard one_call_at_a_time(busy_);
       frame = renderer_->render(view.camera, view.width, view.height, aovs);
     }
-    const auto rows = static_cast<py::ssize_t>(frame.height), columns = static_cast<py::ssize_t>(frame.width);
     py::dict result;
-    const bool doubles = !frame.depth64.empty() || !frame.normal64.empty();
-    if (aovs.has(Aov::depth)) {
-      result["depth"] = doubles ? scalar_plane(std::move(frame.depth64), rows, columns) : scalar_plane(std::move(frame.depth), rows, columns);
-    }
-    if (aovs.has(Aov::normal)) {
-      result["normal"] = doubles ? planes_as_last_axis(std::move(frame.normal64), rows, columns, 3)
-                                 : planes_as_last_axis(std::move(frame.normal), rows, columns, 3);
-    }
-    if (aovs.has(Aov::uv)) result["uv"] = planes_as_last_axis(std::move(frame.uv), rows, columns, 2);
-    add_derived_outputs(frame, aovs, result);
+    add_outputs(frame, aovs, result);
     return result;
   }
 
@@ -388,39 +404,16 @@ class PyReference {
                   py::handle aov_names) {
     const View view = view_from(scene_, camera, width, height);
     const AovSet aovs = aovs_from(aov_names);
-    std::vector<ReferenceHit> hits;
+    py::dict result;
+    Frame frame;
     {
       py::gil_scoped_release released;
-      hits = render_reference_hits(*reference_, view.camera, view.width, view.height);
+      const std::vector<ReferenceHit> hits = render_reference_hits(*reference_, view.camera, view.width, view.height);
+      // Depth and normal in double, the reference's own; the other outputs as `vkray render
+      // --reference` writes them.
+      frame = reference_frame(*reference_, scene_, hits, view.camera, view.width, view.height, aovs, true);
     }
-    const size_t pixels = hits.size();
-    // Only the outputs asked for, as the Renderer does.
-    std::vector<double> depth(aovs.has(Aov::depth) ? pixels : 0), normal(aovs.has(Aov::normal) ? 3 * pixels : 0),
-        uv(aovs.has(Aov::uv) ? 2 * pixels : 0);
-    for (size_t p = 0; p < pixels; ++p) {
-      if (!depth.empty()) depth[p] = hits[p].t;
-      for (size_t c = 0; c < 3 && !normal.empty(); ++c) normal[c * pixels + p] = hits[p].normal[int(c)];
-      if (!uv.empty()) {
-        const glm::dvec2 at = pixel_uv(static_cast<uint32_t>(p % view.width), static_cast<uint32_t>(p / view.width),
-                                       view.width, view.height);
-        uv[p] = at.x, uv[pixels + p] = at.y;
-      }
-    }
-    const auto rows = static_cast<py::ssize_t>(view.height), columns = static_cast<py::ssize_t>(view.width);
-    py::dict result;
-    if (aovs.has(Aov::depth)) result["depth"] = scalar_plane(std::move(depth), rows, columns);
-    if (aovs.has(Aov::normal)) result["normal"] = planes_as_last_axis(std::move(normal), rows, columns, 3);
-    if (aovs.has(Aov::uv)) result["uv"] = planes_as_last_axis(std::move(uv), rows, columns, 2);
-    // The camera, id and surface outputs as `vkray render --reference` writes them.
-    AovSet derived;
-    for (const Aov aov : {Aov::planar_depth, Aov::position, Aov::camera_position, Aov::mesh_id, Aov::primitive_id,
-                          Aov::barycentric, Aov::shading_normal, Aov::texcoord}) {
-      if (aovs.has(aov)) derived.add(aov);
-    }
-    if (!derived.empty()) {
-      Frame frame = reference_frame(*reference_, scene_, hits, view.camera, view.width, view.height, derived);
-      add_derived_outputs(frame, derived, result);
-    }
+    add_outputs(frame, aovs, result);
     return result;
   }
 
@@ -473,6 +466,21 @@ PYBIND11_MODULE(vkray, m) {
     }
   });
   m.attr("NO_HIT") = py::int_(no_object);
+  // The outputs render() gives (engine/frame.hpp, outputs()): each as a dict of its key, components,
+  // dtype, the EXR channels `vkray render` writes it to and what it is.
+  py::list output_list;
+  for (const OutputInfo& output : outputs()) {
+    py::list channels;
+    for (size_t c = 0; c < output.components; ++c) channels.append(output.channels[c]);
+    py::dict entry;
+    entry["name"] = python_key(output);
+    entry["components"] = output.components;
+    entry["dtype"] = output.integers ? "uint32" : "float32";
+    entry["channels"] = channels;
+    entry["description"] = output.description;
+    output_list.append(entry);
+  }
+  m.attr("outputs") = py::tuple(output_list);
 
   py::class_<Scene>(m, "Scene",
                     "A scene from arrays: one mesh (vertices N x 3, triangles M x 3), or meshes, a list of dicts "
@@ -530,7 +538,7 @@ PYBIND11_MODULE(vkray, m) {
            py::arg("traversal") = "auto")
       .def("render", &PyRenderer::render, py::arg("camera") = py::none(), py::arg("width") = py::none(),
            py::arg("height") = py::none(), py::arg("aovs") = py::make_tuple("depth", "normal"),
-           "A dict of arrays: depth H x W (distance along the ray, inf on a miss), normal H x W x 3, uv H x W x 2.")
+           render_help().c_str())
       .def("cast_rays", &PyRenderer::cast_rays, py::arg("rays"),
            "rays: N x 6 (origin, direction). A dict of arrays: t (distance along the normalized direction, inf on "
            "a miss), normal N x 3, primitive_id and mesh_id (uint32, NO_HIT on a miss).")
@@ -540,6 +548,7 @@ PYBIND11_MODULE(vkray, m) {
   py::class_<PyReference>(m, "Reference", "The double-precision CPU reference, with the Renderer's methods (float64).")
       .def(py::init<const Scene&>(), py::arg("scene"))
       .def("render", &PyReference::render, py::arg("camera") = py::none(), py::arg("width") = py::none(),
-           py::arg("height") = py::none(), py::arg("aovs") = py::make_tuple("depth", "normal"))
+           py::arg("height") = py::none(), py::arg("aovs") = py::make_tuple("depth", "normal"),
+           reference_render_help().c_str())
       .def("cast_rays", &PyReference::cast_rays, py::arg("rays"));
 }

@@ -3,6 +3,8 @@
 // reads the OpenEXR and PNG files it writes back with OpenImageIO. Expected values come from the
 // output contract (channel names, UV formula, camera model) and closed-form scenes, never from the
 // engine's own code.
+#include "engine/frame.hpp"
+#include "engine/reference/compare.hpp"
 #include "tests/temp_dir_test.hpp"
 #include <OpenImageIO/imageio.h>
 #include <gtest/gtest.h>
@@ -1040,13 +1042,16 @@ TEST_F(CliTest, BenchBasicSuiteJsonHasEveryFieldAndSaneFigures) {
   }
   const std::vector<std::string> names = {"built-in", "one-sphere", "spheres-on-plane", "sphere-mesh-80k"};
   ASSERT_EQ(json.at("scenes").size(), names.size());
-  const std::vector<std::string> row_fields = {
+  const std::vector<std::string> fixed_fields = {
       "variant", "on_gpu", "device_triangles", "device_geometry_bytes", "bvh_nodes", "bvh_depth", "loop_budget",
       "upload_ms", "bvh_build_ms", "pipeline_ms", "gpu_median_ms", "gpu_min_ms", "frame_median_ms", "gpu_sustained_ms", "mrays_per_s",
       "unfinished_rays", "pixels", "hit_mismatches", "both_hit", "nan_pixels", "depth_rel_p50", "depth_rel_p99", "depth_rel_max",
       "depth_ulp_p50", "depth_ulp_p99", "depth_ulp_max",
-      "normal_deg_p50", "normal_deg_p99", "normal_deg_max", "pareto", "outputs_compared", "id_mismatches",
-      "planar_depth_rel_p99", "position_rel_p99", "barycentric_max", "shading_normal_deg_p99", "texcoord_max"};
+      "normal_deg_p50", "normal_deg_p99", "normal_deg_max", "pareto", "outputs_compared"};
+  // Then the outputs' error fields, one each (engine/frame.hpp's table; every output's is checked in
+  // EveryOutputOfTheTableThroughRenderAndBench).
+  std::vector<std::string> row_fields = fixed_fields;
+  for (const auto& field : vkray::output_error_fields()) row_fields.push_back(field.name);
   size_t rows = 0;
   for (size_t s = 0; s < names.size(); ++s) {
     const auto& scene = json.at("scenes").at(s);
@@ -1461,4 +1466,44 @@ TEST_F(CliTest, ReportEndsRowsThatLoseTheDeviceAndGoesOn) {
   }
   EXPECT_GE(failed, 1u);
   EXPECT_NE(read_text(path("report/report.md")).find("**failed**"), std::string::npos);
+}
+
+// Every output of the engine's table (engine/frame.hpp, outputs()) through the command line: --aov
+// takes its name with '-' or '_', the help names it, the EXR holds its channels, and the bench's
+// +every-output row measures each host output against the reference's (README, "vkray bench").
+TEST_F(CliTest, EveryOutputOfTheTableThroughRenderAndBench) {
+  expect_error(vkray({"render", "--aov", "depth,planer_depth", "-o", "x.exr"}), 2, {"did you mean 'planar-depth'?"});
+  const RunResult help = vkray({"render", "--help"});
+  std::string dashed, underscored;
+  std::set<std::string> channels = {"A"};
+  for (const vkray::OutputInfo& output : vkray::outputs()) {
+    EXPECT_NE(help.out.find(output.name), std::string::npos) << output.name << " not in render --help";
+    dashed += (dashed.empty() ? "" : ",") + std::string(output.name);
+    underscored += (underscored.empty() ? "" : ",") + vkray::python_key(output);
+    for (uint32_t c = 0; c < output.components; ++c) channels.insert(output.channels[c]);
+  }
+  for (const std::string& list : {dashed, underscored}) {
+    SCOPED_TRACE(list);
+    const RunResult run = vkray({"render", "--aov", list, "--width", "24", "--height", "16", "-o", "all.exr", "--no-preview"});
+    ASSERT_EQ(run.exit_code, 0) << run.err;
+    Image image;
+    read_image(path("all.exr"), image);
+    EXPECT_EQ(image.channel_names, channels);
+  }
+
+  const RunResult bench = vkray({"bench", "--variants", "default,+every-output", "--size", "32x24", "--frames", "1", "--json",
+                                 "bench.json"});
+  ASSERT_EQ(bench.exit_code, 0) << bench.err;
+  const auto json = nlohmann::json::parse(read_text(path("bench.json")));
+  const auto& every = json.at("scenes").at(0).at("rows").at(1);
+  ASSERT_EQ(every.at("variant"), "+every-output");
+  EXPECT_TRUE(every.at("outputs_compared").get<bool>());
+  for (const vkray::OutputErrorField& field : vkray::output_error_fields()) {
+    EXPECT_TRUE(every.contains(field.name)) << field.name;
+    EXPECT_NE(bench.out.find("  " + field.label + " "), std::string::npos) << field.label << " not in the bench's table";
+  }
+  for (const vkray::OutputInfo& output : vkray::outputs()) {
+    if (output.error == vkray::OutputError::none) continue;
+    EXPECT_TRUE(every.contains(output.error_field)) << output.name;
+  }
 }

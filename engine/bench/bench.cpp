@@ -54,8 +54,8 @@ BenchVariant views_variant(uint32_t views) {
 
 namespace {
 
-BenchVariant outputs_variant(std::string name, std::string description, AovSet extra) {
-  BenchVariant variant{std::move(name), std::move(description), {}, CpuBaseline::none, [](const Scene&) { return true; }};
+BenchVariant outputs_variant(const std::string& name, const std::string& description, AovSet extra) {
+  BenchVariant variant{name, description, {}, CpuBaseline::none, [](const Scene&) { return true; }};
   variant.extra_outputs = extra;
   return variant;
 }
@@ -110,9 +110,8 @@ BenchRow run_views_variant(GpuDevice& device, const Scene& scene, const BenchVar
 BenchRow run_variant(GpuDevice& device, const Scene& scene, const BenchVariant& variant, const BenchTiming& timing,
                      const ReferenceScene& reference_scene, const std::vector<ReferenceHit>& reference) {
   AovSet aovs{Aov::depth, Aov::normal};
-  for (const Aov extra : {Aov::planar_depth, Aov::position, Aov::camera_position, Aov::mesh_id, Aov::primitive_id,
-                          Aov::barycentric, Aov::shading_normal, Aov::texcoord}) {
-    if (variant.extra_outputs.has(extra)) aovs.add(extra);
+  for (const OutputInfo& output : outputs()) {
+    if (variant.extra_outputs.has(output.aov)) aovs.add(output.aov);
   }
   Renderer renderer(device, scene, variant.options);
   BenchRow row;
@@ -225,19 +224,31 @@ const std::vector<BenchVariant>& bench_variants() {
                      naive),
       shader_variant("float64", "the shader in double precision (--precision double)", float64),
       views_variant(100),
-      outputs_variant("+planar-depth", "the default with the planar-depth output too", {Aov::planar_depth}),
-      outputs_variant("+position", "the default with the position output too", {Aov::position}),
-      outputs_variant("+camera-position", "the default with the camera-position output too", {Aov::camera_position}),
-      outputs_variant("+ids", "the default with the mesh-id and primitive-id outputs too", {Aov::mesh_id, Aov::primitive_id}),
-      outputs_variant("+surface", "the default with barycentric, shading-normal and texcoord too",
-                      {Aov::barycentric, Aov::shading_normal, Aov::texcoord}),
-      outputs_variant("+every-output", "the default with every output too",
-                      {Aov::planar_depth, Aov::position, Aov::camera_position, Aov::mesh_id, Aov::primitive_id,
-                       Aov::barycentric, Aov::shading_normal, Aov::texcoord}),
       cpu_baseline("embree-1", "Embree 3 on the CPU, all threads, one ray at a time", CpuBaseline::embree_single),
       cpu_baseline("embree-8", "Embree 3 on the CPU, all threads, packets of 8 rays", CpuBaseline::embree_packet),
   };
-  return variants;
+  // Then the outputs' rows, before Embree's: each camera output on its own, the ids and the surface
+  // outputs each together, and every output.
+  static const std::vector<BenchVariant> with_outputs = [] {
+    std::vector<BenchVariant> all(variants.begin(), variants.end() - 2);
+    AovSet ids, surface, every;
+    for (const OutputInfo& output : outputs()) {
+      if (output.source == OutputSource::device) continue;
+      every.add(output.aov);
+      if (output.source == OutputSource::camera) {
+        all.push_back(outputs_variant(std::string("+") + output.name, "the default with the " + std::string(output.name) + " output too",
+                                      {output.aov}));
+      }
+      if (output.source == OutputSource::ids) ids.add(output.aov);
+      if (output.source == OutputSource::surface) surface.add(output.aov);
+    }
+    all.push_back(outputs_variant("+ids", "the default with " + ids.names() + " too", ids));
+    all.push_back(outputs_variant("+surface", "the default with " + surface.names() + " too", surface));
+    all.push_back(outputs_variant("+every-output", "the default with every output too", every));
+    all.insert(all.end(), variants.end() - 2, variants.end());
+    return all;
+  }();
+  return with_outputs;
 }
 
 const BenchVariant& find_bench_variant(const std::string& name) {

@@ -4,6 +4,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include <functional>
+
 #include <algorithm>
 #include <bit>
 #include <cinttypes>
@@ -23,11 +25,11 @@ static_assert(std::is_same_v<size_t, uint64_t>, "row fields store counts as uint
 // always hold the same fields.
 using FieldRef = std::variant<double*, uint64_t*, uint32_t*, bool*, std::string*>;
 struct RowField {
-  const char* name;
-  FieldRef (*ref)(BenchRow&);
+  std::string name;
+  std::function<FieldRef(BenchRow&)> ref;
 };
 
-const RowField row_fields[] = {
+const RowField fixed_row_fields[] = {
     {"variant", [](BenchRow& r) -> FieldRef { return &r.variant; }},
     {"on_gpu", [](BenchRow& r) -> FieldRef { return &r.on_gpu; }},
     {"device_triangles", [](BenchRow& r) -> FieldRef { return &r.stats.triangles; }},
@@ -58,19 +60,31 @@ const RowField row_fields[] = {
     {"normal_deg_p99", [](BenchRow& r) -> FieldRef { return &r.error.normal_deg_p99; }},
     {"normal_deg_max", [](BenchRow& r) -> FieldRef { return &r.error.normal_deg_max; }},
     {"pareto", [](BenchRow& r) -> FieldRef { return &r.pareto; }},
-    // The extra outputs of a "+..." row (zeros elsewhere, and for the outputs it lacks).
+    // The extra outputs of a "+..." row (zeros elsewhere, and for the outputs it lacks), then a
+    // field for each of their figures (row_fields()).
     {"outputs_compared", [](BenchRow& r) -> FieldRef { return &r.outputs.compared; }},
-    {"id_mismatches", [](BenchRow& r) -> FieldRef { return &r.outputs.id_mismatches; }},
-    {"planar_depth_rel_p99", [](BenchRow& r) -> FieldRef { return &r.outputs.planar_depth_p99; }},
-    {"position_rel_p99", [](BenchRow& r) -> FieldRef { return &r.outputs.position_p99; }},
-    {"barycentric_max", [](BenchRow& r) -> FieldRef { return &r.outputs.barycentric_max; }},
-    {"shading_normal_deg_p99", [](BenchRow& r) -> FieldRef { return &r.outputs.shading_normal_deg_p99; }},
-    {"texcoord_max", [](BenchRow& r) -> FieldRef { return &r.outputs.texcoord_max; }},
 };
+
+// Every figure of a row: the fields above, then the outputs' error fields (output_error_fields).
+const std::vector<RowField>& row_fields() {
+  static const std::vector<RowField> fields = [] {
+    std::vector<RowField> all(std::begin(fixed_row_fields), std::end(fixed_row_fields));
+    for (const OutputErrorField& field : output_error_fields()) {
+      const std::string name = field.name;
+      if (field.count) {
+        all.push_back({field.name, [name](BenchRow& r) -> FieldRef { return &r.outputs.counts[name]; }});
+      } else {
+        all.push_back({field.name, [name](BenchRow& r) -> FieldRef { return &r.outputs.measures[name]; }});
+      }
+    }
+    return all;
+  }();
+  return fields;
+}
 
 Json row_json(BenchRow row) {
   Json json = Json::object();
-  for (const auto& field : row_fields) {
+  for (const auto& field : row_fields()) {
     std::visit([&](auto* value) { json[field.name] = *value; }, field.ref(row));
   }
   return json;
@@ -141,10 +155,15 @@ std::string outputs_summary(const BenchSceneResult& scene) {
   for (const auto& row : scene.rows) {
     if (row.variant == "default") baseline = &row;
     if (!row.outputs.compared) continue;
-    lines += format("  %-16s %8.2f ms %+8.2f ms  ids %6zu off  planar %8.2e  P %8.2e  bary %8.2e  Ns %8.2e deg  uv %8.2e\n",
-                    row.variant.c_str(), row.frame_median_ms, baseline ? row.frame_median_ms - baseline->frame_median_ms : 0.0,
-                    row.outputs.id_mismatches, row.outputs.planar_depth_p99, row.outputs.position_p99,
-                    row.outputs.barycentric_max, row.outputs.shading_normal_deg_p99, row.outputs.texcoord_max);
+    lines += format("  %-16s %8.2f ms %+8.2f ms", row.variant.c_str(), row.frame_median_ms,
+                    baseline ? row.frame_median_ms - baseline->frame_median_ms : 0.0);
+    for (const OutputErrorField& field : output_error_fields()) {
+      lines += field.count ? format("  %s %6llu off", field.label.c_str(),
+                                    static_cast<unsigned long long>(row.outputs.counts.at(field.name)))
+                           : format("  %s %8.2e%s", field.label.c_str(), row.outputs.measures.at(field.name),
+                                    field.degrees ? " deg" : "");
+    }
+    lines += "\n";
   }
   if (lines.empty()) return "";
   return format("%s: outputs beside depth and normal: frame time (host%s), then the error of each against the reference's "
@@ -270,7 +289,7 @@ std::string bench_json(const BenchReport& report) {
 
 std::string bench_csv(const BenchReport& report) {
   std::string text = "vkray_version,git_commit,device,driver,suite,frames,scene,scene_hash,width,height";
-  for (const auto& field : row_fields) text += std::string(",") + field.name;
+  for (const auto& field : row_fields()) text += std::string(",") + field.name;
   text += "\n";
   for (const auto& scene : report.scenes) {
     for (const auto& row : scene.rows) {
@@ -278,7 +297,7 @@ std::string bench_csv(const BenchReport& report) {
               csv_quoted(report.driver) + "," + report.suite + "," + std::to_string(report.frames) + "," +
               csv_quoted(scene.name) + "," + scene.hash + "," + std::to_string(scene.width) + "," +
               std::to_string(scene.height);
-      for (const auto& field : row_fields) text += "," + csv_cell(row, field);
+      for (const auto& field : row_fields()) text += "," + csv_cell(row, field);
       text += "\n";
     }
   }
@@ -320,8 +339,12 @@ BenchReport read_bench_json(const std::filesystem::path& path) {
         where = "scenes[" + std::to_string(s) + "].rows[" + std::to_string(r) + "]";
         const Json& row_json = scene_json.at("rows").at(r);
         BenchRow row;
-        for (const auto& field : row_fields) {
+        for (const auto& field : row_fields()) {
           where = "scenes[" + std::to_string(s) + "].rows[" + std::to_string(r) + "]." + field.name;
+          // A file from before an output existed lacks its error field: it stays 0 there.
+          const bool output_field = std::any_of(output_error_fields().begin(), output_error_fields().end(),
+                                                [&](const OutputErrorField& f) { return f.name == field.name; });
+          if (output_field && !row_json.contains(field.name)) continue;
           std::visit([&](auto* value) { row_json.at(field.name).get_to(*value); }, field.ref(row));
         }
         scene.rows.push_back(row);

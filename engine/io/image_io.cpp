@@ -274,69 +274,44 @@ void write_exr_to(const PartialFile& file, const std::filesystem::path& path, co
   if (frame.camera) describe_camera(header, *frame.camera, frame.width, frame.height);
   // OpenEXR reads each channel from the frame's own planes (a slice with its strides): no copy.
   Imf::FrameBuffer slices;
-  auto add_channel = [&](const char* name, const float* plane) {
-    header.channels().insert(name, Imf::Channel(Imf::FLOAT));
-    slices.insert(name, Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(const_cast<float*>(plane)), sizeof(float),
-                                   sizeof(float) * frame.width));
+  auto add_channel = [&](const char* name, Imf::PixelType type, const void* plane) {
+    header.channels().insert(name, Imf::Channel(type));
+    const size_t bytes = type == Imf::UINT ? sizeof(uint32_t) : sizeof(float);
+    slices.insert(name, Imf::Slice(type, reinterpret_cast<char*>(const_cast<void*>(plane)), bytes, bytes * frame.width));
   };
   const size_t pixels = frame.pixel_count();
-  // Depths with the chosen value where the ray missed (ExrSettings::miss), in a copy: the frame
+  // Depths with the chosen value where the ray missed (ExrSettings::miss), in copies: the frame
   // keeps +inf, by which hits are known.
   const bool miss_replaced = !(std::isinf(settings.miss) && settings.miss > 0.0f);
-  auto with_misses = [&](const std::vector<float>& depths) {
-    std::vector<float> written(depths);
-    for (size_t p = 0; p < pixels; ++p) {
-      if (!frame.hit(p)) written[p] = settings.miss;
+  std::vector<std::vector<float>> with_misses;
+  with_misses.reserve(outputs().size());  // their planes stay where they are while the file is written
+  bool has_miss_value = false;
+  for (const OutputInfo& output : outputs()) {
+    if (!frame.aovs.has(output.aov)) continue;
+    if (output.integers) {
+      const uint32_t* planes = (frame.*output.integers).data();
+      for (size_t c = 0; c < output.components; ++c) add_channel(output.channels[c], Imf::UINT, planes + c * pixels);
+      continue;
     }
-    return written;
-  };
-  std::vector<float> depth_written, planar_written;
-  if (frame.aovs.has(Aov::depth)) {
-    if (miss_replaced) depth_written = with_misses(frame.depth);
-    add_channel("Z", miss_replaced ? depth_written.data() : frame.depth.data());
+    const float* planes = (frame.*output.floats).data();
+    if (output.takes_miss_value) {
+      has_miss_value = true;
+      if (miss_replaced) {
+        std::vector<float>& written = with_misses.emplace_back(frame.*output.floats);
+        for (size_t p = 0; p < pixels; ++p) {
+          if (!frame.hit(p)) written[p] = settings.miss;
+        }
+        planes = written.data();
+      }
+    }
+    for (size_t c = 0; c < output.components; ++c) add_channel(output.channels[c], Imf::FLOAT, planes + c * pixels);
   }
-  if (frame.aovs.has(Aov::normal)) {
-    add_channel("N.X", frame.normal.data());
-    add_channel("N.Y", frame.normal.data() + pixels);
-    add_channel("N.Z", frame.normal.data() + 2 * pixels);
-  }
-  if (frame.aovs.has(Aov::uv)) {
-    add_channel("U", frame.uv.data());
-    add_channel("V", frame.uv.data() + pixels);
-  }
-  // The camera outputs as OpenEXR layers ("layer.channel"); P for positions, the name pbrt-v4's
-  // G-buffer gives them (in camera space there: camera.P here, world space P).
-  if (frame.aovs.has(Aov::planar_depth)) {
-    if (miss_replaced) planar_written = with_misses(frame.planar_depth);
-    add_channel("planar.Z", miss_replaced ? planar_written.data() : frame.planar_depth.data());
-  }
-  if (frame.aovs.has(Aov::depth) || frame.aovs.has(Aov::planar_depth)) {
-    header.insert("vkray:miss", Imf::FloatAttribute(settings.miss));
-  }
-  // A plane each of `components`' letters, "layer.letter".
-  auto add_planes = [&](const std::string& prefix, const char* components, const std::vector<float>& planes) {
-    for (size_t c = 0; components[c] != 0; ++c) add_channel((prefix + components[c]).c_str(), planes.data() + c * pixels);
-  };
-  if (frame.aovs.has(Aov::position)) add_planes("P.", "XYZ", frame.position);
-  if (frame.aovs.has(Aov::camera_position)) add_planes("camera.P.", "XYZ", frame.camera_position);
-  // Ids as 32-bit unsigned channels, named as Python's cast_rays names them.
-  auto add_id_channel = [&](const char* name, const std::vector<uint32_t>& ids) {
-    header.channels().insert(name, Imf::Channel(Imf::UINT));
-    slices.insert(name, Imf::Slice(Imf::UINT, reinterpret_cast<char*>(const_cast<uint32_t*>(ids.data())), sizeof(uint32_t),
-                                   sizeof(uint32_t) * frame.width));
-  };
-  if (frame.aovs.has(Aov::mesh_id)) add_id_channel("mesh_id", frame.mesh_id);
-  if (frame.aovs.has(Aov::primitive_id)) add_id_channel("primitive_id", frame.primitive_id);
-  // The surface outputs: Ns, pbrt-v4's name for the shading normal; texcoord and barycentric in
-  // their own layers, apart from U and V (the image plane's coordinates, not a texture's).
-  if (frame.aovs.has(Aov::barycentric)) add_planes("barycentric.", "UV", frame.barycentric);
-  if (frame.aovs.has(Aov::shading_normal)) add_planes("Ns.", "XYZ", frame.shading_normal);
-  if (frame.aovs.has(Aov::texcoord)) add_planes("texcoord.", "UV", frame.texcoord);
+  if (has_miss_value) header.insert("vkray:miss", Imf::FloatAttribute(settings.miss));
   std::vector<float> alpha;
   if (frame.aovs.needs_rays()) {
     alpha.resize(pixels);
     for (size_t p = 0; p < pixels; ++p) alpha[p] = frame.hit(p) ? 1.0f : 0.0f;
-    add_channel("A", alpha.data());
+    add_channel("A", Imf::FLOAT, alpha.data());
   }
   try {
     Imf::OutputFile output(file.path().c_str(), header);

@@ -15,50 +15,85 @@ double angle_between(const glm::dvec3& a, const glm::dvec3& b) {
   return std::atan2(glm::length(glm::cross(a, b)), glm::dot(a, b));
 }
 
+const std::vector<OutputErrorField>& output_error_fields() {
+  static const std::vector<OutputErrorField> fields = [] {
+    std::vector<OutputErrorField> list;
+    for (const bool counts : {true, false}) {
+      for (const OutputInfo& output : outputs()) {
+        if (output.error == OutputError::none || (output.error == OutputError::mismatches) != counts) continue;
+        if (std::none_of(list.begin(), list.end(), [&](const OutputErrorField& f) { return f.name == output.error_field; })) {
+          list.push_back({output.error_field, output.error_label, counts, output.error == OutputError::degrees_p99});
+        }
+      }
+    }
+    return list;
+  }();
+  return fields;
+}
+
 OutputErrors measure_output_errors(const Frame& frame, const Frame& reference) {
   OutputErrors errors;
-  const AovSet derived{Aov::planar_depth, Aov::position, Aov::camera_position, Aov::mesh_id, Aov::primitive_id,
-                       Aov::barycentric, Aov::shading_normal, Aov::texcoord};
-  errors.compared = (frame.aovs.bits() & derived.bits()) != 0;
-  if (!errors.compared) return errors;
-  const size_t pixels = frame.pixel_count();
-  auto at = [&](const std::vector<float>& planes, size_t components, size_t p) {
-    glm::dvec3 value(0.0);
-    for (size_t c = 0; c < components; ++c) value[static_cast<int>(c)] = planes[c * pixels + p];
-    return value;
-  };
-  std::vector<double> planar, position, shading;
-  for (size_t p = 0; p < pixels; ++p) {
-    if (!frame.hit(p) || !reference.hit(p)) continue;
-    const double depth = reference.depth[p];
-    if (!frame.planar_depth.empty()) {
-      planar.push_back(std::abs(frame.planar_depth[p] - reference.planar_depth[p]) / std::abs(double{reference.planar_depth[p]}));
-    }
-    for (const auto* planes : {&frame.position, &frame.camera_position}) {
-      if (planes->empty()) continue;
-      const auto& theirs = planes == &frame.position ? reference.position : reference.camera_position;
-      position.push_back(glm::distance(at(*planes, 3, p), at(theirs, 3, p)) / depth);
-    }
-    if (frame.mesh_id.empty()) continue;
-    if (frame.mesh_id[p] != reference.mesh_id[p] || frame.primitive_id[p] != reference.primitive_id[p]) {
-      ++errors.id_mismatches;
-      continue;
-    }
-    if (!frame.barycentric.empty()) {
-      const glm::dvec3 d = glm::abs(at(frame.barycentric, 2, p) - at(reference.barycentric, 2, p));
-      errors.barycentric_max = std::max({errors.barycentric_max, d.x, d.y});
-    }
-    if (!frame.texcoord.empty()) {
-      const glm::dvec3 d = glm::abs(at(frame.texcoord, 2, p) - at(reference.texcoord, 2, p));
-      errors.texcoord_max = std::max({errors.texcoord_max, d.x, d.y});
-    }
-    if (!frame.shading_normal.empty()) {
-      shading.push_back(angle_between(at(frame.shading_normal, 3, p), at(reference.shading_normal, 3, p)) * 180.0 / std::numbers::pi);
+  for (const auto& field : output_error_fields()) {
+    if (field.count) {
+      errors.counts[field.name] = 0;
+    } else {
+      errors.measures[field.name] = 0.0;
     }
   }
-  errors.planar_depth_p99 = percentile(planar, 0.99);
-  errors.position_p99 = percentile(position, 0.99);
-  errors.shading_normal_deg_p99 = percentile(shading, 0.99);
+  // The ids also where only the surface outputs asked for them: their mismatches say which pixels
+  // the surface outputs are not compared on.
+  std::vector<const OutputInfo*> measured;
+  for (const OutputInfo& output : outputs()) {
+    const bool computed = frame.aovs.has(output.aov) || (output.source == OutputSource::ids && frame.aovs.has_surface_outputs());
+    if (output.error != OutputError::none && computed) measured.push_back(&output);
+  }
+  errors.compared = !measured.empty();
+  if (!errors.compared) return errors;
+  const size_t pixels = frame.pixel_count();
+  // Component c of an output's value at pixel p, in double.
+  auto component = [&](const Frame& of, const OutputInfo& output, size_t c, size_t p) {
+    return output.integers ? double((of.*output.integers)[c * pixels + p]) : double((of.*output.floats)[c * pixels + p]);
+  };
+  auto vector = [&](const Frame& of, const OutputInfo& output, size_t p) {
+    glm::dvec3 value(0.0);
+    for (size_t c = 0; c < output.components; ++c) value[static_cast<int>(c)] = component(of, output, c, p);
+    return value;
+  };
+  std::map<std::string, std::vector<double>> samples;
+  for (size_t p = 0; p < pixels; ++p) {
+    if (!frame.hit(p) || !reference.hit(p)) continue;
+    const bool same_primitive =
+        !frame.mesh_id.empty() && frame.mesh_id[p] == reference.mesh_id[p] && frame.primitive_id[p] == reference.primitive_id[p];
+    std::map<std::string, bool> differs;  // a pixel counts once among its field's mismatches
+    for (const OutputInfo* output : measured) {
+      if (output->source == OutputSource::surface && !same_primitive) continue;
+      const glm::dvec3 mine = vector(frame, *output, p), theirs = vector(reference, *output, p);
+      switch (output->error) {
+        case OutputError::relative_p99:
+          samples[output->error_field].push_back(std::abs(mine.x - theirs.x) / std::abs(theirs.x));
+          break;
+        case OutputError::over_depth_p99:
+          samples[output->error_field].push_back(glm::distance(mine, theirs) / reference.depth[p]);
+          break;
+        case OutputError::mismatches:
+          differs[output->error_field] = differs[output->error_field] || mine != theirs;
+          break;
+        case OutputError::absolute_max: {
+          const glm::dvec3 d = glm::abs(mine - theirs);
+          double& largest = errors.measures[output->error_field];
+          largest = std::max({largest, d.x, d.y, d.z});
+          break;
+        }
+        case OutputError::degrees_p99:
+          samples[output->error_field].push_back(angle_between(mine, theirs) * 180.0 / std::numbers::pi);
+          break;
+        case OutputError::none:
+          break;
+      }
+    }
+    for (const auto& [field, different] : differs) errors.counts[field] += different ? 1 : 0;
+  }
+  for (auto& [field, values] : samples) errors.measures[field] = percentile(values, 0.99);
   return errors;
 }
 

@@ -5,6 +5,7 @@
 #include "engine/frame.hpp"
 #include "engine/reference/reference.hpp"
 
+#include <map>
 #include <string>
 #include <vector>
 
@@ -30,16 +31,23 @@ struct FrameError {
 };
 
 // The outputs the host derives (camera, id and surface outputs: engine/frame.hpp) against the
-// reference's own (reference_frame), over the pixels where both hit; those of an output the frame
-// lacks stay 0. The surface outputs over the pixels where both name the same triangle.
+// reference's own (reference_frame), over the pixels where both hit, the surface outputs where both
+// name the same primitive: a figure for each OutputInfo::error_field, as its OutputError says (the
+// outputs that share a field share it: a pixel counts once among mismatches, its samples pool in
+// a percentile). A field whose outputs the frame lacks stays 0.
+struct OutputErrorField {
+  std::string name;   // OutputInfo::error_field
+  std::string label;  // OutputInfo::error_label
+  bool count;         // a number of pixels; else a measure
+  bool degrees;       // an angle
+};
+// Every field, counts first, then in the order of outputs().
+const std::vector<OutputErrorField>& output_error_fields();
+
 struct OutputErrors {
-  bool compared = false;
-  size_t id_mismatches = 0;             // pixels whose mesh or primitive id differs
-  double planar_depth_p99 = 0.0;        // relative
-  double position_p99 = 0.0;            // |P - P_ref| / depth, the world and camera positions alike
-  double barycentric_max = 0.0;         // absolute
-  double shading_normal_deg_p99 = 0.0;  // degrees
-  double texcoord_max = 0.0;            // absolute
+  bool compared = false;  // the frame has an output the host derives
+  std::map<std::string, uint64_t> counts;
+  std::map<std::string, double> measures;
 };
 OutputErrors measure_output_errors(const Frame& frame, const Frame& reference);
 

@@ -301,23 +301,15 @@ void store_reference_hit(Frame& frame, size_t pixel, const ReferenceHit& hit) {
 }
 
 Frame reference_frame(const ReferenceScene& scene, const Scene& source, const std::vector<ReferenceHit>& hits,
-                      const Camera& camera, uint32_t width, uint32_t height, AovSet aovs) {
+                      const Camera& camera, uint32_t width, uint32_t height, AovSet aovs, bool doubles) {
   Frame frame(width, height, aovs);
   frame.camera = camera;
-  frame.allocate(aovs.has_camera_outputs());  // the camera outputs from the exact depth
-  const size_t pixels = frame.pixel_count();
-  for (uint32_t j = 0; j < height; ++j) {
-    for (uint32_t i = 0; i < width; ++i) {
-      const size_t p = size_t{j} * width + i;
-      store_reference_hit(frame, p, hits[p]);
-      if (aovs.has_ids() || aovs.has_surface_outputs()) store_ids(frame, p, scene.source(hits[p]));
-      if (aovs.has(Aov::uv)) {
-        const glm::dvec2 uv = pixel_uv(i, j, width, height);
-        frame.uv[p] = static_cast<float>(uv.x);
-        frame.uv[pixels + p] = static_cast<float>(uv.y);
-      }
-    }
+  frame.allocate(doubles || aovs.has_camera_outputs());  // the camera outputs from the exact depth
+  for (size_t p = 0; p < frame.pixel_count(); ++p) {
+    store_reference_hit(frame, p, hits[p]);
+    if (aovs.has_ids() || aovs.has_surface_outputs()) store_ids(frame, p, scene.source(hits[p]));
   }
+  if (aovs.has(Aov::uv)) fill_pixel_uv(frame);
   add_camera_outputs(frame);
   add_surface_outputs(frame, source);
   return frame;

@@ -90,7 +90,9 @@ void store_reference_hit(Frame& frame, size_t pixel, const ReferenceHit& hit);
 
 // The same outputs the GPU writes, from `scene`'s hits of `camera`'s rays (rounded to float only at
 // the end); `source` is the scene `scene` was made from (the surface outputs read its meshes).
+// `doubles`: depth64 and normal64 kept too (Python's Reference); they are anyway where camera
+// outputs are asked for, which the exact depth makes.
 Frame reference_frame(const ReferenceScene& scene, const Scene& source, const std::vector<ReferenceHit>& hits,
-                      const Camera& camera, uint32_t width, uint32_t height, AovSet aovs);
+                      const Camera& camera, uint32_t width, uint32_t height, AovSet aovs, bool doubles = false);
 
 }  // namespace vkray

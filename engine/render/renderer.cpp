@@ -941,15 +941,7 @@ Frame Renderer::render(const Camera& camera, uint32_t width, uint32_t height, Ao
         }
       });
     }
-    if (!frame.uv.empty()) {
-      for (uint32_t j = 0; j < height; ++j) {
-        for (uint32_t i = 0; i < width; ++i) {
-          const glm::dvec2 uv = pixel_uv(i, j, width, height);
-          frame.uv[size_t{j} * width + i] = static_cast<float>(uv.x);
-          frame.uv[frame.pixel_count() + size_t{j} * width + i] = static_cast<float>(uv.y);
-        }
-      }
-    }
+    if (!frame.uv.empty()) fill_pixel_uv(frame);
     frame.round_doubles();
     add_camera_outputs(frame);
     add_surface_outputs(frame, r.host_scene);

@@ -3,7 +3,7 @@
 # same list with their sanitizer flags: one list, so a parser that comes to call new code fails the
 # ordinary build rather than the fuzz build in CI.
 set(VKRAY_PARSER_SOURCES
-  ${CMAKE_CURRENT_LIST_DIR}/../nearest_name.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/../typed_names.cpp
   ${CMAKE_CURRENT_LIST_DIR}/camera.cpp
   ${CMAKE_CURRENT_LIST_DIR}/obj_loader.cpp
   ${CMAKE_CURRENT_LIST_DIR}/scene.cpp

@@ -1,6 +1,6 @@
 #include "engine/scene/scene_loader.hpp"
 
-#include "engine/nearest_name.hpp"
+#include "engine/typed_names.hpp"
 #include "engine/scene/obj_loader.hpp"
 #include "engine/unit_vector.hpp"
 

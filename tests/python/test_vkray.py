@@ -466,18 +466,6 @@ def test_arrays_outlive_the_renderer():
 
 
 # Every output render() offers beside depth and normal, and its EXR channels (`vkray render --aov`).
-DERIVED_CHANNELS = {
-    "planar_depth": ["planar.Z"],
-    "position": ["P.X", "P.Y", "P.Z"],
-    "camera_position": ["camera.P.X", "camera.P.Y", "camera.P.Z"],
-    "mesh_id": ["mesh_id"],
-    "primitive_id": ["primitive_id"],
-    "barycentric": ["barycentric.U", "barycentric.V"],
-    "shading_normal": ["Ns.X", "Ns.Y", "Ns.Z"],
-    "texcoord": ["texcoord.U", "texcoord.V"],
-}
-
-
 def read_exr_native(path):
     """Every channel in its own type (the ids as uint32), and the header."""
     image = oiio.ImageInput.open(str(path))
@@ -493,10 +481,13 @@ def read_exr_native(path):
 
 @pytest.mark.parametrize("model", [SPOT, TEAPOT])
 def test_every_output_is_the_command_lines_exr_channel(tmp_path, model):
-    """Renderer and Reference give each output exactly as `vkray render --aov` (and --reference) writes
-    its channels: spot has texture coordinates, the teapot normals."""
+    """Renderer and Reference give every output of vkray.outputs (the engine's table of outputs)
+    exactly as `vkray render --aov` (and --reference) writes its channels: spot has texture
+    coordinates, the teapot normals. The Reference's depth and normal are its float64 values, which
+    the file holds rounded to float32."""
     scene = vkray.load(need_model(model), 120, 90)
-    names = ["depth", "normal", *DERIVED_CHANNELS]
+    names = [output["name"] for output in vkray.outputs]
+    assert {"depth", "normal", "uv", "mesh_id"} <= set(names)
     aov_option = ",".join(name.replace("_", "-") for name in names)
     for make, extra in ((vkray.Renderer, []), (vkray.Reference, ["--reference"])):
         arrays = make(scene).render(aovs=names)
@@ -505,10 +496,18 @@ def test_every_output_is_the_command_lines_exr_channel(tmp_path, model):
         subprocess.run([os.environ["VKRAY_CLI"], "render", model, "--width", "120", "--height", "90", "--aov", aov_option,
                         "-o", str(output), "--no-preview", *extra], check=True, capture_output=True)
         channels, _ = read_exr_native(output)
-        for name, channel_names in DERIVED_CHANNELS.items():
-            expected = np.stack([channels[c] for c in channel_names], axis=-1).squeeze(-1 if len(channel_names) == 1 else ())
-            assert arrays[name].dtype == expected.dtype, name
-            assert np.array_equal(arrays[name], expected), name
+        assert set(channels) == {c for o in vkray.outputs for c in o["channels"]} | {"A"}
+        for entry in vkray.outputs:
+            name = entry["name"]
+            expected = np.stack([channels[c] for c in entry["channels"]], axis=-1)
+            expected = expected.squeeze(-1) if entry["components"] == 1 else expected
+            assert expected.dtype == entry["dtype"], name
+            got = arrays[name]
+            if make is vkray.Reference and name in ("depth", "normal"):
+                assert got.dtype == np.float64, name
+                got = got.astype(np.float32)
+            assert got.dtype == expected.dtype and got.shape == expected.shape, name
+            assert np.array_equal(got, expected), name
     # The file's attributes are there: texture coordinates on spot, normals apart from the faces' on the teapot.
     arrays = vkray.Renderer(scene).render(aovs=["normal", "mesh_id", "shading_normal", "texcoord"])
     hit = arrays["mesh_id"] != vkray.NO_HIT

@@ -1,4 +1,5 @@
-// "Did you mean ...?" for names a user typed: scene-file keys, subcommands.
+// Names a user types: comma-separated lists of them (--aov, --variants, Python's aovs), and "did you
+// mean ...?" for one mistyped (scene-file keys, subcommands, outputs).
 #pragma once
 
 #include <optional>
@@ -7,6 +8,9 @@
 #include <vector>
 
 namespace vkray {
+
+// The items of a comma-separated list, empty ones kept ("a,,b" has three); none for "".
+std::vector<std::string> split_list(std::string_view list);
 
 // Levenshtein distance: insertions, deletions and substitutions of one character each cost 1.
 size_t edit_distance(std::string_view a, std::string_view b);

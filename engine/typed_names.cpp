@@ -1,9 +1,19 @@
-#include "engine/nearest_name.hpp"
+#include "engine/typed_names.hpp"
 
 #include <algorithm>
 #include <limits>
 
 namespace vkray {
+
+std::vector<std::string> split_list(std::string_view list) {
+  std::vector<std::string> items;
+  for (size_t start = 0; start <= list.size() && !list.empty();) {
+    const size_t comma = std::min(list.find(',', start), list.size());
+    items.emplace_back(list.substr(start, comma - start));
+    start = comma + 1;
+  }
+  return items;
+}
 
 size_t edit_distance(std::string_view a, std::string_view b) {
   std::vector<size_t> row(b.size() + 1);
