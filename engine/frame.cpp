@@ -44,6 +44,9 @@ const OutputInfo output_table[] = {
      "Ns", &Frame::shading_normal},
     {Aov::texcoord, "texcoord", "interpolated texture coordinates", 2, false, OutputSource::surface,
      {"texcoord.U", "texcoord.V"}, false, OutputError::absolute_max, "texcoord_max", "uv", &Frame::texcoord},
+    {Aov::front_facing, "front-facing", "1 where the ray meets the primitive's front", 1, true, OutputSource::surface,
+     {"front_facing"}, false, OutputError::mismatches, "front_facing_mismatches", "front", nullptr,
+     &Frame::front_facing},
 };
 
 // The name with every '_' read as '-'.

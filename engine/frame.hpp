@@ -34,6 +34,7 @@ enum class Aov : uint32_t {
   barycentric = 512,
   shading_normal = 1024,
   texcoord = 2048,
+  front_facing = 4096,
 };
 
 // Where an output is computed: on the device (depth, normal, uv); on the host from the depth and
@@ -137,10 +138,14 @@ struct Frame {
   std::vector<uint32_t> primitive_id;
   // The surface outputs (README, "Output contract"), 0 where nothing or no triangle gives them: the
   // hit's weights of its triangle's second and third vertices (2 planes), the shading normal (3
-  // planes) and the texture coordinates (2 planes).
+  // planes), the texture coordinates (2 planes) and the side of the primitive the ray meets.
   std::vector<float> barycentric;
   std::vector<float> shading_normal;
   std::vector<float> texcoord;
+  // 1 where the ray meets its primitive's front: a triangle whose vertices run counter-clockwise
+  // as the ray sees them, a sphere from outside, a plane from the side its normal points to; 0 at
+  // the back and on a miss.
+  std::vector<uint32_t> front_facing;
   // The float64 shader's depth and normals before rounding (empty otherwise): what its agreement
   // with the reference is measured on. depth and normal then hold them rounded.
   std::vector<double> depth64;

@@ -55,6 +55,7 @@ struct Surface {
   glm::dvec2 barycentric{0.0};
   glm::dvec3 shading_normal{0.0};
   glm::dvec2 texcoord{0.0};
+  bool front = false;
 };
 
 Surface triangle_surface(const Mesh& mesh, uint32_t triangle, const glm::dvec3& origin, const glm::dvec3& dir, double t) {
@@ -65,7 +66,10 @@ Surface triangle_surface(const Mesh& mesh, uint32_t triangle, const glm::dvec3& 
   surface.barycentric = clamped_to_triangle(crossing ? *crossing : projected_weights(a, b, c, origin + t * dir));
   const double w1 = surface.barycentric.x, w2 = surface.barycentric.y, w0 = 1.0 - w1 - w2;
   const glm::dvec3 face = unit_vector(glm::cross(b - a, c - a));
+  // The face's normal is that of the counter-clockwise winding: the ray meets the front where it
+  // points against the ray.
   const bool front = glm::dot(face, dir) < 0.0;
+  surface.front = front;
   surface.shading_normal = front ? face : -face;
   if (corners_given(mesh.normal_corners, triangle)) {
     const auto& n = mesh.normal_corners[triangle];
@@ -104,10 +108,15 @@ void add_surface_outputs(Frame& frame, const Scene& scene) {
         if (object < meshes) {
           surface = triangle_surface(scene.meshes[object], primitive, ray.origin, dir, t);
         } else if (object < meshes + spheres) {
+          // A sphere's front is its outside: the ray starts outside it.
           const Sphere& sphere = scene.spheres[object - meshes];
           surface.shading_normal = facing(unit_vector(ray.origin + t * dir - sphere.center), dir);
+          surface.front = glm::length(ray.origin - sphere.center) >= sphere.radius;
         } else {
-          surface.shading_normal = facing(scene.planes[object - meshes - spheres].normal, dir);
+          // A plane's front is the side its normal points to.
+          const glm::dvec3& normal = scene.planes[object - meshes - spheres].normal;
+          surface.shading_normal = facing(normal, dir);
+          surface.front = glm::dot(normal, dir) < 0.0;
         }
         for (int c = 0; c < 2; ++c) {
           if (!frame.barycentric.empty()) frame.barycentric[c * pixels + p] = static_cast<float>(surface.barycentric[c]);
@@ -116,6 +125,7 @@ void add_surface_outputs(Frame& frame, const Scene& scene) {
         if (!frame.shading_normal.empty()) {
           for (int c = 0; c < 3; ++c) frame.shading_normal[c * pixels + p] = static_cast<float>(surface.shading_normal[c]);
         }
+        if (!frame.front_facing.empty()) frame.front_facing[p] = surface.front ? 1u : 0u;
       }
     }
   }, 16);

@@ -8,7 +8,7 @@
 
 namespace vkray {
 
-// Fills the barycentric, shading-normal and texcoord outputs `frame.aovs` asks for; `scene` is the
+// Fills the barycentric, shading-normal, texcoord and front-facing outputs `frame.aovs` asks for; `scene` is the
 // one rendered (its meshes give the triangles, normals and texture coordinates the ids name).
 // - barycentric: the weights (b1, b2) of the triangle's second and third vertices where the
 //   pixel's ray in double (CameraBasis) meets the triangle's plane, clamped onto the triangle (the
@@ -20,6 +20,10 @@ namespace vkray {
 //   (or whose interpolated vn vanishes), a sphere or a plane gives its geometric normal facing the
 //   ray. 0 on a miss.
 // - texcoord: the triangle's vt (u, v) interpolated with those weights; 0 without vt.
+// - front-facing: 1 where the pixel's ray meets a triangle whose vertices run counter-clockwise as
+//   it sees them (its face normal, (b - a) x (c - a), points against the ray), a sphere from
+//   outside (the ray's origin at least a radius from its centre) or a plane from the side its
+//   normal points to; 0 elsewhere and on a miss.
 void add_surface_outputs(Frame& frame, const Scene& scene);
 
 }  // namespace vkray

@@ -17,8 +17,8 @@ namespace {
 
 using namespace test;
 
-constexpr AovSet surface_aovs{Aov::depth, Aov::normal, Aov::mesh_id, Aov::primitive_id, Aov::barycentric,
-                              Aov::shading_normal, Aov::texcoord};
+constexpr AovSet surface_aovs{Aov::depth,          Aov::normal,   Aov::mesh_id,     Aov::primitive_id, Aov::barycentric,
+                              Aov::shading_normal, Aov::texcoord, Aov::front_facing};
 
 glm::dvec3 plane3(const std::vector<float>& planes, size_t pixels, size_t p) {
   return {planes[p], planes[pixels + p], planes[2 * pixels + p]};
@@ -70,13 +70,15 @@ void expect_square_closed_form(const Scene& scene, const Frame& frame) {
       EXPECT_GE(w.x, 0.0);
       EXPECT_GE(w.y, 0.0);
       EXPECT_LE(w.x + w.y, 1.0);
+      // Counter-clockwise seen from +z: the front from there, the back from -z.
+      EXPECT_EQ(frame.front_facing[p], from_front ? 1u : 0u) << i << "," << j;
     }
   }
   EXPECT_GT(hits, pixels / 4);
 }
 
-// Seen from the front and from behind (the shading normal turns to the ray's side), on the device
-// and in the reference.
+// Seen from the front and from behind (the shading normal turns to the ray's side, front-facing
+// says which side), on the device and in the reference.
 TEST(SurfaceOutputs, SquareMatchesTheClosedForm) {
   for (const glm::dvec3 from : {glm::dvec3(0.3, 0.2, 2.5), glm::dvec3(-0.2, 0.1, -2.5)}) {
     SCOPED_TRACE(testing::Message() << "camera at z = " << from.z);
@@ -144,6 +146,38 @@ TEST(SurfaceOutputs, SharedModelsAgreeWithTheReference) {
     EXPECT_GT(both_hit, pixels / 20);  // the framed view (framed_model) leaves 90% of the image empty
     EXPECT_GT(same_triangle, both_hit * 9 / 10);
     EXPECT_GT(attributed, same_triangle / 2);
+  }
+}
+
+// front-facing for a sphere seen from outside and from inside, and a plane from each side: the
+// outside and the side the normal points to are the front; misses are 0.
+TEST(SurfaceOutputs, FrontFacingOfSpheresAndPlanes) {
+  struct Case {
+    const char* what;
+    glm::dvec3 from;
+    uint32_t expected;
+  };
+  for (const Case& sides : {Case{"outside the sphere, above the plane", {0, 0.5, 6}, 1u},
+                            Case{"inside the sphere, below the plane", {0, -0.5, 0.2}, 0u}}) {
+    SCOPED_TRACE(sides.what);
+    Scene scene;
+    scene.spheres.push_back({{0, 0, 0}, 2.0});
+    scene.planes.push_back({{0, 0, 0}, {0, 1, 0}});  // the plane y = 0, normal up: inside the sphere too
+    scene.camera = {sides.from, sides.from + glm::dvec3(0, 0, -1), {0, 1, 0}, 60};
+    scene = sized(scene, 24, 18);
+    const Frame frame = render(scene, AovSet{Aov::depth, Aov::mesh_id, Aov::front_facing});
+    size_t sphere_pixels = 0, plane_pixels = 0;
+    for (size_t p = 0; p < frame.pixel_count(); ++p) {
+      if (!frame.hit(p)) {
+        EXPECT_EQ(frame.front_facing[p], 0u);
+        continue;
+      }
+      const bool plane = frame.mesh_id[p] == 1;  // spheres, then planes
+      (plane ? plane_pixels : sphere_pixels) += 1;
+      EXPECT_EQ(frame.front_facing[p], sides.expected) << (plane ? "plane" : "sphere") << " pixel " << p;
+    }
+    EXPECT_GT(sphere_pixels, 0u);
+    EXPECT_GT(plane_pixels, 0u);
   }
 }
 
