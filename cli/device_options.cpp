@@ -1,6 +1,6 @@
 #include "cli/device_options.hpp"
 
-#include "engine/render/gpu_scene.hpp"
+#include "engine/render/search.hpp"
 
 #include <cstdio>
 
@@ -28,11 +28,11 @@ CLI::Option* add_device_options(CLI::App* command, DeviceOptions& options) {
 void add_traversal_option(CLI::App* command, std::string& traversal) {
   command
       ->add_option("--traversal", traversal,
-                   std::string("How rays find the primitives: ") + traversal_names_help +
+                   "How rays find the primitives: " + traversal_names() +
                        " (auto: brute force for a handful, else packets on llvmpipe from Mesa 25, per ray elsewhere)")
       ->check([](const std::string& name) {
         return traversal_from_name(name) ? std::string()
-                                         : "unknown traversal '" + name + "' (choose from " + traversal_names_help + ")";
+                                         : "unknown traversal '" + name + "' (choose from " + traversal_names() + ")";
       })
       ->capture_default_str();
 }

@@ -322,7 +322,7 @@ class PyRenderer {
       throw InputError("precision: 'float' or 'double', got '" + precision + "'");
     }
     const std::optional<PrimitiveSearch> search = traversal_from_name(traversal);
-    if (!search) throw InputError("traversal: one of " + std::string(traversal_names_help) + ", got '" + traversal + "'");
+    if (!search) throw InputError("traversal: one of " + traversal_names() + ", got '" + traversal + "'");
     options.scene.search = *search;
     py::gil_scoped_release released;
     device_ = std::make_unique<GpuDevice>(device.value_or(""));
@@ -481,6 +481,10 @@ PYBIND11_MODULE(vkray, m) {
     output_list.append(entry);
   }
   m.attr("outputs") = py::tuple(output_list);
+  // The searches Renderer's traversal= takes besides "auto" (engine/render/search.hpp).
+  py::list traversal_list;
+  for (const SearchInfo& search : searches()) traversal_list.append(search.name);
+  m.attr("traversals") = py::tuple(traversal_list);
 
   py::class_<Scene>(m, "Scene",
                     "A scene from arrays: one mesh (vertices N x 3, triangles M x 3), or meshes, a list of dicts "
@@ -531,8 +535,8 @@ PYBIND11_MODULE(vkray, m) {
   py::class_<PyRenderer>(m, "Renderer",
                          "Opens the device, uploads the scene and makes the pipeline once; then renders and casts "
                          "rays any number of times. device: part of a device name (`vkray info`); precision: "
-                         "'float' or 'double'; traversal: as `vkray render --traversal` (auto, brute-force, per-ray, "
-                         "packet, ray-query).")
+                         "'float' or 'double'; traversal: as `vkray render --traversal`, 'auto' or one of "
+                         "vkray.traversals.")
       .def(py::init<const Scene&, const std::optional<std::string>&, const std::string&, const std::string&>(),
            py::arg("scene"), py::arg("device") = py::none(), py::arg("precision") = "float",
            py::arg("traversal") = "auto")

@@ -5,6 +5,7 @@
 // engine's own code.
 #include "engine/frame.hpp"
 #include "engine/reference/compare.hpp"
+#include "engine/render/search.hpp"
 #include "tests/temp_dir_test.hpp"
 #include <OpenImageIO/imageio.h>
 #include <gtest/gtest.h>
@@ -1012,7 +1013,7 @@ TEST_F(CliTest, BadCameraOptionsExitTwo) {
 TEST_F(CliTest, BenchPrintsTimesBesideErrors) {
   const RunResult run = vkray({"bench", "--size", "32x24", "--frames", "1"});
   ASSERT_EQ(run.exit_code, 0) << run.err;
-  for (const char* variant : {"default", "bvh-per-ray", "bvh-packet", "generic", "embree-1", "embree-8"}) {
+  for (const char* variant : {"default", "per-ray", "packet", "generic", "embree-1", "embree-8"}) {
     EXPECT_NE(run.out.find(variant), std::string::npos) << variant << " missing from:\n" << run.out;
   }
   expect_error(vkray({"bench", "--size", "32by24"}), 2, {"--size"});
@@ -1506,4 +1507,26 @@ TEST_F(CliTest, EveryOutputOfTheTableThroughRenderAndBench) {
     if (output.error == vkray::OutputError::none) continue;
     EXPECT_TRUE(every.contains(output.error_field)) << output.name;
   }
+}
+
+// Every search of the engine's table (engine/render/search.hpp): --traversal takes its name (and
+// renders, or refuses in one line where the device cannot run it), the help names it, and the
+// bench has its row under the same name.
+TEST_F(CliTest, EverySearchOfTheTableThroughRenderAndBench) {
+  const RunResult help = vkray({"render", "--help"});
+  std::string rows = "default";
+  for (const vkray::SearchInfo& search : vkray::searches()) {
+    SCOPED_TRACE(search.name);
+    EXPECT_NE(help.out.find(search.name), std::string::npos) << "not in render --help";
+    const RunResult run = vkray({"render", "--traversal", search.name, "--width", "24", "--height", "16", "-o", "t.exr", "--no-preview"});
+    EXPECT_TRUE(run.exit_code == 0 || (run.exit_code == 1 && run.err.find("cannot run on") != std::string::npos)) << run.err;
+    rows += std::string(",") + search.name;
+  }
+  const RunResult bench = vkray({"bench", "--variants", rows, "--size", "24x16", "--frames", "1", "--json", "bench.json"});
+  ASSERT_EQ(bench.exit_code, 0) << bench.err;
+  const auto json = nlohmann::json::parse(read_text(path("bench.json")));
+  std::set<std::string> named;
+  for (const auto& row : json.at("scenes").at(0).at("rows")) named.insert(row.at("variant").get<std::string>());
+  for (const auto& skipped : json.at("scenes").at(0).at("skipped")) named.insert(skipped.get<std::string>().substr(0, skipped.get<std::string>().find(' ')));
+  for (const vkray::SearchInfo& search : vkray::searches()) EXPECT_EQ(named.count(search.name), 1u) << search.name;
 }

@@ -26,9 +26,14 @@ double elapsed_ms(Clock::time_point start) {
 
 size_t finite_primitives(const Scene& scene) { return scene.triangle_count() + scene.spheres.size(); }
 
-BenchVariant search_variant(std::string name, std::string description, PrimitiveSearch search, size_t max_primitives) {
-  BenchVariant variant{std::move(name), std::move(description), {}, CpuBaseline::none, {}};
-  variant.options.scene.search = search;
+// A search's row. Brute force only up to bench_brute_force_max_primitives; the packet walk with the
+// double edge functions it takes, the automatic choice on CPU devices alone, so that a GPU with
+// shaderFloat64 runs it too.
+BenchVariant search_variant(const SearchInfo& search) {
+  BenchVariant variant{search.name, search.description, {}, CpuBaseline::none, {}};
+  variant.options.scene.search = search.search;
+  if (search.search == PrimitiveSearch::bvh_packet) variant.options.shader.edges = EdgeArithmetic::double_products;
+  const size_t max_primitives = search.search == PrimitiveSearch::brute_force ? bench_brute_force_max_primitives : SIZE_MAX;
   variant.applies = [max_primitives](const Scene& scene) {
     return finite_primitives(scene) > 0 && finite_primitives(scene) <= max_primitives;
   };
@@ -178,12 +183,7 @@ const std::vector<BenchVariant>& bench_variants() {
   float_edges.edges = EdgeArithmetic::float_error_free;
   double_edges.edges = EdgeArithmetic::double_products;
   storage_geometry.storage_geometry = true;
-  // The packet walk takes double edge functions, the automatic choice on CPU devices alone: asked
-  // for here, so that a GPU with shaderFloat64 runs it too.
-  BenchVariant packet_walk = search_variant(
-      "bvh-packet", "BVH, a subgroup's camera rays together, 8 an invocation, double edge functions (the default on llvmpipe from Mesa 25)",
-      PrimitiveSearch::bvh_packet, SIZE_MAX);
-  packet_walk.options.shader.edges = EdgeArithmetic::double_products;
+
   naive_sphere.sphere_formula = VKRAY_SPHERE_NAIVE;
   moller_trumbore.triangle_test = VKRAY_TRIANGLE_MOLLER_TRUMBORE;
   generic.generic = true;
@@ -195,13 +195,6 @@ const std::vector<BenchVariant>& bench_variants() {
   naive.coordinates = VKRAY_COORDINATES_ABSOLUTE;
   static const std::vector<BenchVariant> variants = {
       shader_variant("default", "what vkray render uses", ShaderVariant{}),
-      search_variant("brute-force", "every primitive tested, no tree", PrimitiveSearch::brute_force,
-                     bench_brute_force_max_primitives),
-      search_variant("bvh-per-ray", "BVH, each ray its own stack (the default but on llvmpipe from Mesa 25)",
-                     PrimitiveSearch::bvh_per_ray, SIZE_MAX),
-      packet_walk,
-      search_variant("ray-query", "the device's acceleration structures, vkray's tests on its candidates (ray queries)",
-                     PrimitiveSearch::ray_query, SIZE_MAX),
       shader_variant("generic", "not specialized: every primitive type and output, counts at run time", generic),
       shader_variant("stack-in-memory", "the tree walk's stack in an array, not registers", stack_in_memory,
                      [](const Scene& scene) {
@@ -230,7 +223,10 @@ const std::vector<BenchVariant>& bench_variants() {
   // Then the outputs' rows, before Embree's: each camera output on its own, the ids and the surface
   // outputs each together, and every output.
   static const std::vector<BenchVariant> with_outputs = [] {
-    std::vector<BenchVariant> all(variants.begin(), variants.end() - 2);
+    // The default, then a row for each search (engine/render/search.hpp), then the shader's variants.
+    std::vector<BenchVariant> all(variants.begin(), variants.begin() + 1);
+    for (const SearchInfo& search : searches()) all.push_back(search_variant(search));
+    all.insert(all.end(), variants.begin() + 1, variants.end() - 2);
     AovSet ids, surface, every;
     for (const OutputInfo& output : outputs()) {
       if (output.source == OutputSource::device) continue;

@@ -6,6 +6,7 @@
 #include "engine/bench/stiff_cases.hpp"
 #include "engine/reference/envelope.hpp"
 #include "engine/render/renderer.hpp"
+#include "engine/render/search.hpp"
 #include "engine/scene/scene_or_model.hpp"
 #include "engine/vulkan/raycast_pipeline.hpp"
 
@@ -69,13 +70,18 @@ std::vector<StiffCase> report_stiff_cases(const ReportSettings& settings) {
   return cases;
 }
 
-// The traversals and geometry layouts a check or a bench row tries: every one a device may take.
-const std::vector<std::string> check_variants = {"default",     "bvh-per-ray",  "bvh-packet",      "ray-query",
-                                                 "float-edges", "double-edges", "storage-geometry"};
-const std::vector<std::string> bench_rows = {"default",          "bvh-per-ray", "bvh-packet", "ray-query", "float-edges",
-                                             "double-edges",     "storage-geometry", "wg-16x16",  "wg-64x1",   "float64",
-                                             "embree-1",         "embree-8"};
-const std::vector<std::string> huge_rows = {"default", "bvh-per-ray", "bvh-packet", "storage-geometry", "embree-8"};
+// The default, a row for each search (engine/render/search.hpp), then `layouts`: what the checks and
+// the bench try, every traversal and geometry layout a device may take.
+std::vector<std::string> default_searches_and(std::initializer_list<const char*> layouts) {
+  std::vector<std::string> rows = {"default"};
+  for (const SearchInfo& search : searches()) rows.emplace_back(search.name);
+  rows.insert(rows.end(), layouts.begin(), layouts.end());
+  return rows;
+}
+const std::vector<std::string> check_variants = default_searches_and({"float-edges", "double-edges", "storage-geometry"});
+const std::vector<std::string> bench_rows = default_searches_and(
+    {"float-edges", "double-edges", "storage-geometry", "wg-16x16", "wg-64x1", "float64", "embree-1", "embree-8"});
+const std::vector<std::string> huge_rows = {"default", "per-ray", "packet", "storage-geometry", "embree-8"};
 const std::vector<std::string> transfers = {"staging", "direct"};
 
 // The models present, or the stand-in.
@@ -221,6 +227,10 @@ void run_check(const ReportGroup& group, size_t index, GpuDevice& device, const 
     return;
   }
   const Scene scene = load_group_scene(settings, model, scale.check_width, scale.check_height);
+  if (!variant.applies(scene)) {
+    emit(out, row_head(group, index, "skipped", "does not apply to this scene"));
+    return;
+  }
   Renderer renderer(device, scene, variant.options);
   const Frame frame = renderer.render(scene.camera, scene.width, scene.height, {Aov::depth, Aov::normal});
   line["width"] = scene.width, line["height"] = scene.height;

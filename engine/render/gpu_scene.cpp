@@ -108,20 +108,6 @@ void append_normal(std::vector<glm::vec4>& texels, const glm::dvec3& normal, Pre
   }
 }
 
-// Brute force beats the tree up to about this many triangles and spheres on lavapipe. Measured
-// with `vkray bench --size 640x480 --variants brute-force,bvh-per-ray` (best of 5 frames):
-// random triangles 4: 7.6 against 11.4 ms, 8: 10.4 / 10.9, 16: 23.0 / 9.8, 32: 25.1 / 18.6;
-// random spheres 8: 9.3 / 11.5, 16: 13.6 / 11.4, 32: 25.7 / 16.9, 10000: 6395 / 48.6.
-constexpr size_t brute_force_max_primitives = 8;
-
-// A handful of spheres beside triangles stay out of the tree, tested one by one before its walk:
-// the walk's loop then holds the triangle test alone. On lavapipe that loop's size is its speed:
-// the built-in scene at 960x540 took 46-54 ms a frame with its sphere in the tree, 19-21 ms apart
-// (fastest of 20 frames, two runs of `vkray bench --variants default`).
-bool keeps_spheres_apart(size_t triangle_count, size_t sphere_count) {
-  return triangle_count > 0 && sphere_count <= brute_force_max_primitives;
-}
-
 // Triangle slots of the brute-force loop: whole batches.
 uint32_t batched_slots(size_t triangle_count) {
   return static_cast<uint32_t>((triangle_count + VKRAY_TRIANGLE_BATCH - 1) / VKRAY_TRIANGLE_BATCH * VKRAY_TRIANGLE_BATCH);
@@ -199,19 +185,6 @@ void lay_out_for_ray_queries(GpuScene& gpu, const Scene& scene, std::vector<Enco
 
 }  // namespace
 
-// The packet walk, where the renderer allows it, is chosen once the tree's depth is known (see
-// GpuSceneOptions::packet_walk). Where it is, triangles always go into a tree: brute force tests
-// each triangle per ray in batches of VKRAY_TRIANGLE_BATCH, and the packet walk beats it from one
-// triangle on (Mesa 25.0.7, 1920x1080, `vkray bench SCENE --variants default,bvh-packet`: one
-// triangle filling the frame 140.3 against 26.0 ms, one out of view 78.9 against 13.9), while a
-// lone sphere is still faster tested one by one (21.7 against 26.9 ms).
-PrimitiveSearch choose_search(size_t triangle_count, size_t sphere_count, bool packet_walk) {
-  if (packet_walk && triangle_count > 0) return PrimitiveSearch::bvh_per_ray;
-  return triangle_count + sphere_count <= brute_force_max_primitives ? PrimitiveSearch::brute_force
-                                                                     : PrimitiveSearch::bvh_per_ray;
-}
-
-
 GpuSceneShape plan_gpu_scene(const Scene& scene, const GpuSceneOptions& options) {
   const size_t triangles = scene.triangle_count(), spheres = scene.spheres.size();
   GpuSceneShape shape;
@@ -224,6 +197,7 @@ GpuSceneShape plan_gpu_scene(const Scene& scene, const GpuSceneOptions& options)
     shape.brute_force_triangle_slots = batched_slots(triangles);
     return shape;
   }
+  // The packet walk where it will run, taking the tree shallow enough for it (make_gpu_scene knows).
   if (options.search == PrimitiveSearch::automatic && options.packet_walk) shape.search = PrimitiveSearch::bvh_packet;
   const bool apart = keeps_spheres_apart(triangles, spheres);
   shape.spheres_apart = apart ? static_cast<uint32_t>(spheres) : 0;
@@ -340,7 +314,7 @@ GpuScene make_gpu_scene(const Scene& scene, const GpuSceneOptions& options, cons
     };
   }
   gpu.bvh_depth = bvh.depth;
-  if (options.search == PrimitiveSearch::automatic && options.packet_walk && bvh.depth <= VKRAY_STACK_REGISTERS_MAX) {
+  if (options.search == PrimitiveSearch::automatic && options.packet_walk && packet_walk_fits(bvh.depth)) {
     gpu.search = PrimitiveSearch::bvh_packet;
   }
   gpu.bvh_build_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
@@ -370,40 +344,6 @@ GpuSceneShape GpuScene::shape() const {
           tree_has_spheres};
 }
 
-namespace {
-constexpr std::pair<PrimitiveSearch, const char*> traversal_names[] = {
-    {PrimitiveSearch::automatic, "auto"},          {PrimitiveSearch::brute_force, "brute-force"},
-    {PrimitiveSearch::bvh_per_ray, "per-ray"},     {PrimitiveSearch::bvh_packet, "packet"},
-    {PrimitiveSearch::ray_query, "ray-query"}};
-}  // namespace
-
-std::optional<PrimitiveSearch> traversal_from_name(std::string_view name) {
-  for (const auto& [search, search_name] : traversal_names) {
-    if (name == search_name) return search;
-  }
-  return std::nullopt;
-}
-
-const char* traversal_name(PrimitiveSearch search) {
-  for (const auto& [known, name] : traversal_names) {
-    if (known == search) return name;
-  }
-  return "?";
-}
-
-uint32_t search_mode(PrimitiveSearch search) {
-  switch (search) {
-    case PrimitiveSearch::bvh_packet:
-      return VKRAY_SEARCH_BVH_PACKET;
-    case PrimitiveSearch::bvh_per_ray:
-      return VKRAY_SEARCH_BVH_PER_RAY;
-    case PrimitiveSearch::ray_query:
-      return VKRAY_SEARCH_RAY_QUERY;
-    default:
-      return VKRAY_SEARCH_BRUTE_FORCE;
-  }
-}
-
 void set_plane_heights(std::vector<gpu::GpuPlane>& planes, const std::vector<Plane>& scene_planes,
                        const glm::dvec3& origin, Precision precision) {
   for (size_t k = 0; k < planes.size(); ++k) {
@@ -414,7 +354,7 @@ void set_plane_heights(std::vector<gpu::GpuPlane>& planes, const std::vector<Pla
 
 glm::uvec4 run_time_counts(const GpuScene& scene) {
   return {static_cast<uint32_t>(scene.spheres.size()), static_cast<uint32_t>(scene.planes.size()),
-          scene.brute_force_triangle_slots(), search_mode(scene.search)};
+          scene.brute_force_triangle_slots(), search_info(scene.search).shader_mode};
 }
 
 bool needs_lo_parts(const glm::dvec3& anchor, double radius, const glm::dvec3& origin) {

@@ -1,6 +1,7 @@
 // Conversion of the double-precision scene into the float32 arrays the shader reads.
 #pragma once
 
+#include "engine/render/search.hpp"
 #include "engine/scene/bvh.hpp"
 #include "engine/scene/camera.hpp"
 #include "engine/scene/scene.hpp"
@@ -12,16 +13,6 @@
 #include <vector>
 
 namespace vkray {
-
-// How the shader finds the nearest triangle or sphere. automatic: brute force for a handful of
-// them, the BVH beyond (see choose_search). Planes are infinite and always tested one by one.
-enum class PrimitiveSearch : uint32_t {
-  automatic,
-  brute_force,
-  bvh_per_ray,
-  bvh_packet,
-  ray_query,  // the device's acceleration structures, vkray's tests on its candidates (ray_query_walk.glsl)
-};
 
 struct GpuSceneOptions {
   PrimitiveSearch search = PrimitiveSearch::automatic;
@@ -116,19 +107,6 @@ struct GeometryLayout {
   size_t vertex = sizeof(gpu::GpuPoint);
   size_t tree_node = sizeof(gpu::GpuBvhNode);
 };
-
-// The traversals by the names `--traversal` and Python's `traversal=` take; nothing for another name.
-inline constexpr const char* traversal_names_help = "auto, brute-force, per-ray, packet, ray-query";
-std::optional<PrimitiveSearch> traversal_from_name(std::string_view name);
-// The name traversal_from_name takes for `search`.
-const char* traversal_name(PrimitiveSearch search);
-
-// The shader's VKRAY_SEARCH_* for `search` (never automatic).
-uint32_t search_mode(PrimitiveSearch search);
-
-// brute_force for scenes of a handful of triangles and spheres, bvh_per_ray otherwise; with
-// `packet_walk` (the renderer favours it) a tree for any triangle.
-PrimitiveSearch choose_search(size_t triangle_count, size_t sphere_count, bool packet_walk = false);
 
 // What make_gpu_scene will build for `scene`, as far as it can be known without building it (see
 // GpuSceneShape): every triangle counted as kept, the tree shallow enough for the packet walk.

@@ -148,24 +148,6 @@ uint32_t tree_loop_budget(const GpuSceneShape& shape, const GpuDeviceInfo& devic
   return static_cast<uint32_t>(budget);
 }
 
-// Why the packet walk (shaders/packet_walk.glsl) cannot run on this device with this shader;
-// empty where it can.
-std::string packet_walk_obstacle(const GpuDeviceInfo& device, const ShaderVariant& shader) {
-  if (shader.precision != Precision::float32) return "the float64 shader walks the tree per ray";
-  if (resolve_edges(device, shader.edges) != EdgeArithmetic::double_products) {
-    return "it takes its edge planes in double (double edge functions: the automatic choice where the device runs "
-           "doubles fast; elsewhere asked for, where it has shaderFloat64)";
-  }
-  if (shader.generic) return "the generic shader walks the tree per ray";
-  if (!shader.stack_in_registers) return "it keeps its stack in registers";
-  if (shader.triangle_test != VKRAY_TRIANGLE_WATERTIGHT) return "it has its own watertight triangle test";
-  if (shader.workgroup_width != VKRAY_WORKGROUP_X || shader.workgroup_height != VKRAY_WORKGROUP_Y || !shader.morton_order) {
-    return "it lays out its own 8x8 workgroups";
-  }
-  if (device.subgroup_size < VKRAY_BVH_MAX_LEAF_SIZE) return "it needs subgroups of at least 8 invocations";
-  return {};
-}
-
 // VKRAY_SPEC_STACK_REGISTERS for a tree `depth` edges deep: a walk holds at most one stack entry per
 // inner node on its path, `depth` of them.
 uint32_t stack_registers_for_depth(uint32_t depth) {
@@ -182,7 +164,7 @@ PipelineSpecialization specialization_for(const GpuSceneShape& shape, uint32_t d
   specialization.spheres = shape.spheres_apart;
   specialization.planes = shape.planes;
   specialization.triangle_slots = shape.brute_force_triangle_slots;
-  specialization.search_mode = search_mode(shape.search);
+  specialization.search_mode = search_info(shape.search).shader_mode;
   specialization.tree_has_triangles = shape.tree_has_triangles;
   specialization.tree_has_spheres = shape.tree_has_spheres;
   specialization.loop_budget = loop_budget;
@@ -250,23 +232,6 @@ const char* given_ray_walk_name(GivenRayWalk walk) {
     case GivenRayWalk::packets_in_place: return "packets in place";
     case GivenRayWalk::packets_by_direction: return "packets by direction";
     default: return "none";
-  }
-}
-
-std::string search_obstacle(PrimitiveSearch search, const GpuDeviceInfo& device, const ShaderVariant& shader) {
-  switch (search) {
-    case PrimitiveSearch::bvh_packet:
-      return packet_walk_obstacle(device, shader);
-    case PrimitiveSearch::ray_query:
-      if (!device.ray_query) {
-        return "it has no ray queries (VK_KHR_ray_query, VK_KHR_acceleration_structure and buffer device addresses)";
-      }
-      if (shader.precision != Precision::float32 || shader.storage_geometry || shader.generic) {
-        return "the ray-query traversal exists for the float32 shader, with texel buffers, specialized";
-      }
-      return {};
-    default:
-      return {};
   }
 }
 
@@ -763,7 +728,7 @@ Renderer::Renderer(GpuDevice& device, const Scene& scene, RendererOptions option
       throw GpuError("traversal '" + std::string(traversal_name(options.scene.search)) + "' cannot run on " +
                      r.context.info.name + ": " + obstacle);
     }
-    const std::string packet_obstacle = packet_walk_obstacle(r.context.info, options.shader);
+    const std::string packet_obstacle = search_obstacle(PrimitiveSearch::bvh_packet, r.context.info, options.shader);
     GpuSceneOptions scene_options = options.scene;
     scene_options.packet_walk = r.context.info.favours_packet_walk && packet_obstacle.empty();
     // The packet walk's pipeline does not depend on the tree: the first one is made on a second
@@ -792,7 +757,7 @@ Renderer::Renderer(GpuDevice& device, const Scene& scene, RendererOptions option
       }
     } joiner{early_creation};
     const GpuScene gpu_scene = make_gpu_scene(scene, scene_options, options.shader);
-    if (gpu_scene.search == PrimitiveSearch::bvh_packet && gpu_scene.bvh_depth > VKRAY_STACK_REGISTERS_MAX) {
+    if (gpu_scene.search == PrimitiveSearch::bvh_packet && !packet_walk_fits(gpu_scene.bvh_depth)) {
       throw GpuError("the packet walk keeps its stack in registers, for trees up to " +
                      std::to_string(VKRAY_STACK_REGISTERS_MAX) + " deep; this one is " + std::to_string(gpu_scene.bvh_depth));
     }

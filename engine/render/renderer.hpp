@@ -115,10 +115,6 @@ struct RendererOptions {
   AovSet first_aovs;
 };
 
-// Why `search` cannot run on `device` with `shader` (the packet walk's and the ray queries' needs);
-// empty where it can, and for the searches every device runs.
-std::string search_obstacle(PrimitiveSearch search, const GpuDeviceInfo& device, const ShaderVariant& shader);
-
 class Renderer {
  public:
   Renderer(GpuDevice& device, const Scene& scene, RendererOptions options = {});

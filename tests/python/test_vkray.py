@@ -358,7 +358,7 @@ def test_double_precision_casts_rays_in_double():
     assert vkray.Renderer(scene, precision="double").cast_rays(np.zeros((0, 6)))["t"].dtype == np.float64
 
 
-@pytest.mark.parametrize("traversal", ["brute-force", "per-ray", "packet", "ray-query"])
+@pytest.mark.parametrize("traversal", vkray.traversals)
 def test_each_traversal_matches_the_command_lines_exr(tmp_path, traversal):
     scene = vkray.load("", 48, 36)
     try:
@@ -372,6 +372,14 @@ def test_each_traversal_matches_the_command_lines_exr(tmp_path, traversal):
         assert not (lavapipe_as_it_is and "VKRAY_REQUIRE_RAY_QUERY" in os.environ), str(error)
         pytest.skip(str(error))
     expect_same_as_cli(renderer.render(), cli_render(tmp_path, "", 48, 36, "--traversal", traversal))
+
+
+def test_the_traversals_are_the_command_lines():
+    """vkray.traversals (engine/render/search.hpp's table) holds what `vkray render --traversal` takes."""
+    help_text = subprocess.run([os.environ["VKRAY_CLI"], "render", "--help"], check=True, capture_output=True, text=True).stdout
+    assert len(vkray.traversals) == 4
+    for name in vkray.traversals:
+        assert name in help_text, name
 
 
 def test_an_unknown_traversal_raises_value_error():
