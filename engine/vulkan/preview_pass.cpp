@@ -1,7 +1,7 @@
 #include "engine/vulkan/preview_pass.hpp"
 
 #include "engine/io/preview.hpp"
-#include "preview.comp.spv.h"
+#include "engine/vulkan/shader_modules.hpp"
 
 #include <cstring>
 #include <stdexcept>
@@ -11,12 +11,6 @@ namespace {
 
 // preview.comp's local_size.
 constexpr uint32_t group_side = 8;
-
-constexpr vk::DescriptorType binding_type(uint32_t binding) {
-  return binding == VKRAY_PREVIEW_BINDING_RAMPS ? vk::DescriptorType::eUniformBuffer : vk::DescriptorType::eStorageImage;
-}
-
-constexpr uint32_t preview_bindings = 3;
 
 uint32_t preview_mode(Aov aov) {
   switch (aov) {
@@ -32,24 +26,14 @@ uint32_t preview_mode(Aov aov) {
 
 PreviewPass::PreviewPass(VulkanContext& context) : context_(context) {
   with_vulkan_errors("making the preview pipeline", [&] {
-    std::array<vk::DescriptorSetLayoutBinding, preview_bindings> bindings;
-    for (uint32_t i = 0; i < preview_bindings; ++i) {
-      bindings[i] = vk::DescriptorSetLayoutBinding(i, binding_type(i), 1, vk::ShaderStageFlagBits::eCompute);
-    }
-    set_layout_ = vk::raii::DescriptorSetLayout(context_.device, vk::DescriptorSetLayoutCreateInfo({}, bindings));
+    shader_.emplace(context_.device, embedded_shader("preview.comp", {}));
     const vk::PushConstantRange push_range(vk::ShaderStageFlagBits::eCompute, 0, sizeof(gpu::PreviewParams));
-    const vk::DescriptorSetLayout set_layout = *set_layout_;
+    const vk::DescriptorSetLayout set_layout = *shader_->layout;
     layout_ = vk::raii::PipelineLayout(context_.device, vk::PipelineLayoutCreateInfo({}, set_layout, push_range));
-    const vk::raii::ShaderModule shader(context_.device, vk::ShaderModuleCreateInfo({}, sizeof(preview_comp), preview_comp));
-    const vk::PipelineShaderStageCreateInfo stage({}, vk::ShaderStageFlagBits::eCompute, *shader, "main");
+    const vk::PipelineShaderStageCreateInfo stage({}, vk::ShaderStageFlagBits::eCompute, *shader_->module, "main");
     pipeline_ = vk::raii::Pipeline(context_.device, context_.pipeline_cache->handle(),
                                    vk::ComputePipelineCreateInfo({}, stage, *layout_));
     context_.pipeline_cache->save();
-    const std::array pool_sizes{vk::DescriptorPoolSize(vk::DescriptorType::eStorageImage, 2),
-                                vk::DescriptorPoolSize(vk::DescriptorType::eUniformBuffer, 1)};
-    pool_ = vk::raii::DescriptorPool(
-        context_.device, vk::DescriptorPoolCreateInfo(vk::DescriptorPoolCreateFlagBits::eFreeDescriptorSet, 1, pool_sizes));
-    set_ = std::move(vk::raii::DescriptorSets(context_.device, vk::DescriptorSetAllocateInfo(*pool_, set_layout))[0]);
     ramps_ = create_upload_buffer(context_, sizeof(gpu::GpuPreviewRamps), vk::BufferUsageFlagBits::eUniformBuffer);
   });
 }
@@ -67,9 +51,9 @@ void PreviewPass::run(const ImageTarget& values, Aov aov, DepthRange depths, boo
       const vk::DescriptorImageInfo picture_info({}, *picture_->view, vk::ImageLayout::eGeneral);
       const vk::DescriptorBufferInfo ramps_info(*ramps_.buffer, 0, VK_WHOLE_SIZE);
       const std::array writes{
-          vk::WriteDescriptorSet(*set_, VKRAY_PREVIEW_BINDING_VALUES, 0, binding_type(VKRAY_PREVIEW_BINDING_VALUES), value_info),
-          vk::WriteDescriptorSet(*set_, VKRAY_PREVIEW_BINDING_PICTURE, 0, binding_type(VKRAY_PREVIEW_BINDING_PICTURE), picture_info),
-          vk::WriteDescriptorSet(*set_, VKRAY_PREVIEW_BINDING_RAMPS, 0, binding_type(VKRAY_PREVIEW_BINDING_RAMPS), nullptr, ramps_info)};
+          vk::WriteDescriptorSet(*shader_->set, VKRAY_PREVIEW_BINDING_VALUES, 0, shader_->types.at(VKRAY_PREVIEW_BINDING_VALUES), value_info),
+          vk::WriteDescriptorSet(*shader_->set, VKRAY_PREVIEW_BINDING_PICTURE, 0, shader_->types.at(VKRAY_PREVIEW_BINDING_PICTURE), picture_info),
+          vk::WriteDescriptorSet(*shader_->set, VKRAY_PREVIEW_BINDING_RAMPS, 0, shader_->types.at(VKRAY_PREVIEW_BINDING_RAMPS), nullptr, ramps_info)};
       context_.device.updateDescriptorSets(writes, {});
       bound_values_ = values.id();
     }
@@ -94,7 +78,7 @@ void PreviewPass::run(const ImageTarget& values, Aov aov, DepthRange depths, boo
                        vk::PipelineStageFlagBits::eComputeShader, vk::AccessFlagBits::eShaderWrite,
                        vk::ImageLayout::eGeneral);
       commands.bindPipeline(vk::PipelineBindPoint::eCompute, *pipeline_);
-      commands.bindDescriptorSets(vk::PipelineBindPoint::eCompute, *layout_, 0, {*set_}, {});
+      commands.bindDescriptorSets(vk::PipelineBindPoint::eCompute, *layout_, 0, {*shader_->set}, {});
       commands.pushConstants<gpu::PreviewParams>(*layout_, vk::ShaderStageFlagBits::eCompute, 0, params);
       commands.dispatch((extent.width + group_side - 1) / group_side, (extent.height + group_side - 1) / group_side, 1);
       // For the copies out of the picture that follow (onto the swapchain, or read_rgb).

@@ -7,6 +7,7 @@
 #include "engine/vulkan/image_target.hpp"
 #include "engine/vulkan/buffer.hpp"
 #include "engine/vulkan/image.hpp"
+#include "engine/vulkan/shader_modules.hpp"
 
 #include <optional>
 #include <vector>
@@ -31,11 +32,9 @@ class PreviewPass {
 
  private:
   VulkanContext& context_;
-  vk::raii::DescriptorSetLayout set_layout_{nullptr};
+  std::optional<ShaderBindings> shader_;  // preview.comp and its descriptor set
   vk::raii::PipelineLayout layout_{nullptr};
   vk::raii::Pipeline pipeline_{nullptr};
-  vk::raii::DescriptorPool pool_{nullptr};
-  vk::raii::DescriptorSet set_{nullptr};
   GpuBuffer ramps_;  // GpuPreviewRamps, host-visible: rewritten every run
   std::optional<GpuImage> picture_;
   uint64_t bound_values_ = 0;  // ImageTarget::id the descriptor set points at; 0: none yet

@@ -1,12 +1,7 @@
 #include "engine/vulkan/raycast_pipeline.hpp"
 
-#include "raycast.comp.VKRAY_DOUBLE_EDGES.spv.h"
-#include "raycast.comp.VKRAY_FLOAT64.spv.h"
-#include "raycast.comp.VKRAY_RAY_QUERY.VKRAY_DOUBLE_EDGES.spv.h"
-#include "raycast.comp.VKRAY_RAY_QUERY.spv.h"
-#include "raycast.comp.VKRAY_STORAGE_GEOMETRY.VKRAY_DOUBLE_EDGES.spv.h"
-#include "raycast.comp.VKRAY_STORAGE_GEOMETRY.spv.h"
-#include "raycast.comp.spv.h"
+#include "engine/stopwatch.hpp"
+#include "engine/vulkan/shader_modules.hpp"
 
 #include <chrono>
 
@@ -17,18 +12,21 @@ EdgeArithmetic resolve_edges(const GpuDeviceInfo& device, EdgeArithmetic request
   return device.fast_float64 ? EdgeArithmetic::double_products : EdgeArithmetic::float_error_free;
 }
 
+// The module for `specialization`: the defines each of its choices takes (shaders/raycast.comp).
+const EmbeddedShader& raycast_module(const PipelineSpecialization& specialization, EdgeArithmetic edges) {
+  const ShaderVariant& variant = specialization.variant;
+  const bool ray_query = specialization.search_mode == VKRAY_SEARCH_RAY_QUERY;
+  if (variant.precision == Precision::float64) return embedded_shader("raycast.comp", {"VKRAY_FLOAT64"});
+  const bool double_edges = edges == EdgeArithmetic::double_products;
+  const char* layout = ray_query ? "VKRAY_RAY_QUERY" : variant.storage_geometry ? "VKRAY_STORAGE_GEOMETRY" : "";
+  if (*layout && double_edges) return embedded_shader("raycast.comp", {layout, "VKRAY_DOUBLE_EDGES"});
+  if (*layout) return embedded_shader("raycast.comp", {layout});
+  if (double_edges) return embedded_shader("raycast.comp", {"VKRAY_DOUBLE_EDGES"});
+  return embedded_shader("raycast.comp", {});
+}
+
 RaycastPipeline::RaycastPipeline(VulkanContext& context, PipelineSpecialization specialization)
     : context_(context), specialization_(specialization) {
-  std::vector<vk::DescriptorSetLayoutBinding> bindings;
-  std::map<vk::DescriptorType, uint32_t> descriptors;  // of each type
-  for (uint32_t i = 0; i < binding_count(); ++i) {
-    bindings.emplace_back(i, binding_type(i), 1, vk::ShaderStageFlagBits::eCompute);
-    ++descriptors[binding_type(i)];
-  }
-  set_layout_ = vk::raii::DescriptorSetLayout(context.device, vk::DescriptorSetLayoutCreateInfo({}, bindings));
-  const vk::PushConstantRange push_range(vk::ShaderStageFlagBits::eCompute, 0, sizeof(gpu::RayGenParams));
-  const vk::DescriptorSetLayout set_layout = *set_layout_;
-  layout_ = vk::raii::PipelineLayout(context.device, vk::PipelineLayoutCreateInfo({}, set_layout, push_range));
   const bool float64 = specialization.variant.precision == Precision::float64;
   if (float64 && !context.info.shader_float64) {
     throw GpuError(context.info.name + " has no float64 arithmetic in shaders (shaderFloat64); use --precision float");
@@ -43,26 +41,12 @@ RaycastPipeline::RaycastPipeline(VulkanContext& context, PipelineSpecialization 
   if (ray_query() && (float64 || specialization.variant.storage_geometry || specialization.variant.generic)) {
     throw GpuError("the ray-query traversal exists for the float32 shader, with texel buffers, specialized");
   }
-  auto module = [&](const auto& spirv) {
-    return vk::raii::ShaderModule(context.device, vk::ShaderModuleCreateInfo({}, sizeof(spirv), spirv));
-  };
-  const bool storage = specialization.variant.storage_geometry;
-  if (ray_query()) {
-    shader_ = edges == EdgeArithmetic::double_products ? module(raycast_comp_VKRAY_RAY_QUERY_VKRAY_DOUBLE_EDGES)
-                                                       : module(raycast_comp_VKRAY_RAY_QUERY);
-  } else if (float64) {
-    shader_ = module(raycast_comp_VKRAY_FLOAT64);
-  } else if (edges == EdgeArithmetic::double_products) {
-    shader_ = storage ? module(raycast_comp_VKRAY_STORAGE_GEOMETRY_VKRAY_DOUBLE_EDGES) : module(raycast_comp_VKRAY_DOUBLE_EDGES);
-  } else {
-    shader_ = storage ? module(raycast_comp_VKRAY_STORAGE_GEOMETRY) : module(raycast_comp);
-  }
-
-  std::vector<vk::DescriptorPoolSize> pool_sizes;
-  for (const auto& [type, count] : descriptors) pool_sizes.emplace_back(type, count);
-  pool_ = vk::raii::DescriptorPool(
-      context.device, vk::DescriptorPoolCreateInfo(vk::DescriptorPoolCreateFlagBits::eFreeDescriptorSet, 1, pool_sizes));
-  set_ = std::move(vk::raii::DescriptorSets(context.device, vk::DescriptorSetAllocateInfo(*pool_, set_layout))[0]);
+  // The bindings as the module declares them: geometry as texel or storage buffers, the ray
+  // queries' top-level structure where it has one.
+  shader_.emplace(context.device, raycast_module(specialization, edges));
+  const vk::PushConstantRange push_range(vk::ShaderStageFlagBits::eCompute, 0, sizeof(gpu::RayGenParams));
+  const vk::DescriptorSetLayout set_layout = *shader_->layout;
+  layout_ = vk::raii::PipelineLayout(context.device, vk::PipelineLayoutCreateInfo({}, set_layout, push_range));
 }
 
 const vk::raii::Pipeline& RaycastPipeline::pipeline(AovSet aovs, bool lo_parts, RaycastMode mode, double& created_ms) {
@@ -72,7 +56,7 @@ const vk::raii::Pipeline& RaycastPipeline::pipeline(AovSet aovs, bool lo_parts, 
   const uint64_t key = uint64_t{aovs.bits()} | (uint64_t{lo_parts} << 32) | (uint64_t{static_cast<uint32_t>(mode)} << 33);
   if (auto found = pipelines_.find(key); found != pipelines_.end()) return found->second;
 
-  const auto start = std::chrono::steady_clock::now();
+  const auto start = Clock::now();
   // One 32-bit value per VKRAY_SPEC_* id (SPIR-V booleans are 32-bit), stored at the id's index.
   std::array<uint32_t, VKRAY_SPEC_COUNT> values{};
   values[VKRAY_SPEC_SPHERE_COUNT] = specialization_.spheres;
@@ -104,39 +88,20 @@ const vk::raii::Pipeline& RaycastPipeline::pipeline(AovSet aovs, bool lo_parts, 
   std::array<vk::SpecializationMapEntry, values.size()> entries;
   for (uint32_t id = 0; id < entries.size(); ++id) entries[id] = vk::SpecializationMapEntry(id, id * 4u, 4u);
   const vk::SpecializationInfo specialization(entries, vk::ArrayProxyNoTemporaries<const uint32_t>(values));
-  const vk::PipelineShaderStageCreateInfo stage({}, vk::ShaderStageFlagBits::eCompute, *shader_, "main", &specialization);
+  const vk::PipelineShaderStageCreateInfo stage({}, vk::ShaderStageFlagBits::eCompute, *shader_->module, "main", &specialization);
   auto [entry, inserted] = pipelines_.emplace(
       key, vk::raii::Pipeline(context_.device, context_.pipeline_cache->handle(),
                               vk::ComputePipelineCreateInfo({}, stage, *layout_)));
   context_.pipeline_cache->save();
-  created_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  created_ms = elapsed_ms(start);
   return entry->second;
 }
 
 bool RaycastPipeline::ray_query() const { return specialization_.search_mode == VKRAY_SEARCH_RAY_QUERY; }
 
-uint32_t RaycastPipeline::binding_count() const {
-  return ray_query() ? VKRAY_BINDING_COUNT : VKRAY_BINDING_TOP_STRUCTURE;
-}
+uint32_t RaycastPipeline::binding_count() const { return static_cast<uint32_t>(shader_->types.size()); }
 
-vk::DescriptorType RaycastPipeline::binding_type(uint32_t binding) const {
-  switch (binding) {
-    case VKRAY_BINDING_TOP_STRUCTURE:
-      return vk::DescriptorType::eAccelerationStructureKHR;
-    case VKRAY_BINDING_DEPTH:
-    case VKRAY_BINDING_NORMAL:
-    case VKRAY_BINDING_UV:
-    case VKRAY_BINDING_OVERFLOW:
-    case VKRAY_BINDING_DEPTH_RANGE:
-    case VKRAY_BINDING_HITS:
-      return vk::DescriptorType::eStorageBuffer;
-    case VKRAY_BINDING_IMAGE:
-      return vk::DescriptorType::eStorageImage;
-    default:  // geometry and given rays
-      return specialization_.variant.storage_geometry ? vk::DescriptorType::eStorageBuffer
-                                                      : vk::DescriptorType::eUniformTexelBuffer;
-  }
-}
+vk::DescriptorType RaycastPipeline::binding_type(uint32_t binding) const { return shader_->types.at(binding); }
 
 void RaycastPipeline::bind_resources(const Resources& resources) {
   std::array<vk::DescriptorBufferInfo, VKRAY_BINDING_COUNT> buffer_infos;
@@ -144,7 +109,7 @@ void RaycastPipeline::bind_resources(const Resources& resources) {
   std::vector<vk::WriteDescriptorSet> writes(binding_count());
   const vk::WriteDescriptorSetAccelerationStructureKHR top_structure(resources.top_structure);
   for (uint32_t i = 0; i < binding_count(); ++i) {
-    writes[i] = vk::WriteDescriptorSet(*set_, i, 0, 1, binding_type(i));
+    writes[i] = vk::WriteDescriptorSet(*shader_->set, i, 0, 1, binding_type(i));
     switch (binding_type(i)) {
       case vk::DescriptorType::eAccelerationStructureKHR:
         writes[i].setPNext(&top_structure);
@@ -168,7 +133,7 @@ void RaycastPipeline::bind_resources(const Resources& resources) {
 void RaycastPipeline::bind(const vk::raii::CommandBuffer& commands, const vk::raii::Pipeline& pipeline,
                            const gpu::RayGenParams& params) const {
   commands.bindPipeline(vk::PipelineBindPoint::eCompute, *pipeline);
-  commands.bindDescriptorSets(vk::PipelineBindPoint::eCompute, *layout_, 0, {*set_}, {});
+  commands.bindDescriptorSets(vk::PipelineBindPoint::eCompute, *layout_, 0, {*shader_->set}, {});
   commands.pushConstants<gpu::RayGenParams>(*layout_, vk::ShaderStageFlagBits::eCompute, 0, params);
 }
 

@@ -5,10 +5,12 @@
 #include "engine/frame.hpp"
 #include "engine/vulkan/shader_variant.hpp"
 #include "engine/vulkan/context.hpp"
+#include "engine/vulkan/shader_modules.hpp"
 #include "shaders/gpu_layout.h"
 
 #include <array>
 #include <map>
+#include <optional>
 
 namespace vkray {
 
@@ -59,10 +61,10 @@ class RaycastPipeline {
     std::array<vk::ImageView, VKRAY_BINDING_COUNT> images;
     vk::AccelerationStructureKHR top_structure;  // the ray-query traversal's
   };
-  // The descriptor type of each binding (see gpu_layout.h): geometry as texel or storage buffers,
-  // as the variant reads it.
+  // The descriptor type of each binding (see gpu_layout.h), as the module declares it
+  // (binding_types): geometry as texel or storage buffers, as the variant reads it; the ray-query
+  // traversal's pipelines have one binding more, its top-level structure.
   vk::DescriptorType binding_type(uint32_t binding) const;
-  // The ray-query traversal's pipelines have one binding more: its top-level structure.
   bool ray_query() const;
   uint32_t binding_count() const;
   // Points every binding of the descriptor set at its resource.
@@ -74,11 +76,8 @@ class RaycastPipeline {
  private:
   VulkanContext& context_;
   PipelineSpecialization specialization_;
-  vk::raii::DescriptorSetLayout set_layout_{nullptr};
+  std::optional<ShaderBindings> shader_;  // the module and its descriptor set
   vk::raii::PipelineLayout layout_{nullptr};
-  vk::raii::ShaderModule shader_{nullptr};
-  vk::raii::DescriptorPool pool_{nullptr};
-  vk::raii::DescriptorSet set_{nullptr};
   std::map<uint64_t, vk::raii::Pipeline> pipelines_;  // by AovSet bits, bit 32 the lo parts, the mode from bit 33
 };
 
