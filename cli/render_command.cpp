@@ -11,6 +11,7 @@
 #include "engine/render/renderer.hpp"
 #include "engine/scene/scene_loader.hpp"
 #include "engine/scene/scene_or_model.hpp"
+#include "engine/stopwatch.hpp"
 
 #include <algorithm>
 #include <cctype>
@@ -58,19 +59,6 @@ AovSet parse_aov_list(const std::string& list) {
   if (aovs.empty()) throw InputError("--aov: name at least one output (" + output_names() + ")");
   return aovs;
 }
-
-class Stopwatch {
- public:
-  double lap_ms() {
-    const auto now = std::chrono::steady_clock::now();
-    const double ms = std::chrono::duration<double, std::milli>(now - last_).count();
-    last_ = now;
-    return ms;
-  }
-
- private:
-  std::chrono::steady_clock::time_point last_ = std::chrono::steady_clock::now();
-};
 
 // --miss: inf, -inf, nan or a finite number, as the float written.
 float miss_value(const std::string& text) {
@@ -166,7 +154,6 @@ int run_render_views(const RenderOptions& options, const AovSet& aovs) {
 int run_render(const RenderOptions& options) {
   if (options.views.any()) return run_render_views(options, parse_aov_list(options.aovs));
   Stopwatch stopwatch;
-  const auto start = std::chrono::steady_clock::now();
   const AovSet aovs = parse_aov_list(options.aovs);
   check_render_options(options, aovs);
   const std::filesystem::path preview =
@@ -259,7 +246,7 @@ int run_render(const RenderOptions& options) {
                 {options.compression, miss_value(options.miss)});
   if (!options.no_preview) written += " and " + preview.string();
   const double write_ms = stopwatch.lap_ms();
-  const double total_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  const double total_ms = stopwatch.total_ms();
 
   std::printf("vkray: wrote %s (%ux%u, %s) on %s\n", written.c_str(), scene.width, scene.height,
               aovs.names().c_str(), device_name.c_str());

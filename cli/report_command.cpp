@@ -6,6 +6,7 @@
 #include "cli/commands.hpp"
 #include "engine/bench/gpu_report.hpp"
 #include "engine/io/image_io.hpp"
+#include "engine/stopwatch.hpp"
 #include "engine/scene/scene.hpp"
 
 #include <fcntl.h>
@@ -31,7 +32,6 @@ namespace vkray::cli {
 namespace {
 
 namespace fs = std::filesystem;
-using Clock = std::chrono::steady_clock;
 
 struct ReportOptions {
   std::string folder;
@@ -122,7 +122,7 @@ Ended run_process(const std::vector<std::string>& arguments, const std::vector<s
   posix_spawn_file_actions_destroy(&files);
   posix_spawnattr_destroy(&attributes);
   if (spawned != 0) throw std::runtime_error(std::string("cannot start a report process: ") + std::strerror(spawned));
-  const auto deadline = Clock::now() + std::chrono::duration<double>(std::max(seconds, 0.0));
+  const auto deadline = after_ms(Clock::now(), 1e3 * std::max(seconds, 0.0));
   Ended ended;
   while (waitpid(pid, &ended.status, WNOHANG) == 0) {
     if (Clock::now() >= deadline) {
@@ -172,14 +172,14 @@ std::vector<std::string> run_group(const ReportOptions& options, const ReportGro
   const fs::path rows_file = parts / (group.id + ".jsonl"), log = parts / (group.id + ".log");
   fs::remove(rows_file);
   fs::remove(log);
-  const auto deadline = Clock::now() + std::chrono::duration<double>(seconds);
+  const auto deadline = after_ms(Clock::now(), 1e3 * seconds);
   std::vector<std::string> lines;
   // Processes in a row that ended before their last row: past three, something is wrong with every
   // row (a driver that crashes, a layer that aborts), and the group's time is better left to others.
   constexpr int most_ended_in_a_row = 3;
   int ended_in_a_row = 0;
   while (lines.size() < group.rows.size()) {
-    const double left = std::chrono::duration<double>(deadline - Clock::now()).count();
+    const double left = -elapsed_ms(deadline) / 1e3;
     if (left <= 0.0 || ended_in_a_row == most_ended_in_a_row) {
       const std::string why = left <= 0.0 ? "the group's time ran out"
                                           : "three of its processes in a row ended early (the failed rows above say how)";
@@ -230,12 +230,12 @@ int run_report(const ReportOptions& options) {
   fs::create_directories(folder / "parts");
   const double minutes = options.minutes > 0.0 ? options.minutes : options.reduced ? 3.0 : 8.0;
   const auto start = Clock::now();
-  const auto deadline = start + std::chrono::duration<double>(60.0 * minutes);
+  const auto deadline = after_ms(start, 60e3 * minutes);
   const std::string command = command_line(options);
   std::vector<std::string> lines, failed_variants;
   std::string json;
   auto save = [&] {
-    json = report_json(lines, command, std::chrono::duration<double>(Clock::now() - start).count());
+    json = report_json(lines, command, elapsed_ms(start) / 1e3);
     write_text_file(folder / "report.json", json);
     write_text_file(folder / "report.md", report_markdown(json));
   };
@@ -244,7 +244,7 @@ int run_report(const ReportOptions& options) {
         std::find(options.only.begin(), options.only.end(), group.section) == options.only.end()) {
       continue;
     }
-    const double left = std::chrono::duration<double>(deadline - Clock::now()).count();
+    const double left = -elapsed_ms(deadline) / 1e3;
     const auto group_start = Clock::now();
     std::vector<std::string> group_lines;
     if (left <= 0.0) {
@@ -278,7 +278,7 @@ int run_report(const ReportOptions& options) {
     }
     std::printf("%-44s %3zu rows: %zu ok, %zu skipped, %zu failed or not run (%.0f s)\n", group.id.c_str(), group_lines.size(),
                 ok, skipped, group_lines.size() - ok - skipped,
-                std::chrono::duration<double>(Clock::now() - group_start).count());
+                elapsed_ms(group_start) / 1e3);
     std::fflush(stdout);
   }
   const bool passed = report_passed(json);

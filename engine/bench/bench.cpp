@@ -3,6 +3,8 @@
 #include "engine/bench/bench_report.hpp"
 #include "engine/bench/embree_baseline.hpp"
 #include "engine/io/image_io.hpp"
+#include "engine/parallel.hpp"
+#include "engine/stopwatch.hpp"
 #include "engine/views/view_batch.hpp"
 #include "engine/views/view_list.hpp"
 
@@ -17,12 +19,6 @@
 
 namespace vkray {
 namespace {
-
-using Clock = std::chrono::steady_clock;
-
-double elapsed_ms(Clock::time_point start) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
-}
 
 size_t finite_primitives(const Scene& scene) { return scene.triangle_count() + scene.spheres.size(); }
 
@@ -278,19 +274,13 @@ BenchSceneRun::BenchSceneRun(const BenchScene& bench, const BenchSettings& setti
     const CameraBasis camera = make_camera_basis(scene.camera, scene.width, scene.height);
     Frame rounded_rays(scene.width, scene.height, AovSet{Aov::depth, Aov::normal});
     rounded_rays.allocate();
-    const unsigned workers = std::max(1u, std::min(std::thread::hardware_concurrency(), scene.height));
-    std::vector<std::jthread> threads;
-    for (unsigned worker = 0; worker < workers; ++worker) {
-      threads.emplace_back([&, worker] {
-        for (uint32_t j = worker; j < scene.height; j += workers) {
-          for (uint32_t i = 0; i < scene.width; ++i) {
-            store_reference_hit(rounded_rays, size_t{j} * scene.width + i,
-                                reference_scene_.trace(camera.origin, float32_ray_direction(camera, i, j, scene.width, scene.height)));
-          }
-        }
-      });
-    }
-    threads.clear();  // joins
+    parallel_for_strided(scene.height, [&](size_t row, size_t) {
+      const auto j = static_cast<uint32_t>(row);
+      for (uint32_t i = 0; i < scene.width; ++i) {
+        store_reference_hit(rounded_rays, size_t{j} * scene.width + i,
+                            reference_scene_.trace(camera.origin, float32_ray_direction(camera, i, j, scene.width, scene.height)));
+      }
+    });
     result_.float32_ray = measure_error(rounded_rays, reference_);
   }
 }

@@ -1,7 +1,8 @@
 #include "engine/bench/embree_baseline.hpp"
 
-#include "engine/scene/camera.hpp"
 #include "engine/reference/reference.hpp"
+#include "engine/scene/camera.hpp"
+#include "engine/stopwatch.hpp"
 #include "engine/unit_vector.hpp"
 
 #include <embree3/rtcore.h>
@@ -18,8 +19,6 @@
 
 namespace vkray {
 namespace {
-
-using Clock = std::chrono::steady_clock;
 
 // Pixels of the image in 8x8 tiles handed out to the worker threads; a packet is a 4x2 block, the
 // shape vkray's subgroups have (shaders/raycast.comp).
@@ -44,7 +43,7 @@ class EmbreeScene {
     const auto start = Clock::now();
     rtcCommitScene(scene_);
     check(device_, "building the scene");
-    build_ms = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+    build_ms = elapsed_ms(start);
   }
   ~EmbreeScene() {
     rtcReleaseScene(scene_);
@@ -113,7 +112,7 @@ double run_tiles(uint32_t width, uint32_t height, unsigned threads, TraceTile tr
       });
     }
   }
-  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+  return elapsed_ms(start);
 }
 
 }  // namespace
@@ -245,7 +244,7 @@ EmbreeRays trace_rays_with_embree(const Scene& scene, std::span<const GivenRay> 
         });
       }
     }
-    return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+    return elapsed_ms(start);
   };
   trace();  // warm-up
   std::vector<double> times_ms;

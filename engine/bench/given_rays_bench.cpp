@@ -4,6 +4,7 @@
 #include "engine/reference/reference.hpp"
 #include "engine/render/renderer.hpp"
 #include "engine/scene/camera.hpp"
+#include "engine/stopwatch.hpp"
 
 #include <glm/geometric.hpp>
 
@@ -14,12 +15,6 @@
 
 namespace vkray {
 namespace {
-
-using Clock = std::chrono::steady_clock;
-
-double elapsed_ms(Clock::time_point start) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
-}
 
 // Rings of the spinning sensor: what a 64-beam LiDAR has.
 constexpr size_t sensor_rings = 64;

@@ -8,6 +8,7 @@
 #include "engine/render/renderer.hpp"
 #include "engine/render/search.hpp"
 #include "engine/scene/scene_or_model.hpp"
+#include "engine/stopwatch.hpp"
 #include "engine/vulkan/raycast_pipeline.hpp"
 
 #include <nlohmann/json.hpp>
@@ -27,7 +28,6 @@ namespace vkray {
 namespace {
 
 using Json = nlohmann::ordered_json;
-using Clock = std::chrono::steady_clock;
 
 // What --precision double promises (README, "Precision"): the report measures whether this device keeps it.
 constexpr double float64_promise = 1e-12;
@@ -326,7 +326,7 @@ void run_transfer(const ReportGroup& group, size_t index, const std::string& dev
     renderer.render(scene.camera, scene.width, scene.height, aovs);
     gpu_ms.push_back(renderer.timings().dispatch_gpu_ms);
     readback_ms.push_back(renderer.timings().readback_ms);
-    return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+    return elapsed_ms(start);
   });
   gpu_ms.erase(gpu_ms.begin(), gpu_ms.end() - static_cast<std::ptrdiff_t>(frame_ms.size()));
   readback_ms.erase(readback_ms.begin(), readback_ms.end() - static_cast<std::ptrdiff_t>(frame_ms.size()));

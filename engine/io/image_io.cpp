@@ -202,12 +202,6 @@ void write_exr(const std::filesystem::path& path, const Frame& frame, const ExrS
   file.commit();
 }
 
-void write_preview_png(const std::filesystem::path& path, const Frame& frame) {
-  PartialFile file(path);
-  write_preview_png_to(file, path, frame);
-  file.commit();
-}
-
 void write_rgb_png(const std::filesystem::path& path, uint32_t width, uint32_t height, const std::vector<uint8_t>& rgb) {
   PartialFile file(path);
   if (rgb.size() != size_t{width} * height * 3) throw std::invalid_argument("write_rgb_png: not width x height RGB pixels");

@@ -63,16 +63,14 @@ void use_exr_threads(unsigned count);
 // (engine/scene/camera_description.hpp). Throws std::runtime_error naming the file.
 void write_exr(const std::filesystem::path& path, const Frame& frame, const ExrSettings& settings = {});
 
-// 8-bit RGB preview, one panel per output side by side in the order depth, normal, uv: depth as
-// grey (near bright, far dark, misses black), normals as (N+1)/2, uv as (u+1)/2, (v+1)/2 with the
-// unit disk drawn brighter (it must touch the shorter borders).
-void write_preview_png(const std::filesystem::path& path, const Frame& frame);
-
 // 8-bit RGB pixels, 3 bytes a pixel, rows from the top, as PNG (the viewer's screenshots).
 void write_rgb_png(const std::filesystem::path& path, uint32_t width, uint32_t height, const std::vector<uint8_t>& rgb);
 
 // The EXR and, when `preview` is set, the PNG preview, written at the same time on two threads
 // (each takes about as long at 1920x1080), and renamed into place only when both are complete.
+// The preview is 8-bit RGB, one panel per output side by side in the order depth, normal, uv:
+// depth as grey (near bright, far dark, misses black), normals as (N+1)/2, uv as (u+1)/2, (v+1)/2
+// with the unit disk drawn brighter (it must touch the shorter borders).
 // Throws the EXR's failure, else the PNG's.
 void write_outputs(const std::filesystem::path& exr, const std::filesystem::path* preview, const Frame& frame,
                    const ExrSettings& settings = {});

@@ -40,6 +40,7 @@
 // between grazes it: its normal is across the ray, asin |n.d| from a sample's).
 #include "engine/reference/envelope.hpp"
 
+#include "engine/parallel.hpp"
 #include "engine/reference/reference.hpp"
 
 #include <glm/geometric.hpp>
@@ -136,16 +137,10 @@ EnvelopeReport check_against_reference(const Scene& scene, const Frame& frame, u
   const std::vector<double> triangle_reach = triangle_reaches(scene);
 
   std::vector<PixelSamples> samples(frame.pixel_count());
-  const unsigned workers = std::max(1u, std::thread::hardware_concurrency());
   auto in_parallel = [&](const auto& per_pixel) {
-    std::vector<std::jthread> threads;
-    for (unsigned worker = 0; worker < workers; ++worker) {
-      threads.emplace_back([&, worker] {
-        for (size_t p = worker; p < samples.size(); p += workers) {
-          if ((p / width) % row_step == 0) per_pixel(p);
-        }
-      });
-    }
+    parallel_for_strided(samples.size(), [&](size_t p, size_t) {
+      if ((p / width) % row_step == 0) per_pixel(p);
+    });
   };
   // The centre rays first: each pixel's position error subtends 2 eps (t + E) / t of its hit.
   std::vector<double> position_angle(samples.size(), 0.0);

@@ -256,21 +256,14 @@ std::vector<ReferenceHit> render_reference_hits(const ReferenceScene& scene, con
                                                 const std::function<void(double)>& progress) {
   const CameraBasis basis = make_camera_basis(camera, width, height);
   std::vector<ReferenceHit> hits(size_t{width} * height);
-  const unsigned workers = std::max(1u, std::min(std::thread::hardware_concurrency(), height));
-  {  // the workers join at the end of this block, before `hits` is returned
-    std::vector<std::jthread> threads;
-    for (unsigned worker = 0; worker < workers; ++worker) {
-      threads.emplace_back([&, worker] {
-        for (uint32_t j = worker; j < height; j += workers) {
-          for (uint32_t i = 0; i < width; ++i) {
-            const PixelRay ray = pixel_ray(camera, basis, i, j, width, height);
-            hits[size_t{j} * width + i] = scene.trace(ray.origin, ray.direction);
-          }
-          if (progress && worker == 0) progress(static_cast<double>(j + 1) / height);
-        }
-      });
+  parallel_for_strided(height, [&](size_t row, size_t worker) {
+    const auto j = static_cast<uint32_t>(row);
+    for (uint32_t i = 0; i < width; ++i) {
+      const PixelRay ray = pixel_ray(camera, basis, i, j, width, height);
+      hits[size_t{j} * width + i] = scene.trace(ray.origin, ray.direction);
     }
-  }
+    if (progress && worker == 0) progress(static_cast<double>(j + 1) / height);
+  });
   return hits;
 }
 

@@ -1,5 +1,6 @@
 #include "engine/render/gpu_scene.hpp"
 
+#include "engine/stopwatch.hpp"
 #include "engine/unit_vector.hpp"
 
 #include <glm/geometric.hpp>
@@ -274,7 +275,7 @@ GpuScene make_gpu_scene(const Scene& scene, const GpuSceneOptions& options, cons
     return gpu;
   }
 
-  const auto start = std::chrono::steady_clock::now();
+  const auto start = Clock::now();
   std::vector<EncodedPrimitive> unordered = std::move(triangles);
   const bool spheres_apart = keeps_spheres_apart(unordered.size(), scene.spheres.size());
   for (uint32_t k = 0; k < (spheres_apart ? 0 : scene.spheres.size()); ++k) {
@@ -317,7 +318,7 @@ GpuScene make_gpu_scene(const Scene& scene, const GpuSceneOptions& options, cons
   if (options.search == PrimitiveSearch::automatic && options.packet_walk && packet_walk_fits(bvh.depth)) {
     gpu.search = PrimitiveSearch::bvh_packet;
   }
-  gpu.bvh_build_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  gpu.bvh_build_ms = elapsed_ms(start);
   return gpu;
 }
 

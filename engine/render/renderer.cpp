@@ -1,11 +1,12 @@
 #include "engine/render/renderer.hpp"
 
-#include "engine/scene/camera.hpp"
+#include "engine/parallel.hpp"
+#include "engine/reference/reference.hpp"
 #include "engine/render/gpu_scene.hpp"
 #include "engine/render/ray_order.hpp"
-#include "engine/parallel.hpp"
+#include "engine/scene/camera.hpp"
+#include "engine/stopwatch.hpp"
 #include "engine/surface_outputs.hpp"
-#include "engine/reference/reference.hpp"
 #include "engine/unit_vector.hpp"
 #include "engine/vulkan/acceleration_structures.hpp"
 #include "engine/vulkan/buffer.hpp"
@@ -21,12 +22,6 @@
 
 namespace vkray {
 namespace {
-
-using Clock = std::chrono::steady_clock;
-
-double elapsed_ms(Clock::time_point start) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
-}
 
 // Geometry the shader reads as RGBA32 texels (see gpu_layout.h), with a float view and, where the
 // texels hold indices, a uint view of the same memory.

@@ -1,6 +1,7 @@
 #include "engine/views/view_batch.hpp"
 
 #include "engine/io/image_io.hpp"
+#include "engine/stopwatch.hpp"
 #include "engine/views/manifest.hpp"
 
 #include <chrono>
@@ -14,9 +15,8 @@
 namespace vkray {
 namespace {
 
-using Clock = std::chrono::steady_clock;
 
-double seconds_since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
+double seconds_since(Clock::time_point start) { return elapsed_ms(start) / 1e3; }
 
 struct WriteJob {
   uint32_t index;

@@ -1,5 +1,7 @@
 #include "engine/vulkan/acceleration_structures.hpp"
 
+#include "engine/stopwatch.hpp"
+
 #include <chrono>
 #include <cstring>
 
@@ -32,7 +34,7 @@ AccelerationStructures::AccelerationStructures(VulkanContext& context, const Str
     throw GpuError(context.info.name + " has no ray queries (VK_KHR_ray_query, VK_KHR_acceleration_structure and buffer "
                                        "device addresses): use another traversal");
   }
-  const auto start = std::chrono::steady_clock::now();
+  const auto start = Clock::now();
   const vk::raii::Device& device = context.device;
   // The build's inputs, on the device; dropped once the structures are built.
   GpuBuffer indices, boxes;
@@ -198,7 +200,7 @@ AccelerationStructures::AccelerationStructures(VulkanContext& context, const Str
                                   vk::AccessFlagBits::eAccelerationStructureReadKHR);
     commands.pipelineBarrier(build_stage, vk::PipelineStageFlagBits::eComputeShader, {}, ready, {}, {});
   });
-  build_ms_ = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  build_ms_ = elapsed_ms(start);
 }
 
 }  // namespace vkray
