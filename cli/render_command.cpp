@@ -151,6 +151,75 @@ int run_render_views(const RenderOptions& options, const AovSet& aovs) {
   return 0;
 }
 
+// What --timings prints of one render: each part's wall clock, then the scene and cache on the device.
+struct RenderRunTimings {
+  double load_ms = 0.0, device_open_ms = 0.0, device_wait_ms = 0.0, upload_ms = 0.0, render_ms = 0.0;
+  double write_ms = 0.0, total_ms = 0.0;
+  std::optional<double> reference_ms, measure_ms;  // where the reference ran, the error was measured
+  bool staging = false;
+  std::optional<RenderTimings> gpu_timings;  // none for --reference
+  std::optional<SceneStats> scene_stats;
+  std::string pipeline_cache;  // what --timings says of the device's pipeline cache
+};
+
+void print_render_timings(const RenderRunTimings& run, bool no_preview) {
+  std::printf("timings (wall clock unless said; an indented line is a part of the line above it, and a line "
+              "'beside' another ran at the same time, on another thread):\n");
+  print_timing(0, "total", run.total_ms, "from the start of 'render' to the files in place");
+  print_timing(1, "scene load", run.load_ms, "reading and checking the scene, the OBJ files it names");
+  if (run.gpu_timings) {
+    print_timing(1, "device open", run.device_open_ms, "beside the scene load, on a second thread");
+    print_timing(1, "waiting for the device", run.device_wait_ms, "what the device open took beyond the scene load");
+    print_timing(1, "upload", run.upload_ms,
+                 run.staging ? "the scene to the device, through staging buffers (--transfer)"
+                             : "the scene to the device, into memory the host maps (--transfer)");
+    if (run.scene_stats->bvh_nodes > 0) print_timing(2, "BVH build", run.gpu_timings->bvh_build_ms);
+    if (run.scene_stats->search == PrimitiveSearch::ray_query) {
+      print_timing(2, "acceleration structures", run.gpu_timings->structures_ms,
+                   "built and compacted by the device (--traversal ray-query)");
+    }
+    if (run.gpu_timings->pipeline_beside_upload_ms > 0.0) {
+      print_timing(2, "pipeline creation", run.gpu_timings->pipeline_beside_upload_ms,
+                   "beside the BVH build and upload, on a second thread");
+    }
+    print_timing(1, "render", run.render_ms);
+    if (run.gpu_timings->pipeline_ms > 0.0) print_timing(2, "pipeline creation", run.gpu_timings->pipeline_ms);
+    char longest[64];
+    std::snprintf(longest, sizeof longest, ", the longest %.1f ms (budget %.0f)", run.gpu_timings->longest_dispatch_ms,
+                  default_dispatch_budget_ms);
+    const std::string dispatches = std::to_string(run.gpu_timings->tiles) +
+                                   (run.gpu_timings->tiles == 1 ? " dispatch" : " dispatches" + std::string(longest));
+    if (run.gpu_timings->has_gpu_times) {
+      print_timing(2, "dispatch (GPU time)", run.gpu_timings->dispatch_gpu_ms, dispatches + ", timestamp queries");
+    } else {
+      std::printf("      %-24s %13s  %s\n", "dispatch (GPU time)", "n/a", "(the device has no timestamps)");
+    }
+    print_timing(2, "readback", run.gpu_timings->readback_ms);
+    if (run.gpu_timings->unfinished_rays > 0) {
+      print_timing(2, "finishing rays on the CPU", run.gpu_timings->cpu_finish_ms,
+                   std::to_string(run.gpu_timings->unfinished_rays) + " rays past the loop budget");
+    }
+  }
+  if (run.reference_ms) print_timing(1, "reference (CPU)", *run.reference_ms);
+  if (run.measure_ms) print_timing(1, "error measurement", *run.measure_ms);
+  print_timing(1, "file writing", run.write_ms, no_preview ? "the EXR" : "the EXR and the PNG at the same time");
+  if (run.scene_stats) {
+    const SceneStats& stats = *run.scene_stats;
+    std::printf("scene on the device: %u triangles, %u spheres, %.1f MiB", stats.triangles, stats.spheres,
+                static_cast<double>(stats.geometry_bytes) / (1 << 20));
+    if (stats.triangles > 0 && stats.spheres == 0) {
+      std::printf(" (%.1f bytes a triangle)", static_cast<double>(stats.geometry_bytes) / stats.triangles);
+    }
+    if (stats.bvh_nodes > 0) {
+      std::printf("; BVH of %u nodes, depth %u, walked %s", stats.bvh_nodes, stats.bvh_depth,
+                  stats.search == PrimitiveSearch::bvh_packet ? "by packets of rays" : "per ray");
+    }
+    std::printf("\n");
+  }
+  if (!run.pipeline_cache.empty()) std::printf("pipeline cache: %s\n", run.pipeline_cache.c_str());
+  std::printf("peak host memory: %.1f MiB\n", static_cast<double>(peak_host_memory_bytes()) / (1 << 20));
+}
+
 int run_render(const RenderOptions& options) {
   if (options.views.any()) return run_render_views(options, parse_aov_list(options.aovs));
   Stopwatch stopwatch;
@@ -181,13 +250,9 @@ int run_render(const RenderOptions& options) {
   const double load_ms = stopwatch.lap_ms();
 
   Frame frame;
-  std::optional<RenderTimings> gpu_timings;
-  std::optional<SceneStats> scene_stats;
-  double reference_ms = 0.0;
-  double device_ms = 0.0, device_wait_ms = 0.0, upload_ms = 0.0, render_ms = 0.0;
+  RenderRunTimings run;
+  run.load_ms = load_ms;
   std::string device_name = "CPU reference (double precision)";
-  std::string pipeline_cache;  // what --timings says of the device's pipeline cache
-  bool staging = false;
   std::optional<ReferenceScene> reference_scene;
   std::optional<std::vector<ReferenceHit>> reference_hits;
   auto reference = [&]() -> const std::vector<ReferenceHit>& {
@@ -196,7 +261,7 @@ int run_render(const RenderOptions& options) {
       reference_scene.emplace(scene);
       reference_hits = render_reference_hits(*reference_scene, scene.camera,
                                              scene.width, scene.height);
-      reference_ms = reference_watch.lap_ms();
+      run.reference_ms = reference_watch.lap_ms();
     }
     return *reference_hits;
   };
@@ -209,14 +274,14 @@ int run_render(const RenderOptions& options) {
     const OpenedDevice opened = opening.get();
     GpuDevice& device = *opened.device;
     device_name = device.info().name;
-    staging = device.transfer() == TransferMode::staging;
-    pipeline_cache = device.pipeline_cache_file().empty()
+    run.staging = device.transfer() == TransferMode::staging;
+    run.pipeline_cache = device.pipeline_cache_file().empty()
                          ? std::string("none (VKRAY_CACHE_DIR=off, or no home folder)")
                          : std::to_string(device.pipeline_cache_bytes_read()) + " bytes read from " +
                                device.pipeline_cache_file().string();
     print_cpu_device_note(device.info());
-    device_ms = opened.open_ms;
-    device_wait_ms = stopwatch.lap_ms();
+    run.device_open_ms = opened.open_ms;
+    run.device_wait_ms = stopwatch.lap_ms();
     ProgressLine progress("building the BVH");
     RendererOptions renderer_options;
     renderer_options.scene.bvh.progress = progress.callback();
@@ -224,20 +289,19 @@ int run_render(const RenderOptions& options) {
     renderer_options.scene.search = *traversal_from_name(options.traversal);
     renderer_options.first_aovs = aovs;
     Renderer renderer(device, scene, renderer_options);
-    upload_ms = stopwatch.lap_ms();
+    run.upload_ms = stopwatch.lap_ms();
     frame = renderer.render(scene.camera, scene.width, scene.height, aovs);
-    render_ms = stopwatch.lap_ms();
-    gpu_timings = renderer.timings();
-    scene_stats = renderer.scene_stats();
+    run.render_ms = stopwatch.lap_ms();
+    run.gpu_timings = renderer.timings();
+    run.scene_stats = renderer.scene_stats();
   }
 
   std::optional<FrameError> error;
-  double measure_ms = 0.0;
   if (options.check) {
     const std::vector<ReferenceHit>& hits = reference();
     Stopwatch measure_watch;
     error = measure_error(frame, hits);
-    measure_ms = measure_watch.lap_ms();
+    run.measure_ms = measure_watch.lap_ms();
   }
   stopwatch.lap_ms();
 
@@ -245,71 +309,15 @@ int run_render(const RenderOptions& options) {
   write_outputs(options.output, options.no_preview ? nullptr : &preview, frame,
                 {options.compression, miss_value(options.miss)});
   if (!options.no_preview) written += " and " + preview.string();
-  const double write_ms = stopwatch.lap_ms();
-  const double total_ms = stopwatch.total_ms();
+  run.write_ms = stopwatch.lap_ms();
+  run.total_ms = stopwatch.total_ms();
 
   std::printf("vkray: wrote %s (%ux%u, %s) on %s\n", written.c_str(), scene.width, scene.height,
               aovs.names().c_str(), device_name.c_str());
   // A model is framed by vkray: say from where, ready to paste (to render it again, or a neighbour).
   if (lower_extension(options.scene_path) == ".obj" || options.view) std::printf("camera: %s\n", camera_option(scene.camera).c_str());
   if (error) std::printf("error vs. double-precision reference: %s\n", error->summary().c_str());
-  if (options.timings) {
-    std::printf("timings (wall clock unless said; an indented line is a part of the line above it, and a line "
-                "'beside' another ran at the same time, on another thread):\n");
-    print_timing(0, "total", total_ms, "from the start of 'render' to the files in place");
-    print_timing(1, "scene load", load_ms, "reading and checking the scene, the OBJ files it names");
-    if (gpu_timings) {
-      print_timing(1, "device open", device_ms, "beside the scene load, on a second thread");
-      print_timing(1, "waiting for the device", device_wait_ms, "what the device open took beyond the scene load");
-      print_timing(1, "upload", upload_ms,
-                   staging ? "the scene to the device, through staging buffers (--transfer)"
-                           : "the scene to the device, into memory the host maps (--transfer)");
-      if (scene_stats->bvh_nodes > 0) print_timing(2, "BVH build", gpu_timings->bvh_build_ms);
-      if (scene_stats->search == PrimitiveSearch::ray_query) {
-        print_timing(2, "acceleration structures", gpu_timings->structures_ms,
-                     "built and compacted by the device (--traversal ray-query)");
-      }
-      if (gpu_timings->pipeline_beside_upload_ms > 0.0) {
-        print_timing(2, "pipeline creation", gpu_timings->pipeline_beside_upload_ms,
-                     "beside the BVH build and upload, on a second thread");
-      }
-      print_timing(1, "render", render_ms);
-      if (gpu_timings->pipeline_ms > 0.0) print_timing(2, "pipeline creation", gpu_timings->pipeline_ms);
-      char longest[64];
-      std::snprintf(longest, sizeof longest, ", the longest %.1f ms (budget %.0f)", gpu_timings->longest_dispatch_ms,
-                    default_dispatch_budget_ms);
-      const std::string dispatches = std::to_string(gpu_timings->tiles) +
-                                     (gpu_timings->tiles == 1 ? " dispatch" : " dispatches" + std::string(longest));
-      if (gpu_timings->has_gpu_times) {
-        print_timing(2, "dispatch (GPU time)", gpu_timings->dispatch_gpu_ms, dispatches + ", timestamp queries");
-      } else {
-        std::printf("      %-24s %13s  %s\n", "dispatch (GPU time)", "n/a", "(the device has no timestamps)");
-      }
-      print_timing(2, "readback", gpu_timings->readback_ms);
-      if (gpu_timings->unfinished_rays > 0) {
-        print_timing(2, "finishing rays on the CPU", gpu_timings->cpu_finish_ms,
-                     std::to_string(gpu_timings->unfinished_rays) + " rays past the loop budget");
-      }
-    }
-    if (reference_hits) print_timing(1, "reference (CPU)", reference_ms);
-    if (error) print_timing(1, "error measurement", measure_ms);
-    print_timing(1, "file writing", write_ms, options.no_preview ? "the EXR" : "the EXR and the PNG at the same time");
-    if (scene_stats) {
-      const SceneStats& stats = *scene_stats;
-      std::printf("scene on the device: %u triangles, %u spheres, %.1f MiB", stats.triangles, stats.spheres,
-                  static_cast<double>(stats.geometry_bytes) / (1 << 20));
-      if (stats.triangles > 0 && stats.spheres == 0) {
-        std::printf(" (%.1f bytes a triangle)", static_cast<double>(stats.geometry_bytes) / stats.triangles);
-      }
-      if (stats.bvh_nodes > 0) {
-        std::printf("; BVH of %u nodes, depth %u, walked %s", stats.bvh_nodes, stats.bvh_depth,
-                    stats.search == PrimitiveSearch::bvh_packet ? "by packets of rays" : "per ray");
-      }
-      std::printf("\n");
-    }
-    if (!pipeline_cache.empty()) std::printf("pipeline cache: %s\n", pipeline_cache.c_str());
-    std::printf("peak host memory: %.1f MiB\n", static_cast<double>(peak_host_memory_bytes()) / (1 << 20));
-  }
+  if (options.timings) print_render_timings(run, options.no_preview);
   return 0;
 }
 

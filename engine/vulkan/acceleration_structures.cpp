@@ -15,37 +15,34 @@ constexpr auto storage_usage =
 // A custom index holds 24 bits.
 constexpr uint32_t max_custom_index = (1u << 24) - 1;
 
+// A build reads what the host or a transfer wrote; a structure is read by the builds after it.
+constexpr auto build_stage = vk::PipelineStageFlagBits::eAccelerationStructureBuildKHR;
+constexpr auto input_stages = vk::PipelineStageFlagBits::eTransfer | vk::PipelineStageFlagBits::eHost;
+const vk::MemoryBarrier inputs_written(vk::AccessFlagBits::eTransferWrite | vk::AccessFlagBits::eHostWrite,
+                                       vk::AccessFlagBits::eShaderRead);
+const vk::MemoryBarrier structures_built(vk::AccessFlagBits::eAccelerationStructureWriteKHR,
+                                         vk::AccessFlagBits::eAccelerationStructureReadKHR);
+
 vk::DeviceSize align_up(vk::DeviceSize value, vk::DeviceSize alignment) {
   return alignment == 0 ? value : (value + alignment - 1) / alignment * alignment;
 }
 
+}  // namespace
+
 // One structure to build: its geometry, how many primitives, and what its instance carries.
-struct Build {
+struct AccelerationStructures::Build {
   vk::AccelerationStructureGeometryKHR geometry;
   uint32_t primitives = 0;
   uint32_t primitive_offset = 0;  // bytes into the index data
   uint32_t first_slot = 0;
 };
 
-}  // namespace
-
-AccelerationStructures::AccelerationStructures(VulkanContext& context, const StructureInput& input) {
-  if (!context.info.ray_query) {
-    throw GpuError(context.info.name + " has no ray queries (VK_KHR_ray_query, VK_KHR_acceleration_structure and buffer "
-                                       "device addresses): use another traversal");
-  }
-  const auto start = Clock::now();
-  const vk::raii::Device& device = context.device;
-  // The build's inputs, on the device; dropped once the structures are built.
-  GpuBuffer indices, boxes;
-  if (!input.triangles.empty()) {
-    indices = upload_buffer(context, input.triangles.data(), input.triangles.size() * sizeof(input.triangles[0]), input_usage);
-  }
-  if (!input.sphere_boxes.empty()) {
-    boxes = upload_buffer(context, input.sphere_boxes.data(), input.sphere_boxes.size() * sizeof(input.sphere_boxes[0]),
-                          input_usage);
-  }
-
+// What to build, a structure per mesh and one for the spheres; throws where one is more than the
+// device or the 24-bit custom index allows.
+std::vector<AccelerationStructures::Build> AccelerationStructures::describe_builds(const VulkanContext& context,
+                                                                                  const StructureInput& input,
+                                                                                  const GpuBuffer& indices,
+                                                                                  const GpuBuffer& boxes) {
   std::vector<Build> builds;
   uint32_t triangles_before = 0;
   for (const auto& mesh : input.meshes) {
@@ -79,6 +76,36 @@ AccelerationStructures::AccelerationStructures(VulkanContext& context, const Str
     }
   }
 
+  return builds;
+}
+
+AccelerationStructures::AccelerationStructures(VulkanContext& context, const StructureInput& input) {
+  if (!context.info.ray_query) {
+    throw GpuError(context.info.name + " has no ray queries (VK_KHR_ray_query, VK_KHR_acceleration_structure and buffer "
+                                       "device addresses): use another traversal");
+  }
+  const auto start = Clock::now();
+  // The build's inputs, on the device; dropped once the structures are built.
+  GpuBuffer indices, boxes;
+  if (!input.triangles.empty()) {
+    indices = upload_buffer(context, input.triangles.data(), input.triangles.size() * sizeof(input.triangles[0]), input_usage);
+  }
+  if (!input.sphere_boxes.empty()) {
+    boxes = upload_buffer(context, input.sphere_boxes.data(), input.sphere_boxes.size() * sizeof(input.sphere_boxes[0]),
+                          input_usage);
+  }
+
+  const std::vector<Build> builds = describe_builds(context, input, indices, boxes);
+  const vk::DeviceSize alignment = std::max<vk::DeviceSize>(1, context.info.structure_scratch_alignment);
+  if (!builds.empty()) build_bottom(context, builds, alignment);
+  build_top(context, builds, alignment);
+  build_ms_ = elapsed_ms(start);
+}
+
+// Builds the bottom structures side by side, then copies each into storage of its compacted size.
+void AccelerationStructures::build_bottom(VulkanContext& context, const std::vector<Build>& builds,
+                                          vk::DeviceSize alignment) {
+  const vk::raii::Device& device = context.device;
   // Sizes, storage and scratch: each build its own part of one scratch buffer, so they need no
   // barrier between them.
   const auto flags = vk::BuildAccelerationStructureFlagBitsKHR::ePreferFastTrace |
@@ -86,7 +113,6 @@ AccelerationStructures::AccelerationStructures(VulkanContext& context, const Str
   std::vector<vk::AccelerationStructureBuildGeometryInfoKHR> infos;
   std::vector<vk::DeviceSize> scratch_offsets;
   vk::DeviceSize scratch_size = 0;
-  const vk::DeviceSize alignment = std::max<vk::DeviceSize>(1, context.info.structure_scratch_alignment);
   std::vector<Structure> built(builds.size());
   for (size_t k = 0; k < builds.size(); ++k) {
     vk::AccelerationStructureBuildGeometryInfoKHR info(vk::AccelerationStructureTypeKHR::eBottomLevel, flags,
@@ -119,16 +145,11 @@ AccelerationStructures::AccelerationStructures(VulkanContext& context, const Str
   const vk::raii::QueryPool compacted_sizes(
       device, vk::QueryPoolCreateInfo({}, vk::QueryType::eAccelerationStructureCompactedSizeKHR,
                                       std::max<uint32_t>(1, static_cast<uint32_t>(builds.size()))));
-  const vk::MemoryBarrier inputs_written(vk::AccessFlagBits::eTransferWrite | vk::AccessFlagBits::eHostWrite,
-                                         vk::AccessFlagBits::eShaderRead);
-  const vk::MemoryBarrier structures_built(vk::AccessFlagBits::eAccelerationStructureWriteKHR,
-                                           vk::AccessFlagBits::eAccelerationStructureReadKHR);
-  constexpr auto build_stage = vk::PipelineStageFlagBits::eAccelerationStructureBuildKHR;
   std::vector<vk::AccelerationStructureKHR> handles;
   for (const auto& structure : built) handles.push_back(*structure.handle);
-  if (!builds.empty()) {
+  {
     context.submit_and_wait([&](const vk::raii::CommandBuffer& commands) {
-      commands.pipelineBarrier(vk::PipelineStageFlagBits::eTransfer | vk::PipelineStageFlagBits::eHost, build_stage, {},
+      commands.pipelineBarrier(input_stages, build_stage, {},
                                inputs_written, {}, {});
       commands.buildAccelerationStructuresKHR(infos, range_pointers);
       commands.pipelineBarrier(build_stage, build_stage, {}, structures_built, {}, {});
@@ -156,7 +177,10 @@ AccelerationStructures::AccelerationStructures(VulkanContext& context, const Str
       commands.pipelineBarrier(build_stage, build_stage, {}, structures_built, {}, {});
     });
   }
+}
 
+void AccelerationStructures::build_top(VulkanContext& context, const std::vector<Build>& builds, vk::DeviceSize alignment) {
+  const vk::raii::Device& device = context.device;
   // The top: an instance of each bottom structure, in place (the scene's positions are already
   // where they belong), its first slot as its custom index.
   std::vector<vk::AccelerationStructureInstanceKHR> instances;
@@ -192,15 +216,12 @@ AccelerationStructures::AccelerationStructures(VulkanContext& context, const Str
   const vk::AccelerationStructureBuildRangeInfoKHR top_range(instance_count, 0, 0, 0);
   const vk::AccelerationStructureBuildRangeInfoKHR* top_ranges[] = {&top_range};
   context.submit_and_wait([&](const vk::raii::CommandBuffer& commands) {
-    commands.pipelineBarrier(vk::PipelineStageFlagBits::eTransfer | vk::PipelineStageFlagBits::eHost, build_stage, {},
+    commands.pipelineBarrier(input_stages, build_stage, {},
                              inputs_written, {}, {});
     commands.buildAccelerationStructuresKHR(top_info, top_ranges);
     // Every later ray query reads the structures.
-    const vk::MemoryBarrier ready(vk::AccessFlagBits::eAccelerationStructureWriteKHR,
-                                  vk::AccessFlagBits::eAccelerationStructureReadKHR);
-    commands.pipelineBarrier(build_stage, vk::PipelineStageFlagBits::eComputeShader, {}, ready, {}, {});
+    commands.pipelineBarrier(build_stage, vk::PipelineStageFlagBits::eComputeShader, {}, structures_built, {}, {});
   });
-  build_ms_ = elapsed_ms(start);
 }
 
 }  // namespace vkray

@@ -44,6 +44,12 @@ class AccelerationStructures {
     GpuBuffer storage;
     vk::raii::AccelerationStructureKHR handle{nullptr};
   };
+  struct Build;  // what one bottom structure holds
+  static std::vector<Build> describe_builds(const VulkanContext& context, const StructureInput& input,
+                                            const GpuBuffer& indices, const GpuBuffer& boxes);
+  void build_bottom(VulkanContext& context, const std::vector<Build>& builds, vk::DeviceSize alignment);
+  void build_top(VulkanContext& context, const std::vector<Build>& builds, vk::DeviceSize alignment);
+
   std::vector<Structure> bottom_;
   GpuBuffer top_storage_;
   vk::raii::AccelerationStructureKHR top_{nullptr};
