@@ -160,10 +160,7 @@ void lay_out_for_ray_queries(GpuScene& gpu, const Scene& scene, std::vector<Enco
     }
     begin = end;
   }
-  const bool apart = keeps_spheres_apart(triangles.size(), scene.spheres.size());
-  gpu.tree_has_triangles = !triangles.empty();
-  gpu.tree_has_spheres = !scene.spheres.empty() && !apart;
-  if (apart) {
+  if (!gpu.tree_has_spheres) {
     for (const auto& sphere : scene.spheres) {
       gpu.spheres.push_back({encode_point(glm::dvec4(sphere.center - gpu.anchor, sphere.radius), gpu.precision)});
     }
@@ -184,12 +181,11 @@ void lay_out_for_ray_queries(GpuScene& gpu, const Scene& scene, std::vector<Enco
   gpu.structure_spheres.count = static_cast<uint32_t>(gpu.sphere_boxes.size());
 }
 
-}  // namespace
-
-GpuSceneShape plan_gpu_scene(const Scene& scene, const GpuSceneOptions& options) {
-  const size_t triangles = scene.triangle_count(), spheres = scene.spheres.size();
+// What the scene's counts decide (GpuSceneShape), for plan_gpu_scene before anything is built and
+// for make_gpu_scene with the triangles it keeps: one set of decisions, so the two agree.
+GpuSceneShape shape_for_counts(size_t triangles, size_t spheres, size_t planes, const GpuSceneOptions& options) {
   GpuSceneShape shape;
-  shape.planes = static_cast<uint32_t>(scene.planes.size());
+  shape.planes = static_cast<uint32_t>(planes);
   shape.search = options.search == PrimitiveSearch::automatic ? choose_search(triangles, spheres, options.packet_walk)
                                                               : options.search;
   if (triangles == 0 && spheres == 0) shape.search = PrimitiveSearch::brute_force;
@@ -198,13 +194,20 @@ GpuSceneShape plan_gpu_scene(const Scene& scene, const GpuSceneOptions& options)
     shape.brute_force_triangle_slots = batched_slots(triangles);
     return shape;
   }
-  // The packet walk where it will run, taking the tree shallow enough for it (make_gpu_scene knows).
+  // The packet walk where it will run, taking the tree shallow enough for it: make_gpu_scene walks
+  // a deeper one per ray.
   if (options.search == PrimitiveSearch::automatic && options.packet_walk) shape.search = PrimitiveSearch::bvh_packet;
   const bool apart = keeps_spheres_apart(triangles, spheres);
   shape.spheres_apart = apart ? static_cast<uint32_t>(spheres) : 0;
   shape.tree_has_triangles = triangles > 0;
   shape.tree_has_spheres = spheres > 0 && !apart;
   return shape;
+}
+
+}  // namespace
+
+GpuSceneShape plan_gpu_scene(const Scene& scene, const GpuSceneOptions& options) {
+  return shape_for_counts(scene.triangle_count(), scene.spheres.size(), scene.planes.size(), options);
 }
 
 GpuScene make_gpu_scene(const Scene& scene, const GpuSceneOptions& options, const ShaderVariant& shader) {
@@ -251,9 +254,10 @@ GpuScene make_gpu_scene(const Scene& scene, const GpuSceneOptions& options, cons
     }
   }
   gpu.triangle_count = static_cast<uint32_t>(triangles.size());
-  gpu.search = options.search == PrimitiveSearch::automatic ? choose_search(triangles.size(), scene.spheres.size(), options.packet_walk)
-                                                            : options.search;
-  if (triangles.empty() && scene.spheres.empty()) gpu.search = PrimitiveSearch::brute_force;
+  const GpuSceneShape shape = shape_for_counts(triangles.size(), scene.spheres.size(), scene.planes.size(), options);
+  gpu.search = shape.search;
+  gpu.tree_has_triangles = shape.tree_has_triangles;
+  gpu.tree_has_spheres = shape.tree_has_spheres;
 
   if (gpu.search == PrimitiveSearch::brute_force) {
     for (const auto& sphere : scene.spheres) gpu.spheres.push_back({encode(sphere.center - gpu.anchor, sphere.radius)});
@@ -277,7 +281,7 @@ GpuScene make_gpu_scene(const Scene& scene, const GpuSceneOptions& options, cons
 
   const auto start = Clock::now();
   std::vector<EncodedPrimitive> unordered = std::move(triangles);
-  const bool spheres_apart = keeps_spheres_apart(unordered.size(), scene.spheres.size());
+  const bool spheres_apart = !shape.tree_has_spheres;
   for (uint32_t k = 0; k < (spheres_apart ? 0 : scene.spheres.size()); ++k) {
     const Sphere& sphere = scene.spheres[k];
     const glm::dvec3 centre = sphere.center - gpu.anchor;
@@ -288,8 +292,6 @@ GpuScene make_gpu_scene(const Scene& scene, const GpuSceneOptions& options, cons
   if (spheres_apart) {
     for (const auto& sphere : scene.spheres) gpu.spheres.push_back({encode(sphere.center - gpu.anchor, sphere.radius)});
   }
-  gpu.tree_has_triangles = gpu.triangle_count > 0;
-  gpu.tree_has_spheres = !scene.spheres.empty() && !spheres_apart;
   std::vector<Box> boxes;
   boxes.reserve(unordered.size());
   for (const auto& primitive : unordered) boxes.push_back({glm::dvec3(primitive.box.lower), glm::dvec3(primitive.box.upper)});
@@ -315,8 +317,9 @@ GpuScene make_gpu_scene(const Scene& scene, const GpuSceneOptions& options, cons
     };
   }
   gpu.bvh_depth = bvh.depth;
-  if (options.search == PrimitiveSearch::automatic && options.packet_walk && packet_walk_fits(bvh.depth)) {
-    gpu.search = PrimitiveSearch::bvh_packet;
+  if (options.search == PrimitiveSearch::automatic && gpu.search == PrimitiveSearch::bvh_packet &&
+      !packet_walk_fits(bvh.depth)) {
+    gpu.search = PrimitiveSearch::bvh_per_ray;
   }
   gpu.bvh_build_ms = elapsed_ms(start);
   return gpu;
