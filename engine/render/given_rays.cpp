@@ -1,0 +1,229 @@
+#include "engine/parallel.hpp"
+#include "engine/render/dispatch_sizer.hpp"
+#include "engine/render/ray_order.hpp"
+#include "engine/render/renderer_impl.hpp"
+#include "engine/stopwatch.hpp"
+#include "engine/unit_vector.hpp"
+
+#include <algorithm>
+#include <cstring>
+
+namespace vkray {
+namespace {
+
+// The packet walk's layout of given directions in an order (by direction): rows
+// VKRAY_PACKET_GROUP_WIDTH wide, in which a packet is packet_columns columns (lavapipe's 8 lanes;
+// wider subgroups take several packets) of VKRAY_PACKET_ROWS rows. The n-th ray of the order takes
+// the n % 64-th place of packet n / 64, so that 64 consecutive rays walk the tree together; a block
+// of VKRAY_PACKET_ROWS rows holds whole packets.
+constexpr uint32_t packet_columns = 8;
+constexpr uint32_t packet_rays = packet_columns * VKRAY_PACKET_ROWS;
+constexpr uint32_t packets_a_row = VKRAY_PACKET_GROUP_WIDTH / packet_columns;
+constexpr uint32_t packet_block_positions = VKRAY_PACKET_GROUP_WIDTH * VKRAY_PACKET_ROWS;
+static_assert(VKRAY_PACKET_GROUP_WIDTH % packet_columns == 0);
+
+// The place in the order of the ray at layout position p.
+size_t packet_order_index(size_t position) {
+  const size_t x = position % VKRAY_PACKET_GROUP_WIDTH, y = position / VKRAY_PACKET_GROUP_WIDTH;
+  const size_t packet = (y / VKRAY_PACKET_ROWS) * packets_a_row + x / packet_columns;
+  return packet * packet_rays + (y % VKRAY_PACKET_ROWS) * packet_columns + x % packet_columns;
+}
+
+}  // namespace
+
+const char* given_ray_walk_name(GivenRayWalk walk) {
+  switch (walk) {
+    case GivenRayWalk::one_by_one: return "one by one";
+    case GivenRayWalk::packets_in_place: return "packets in place";
+    case GivenRayWalk::packets_by_direction: return "packets by direction";
+    default: return "none";
+  }
+}
+
+void RayHits::allocate(size_t ray_count, bool doubles) {
+  count = ray_count;
+  t.resize(count);
+  normal.resize(3 * count);
+  object.resize(count);
+  primitive.resize(count);
+  t64.resize(doubles ? count : 0);
+  normal64.resize(doubles ? 3 * count : 0);
+}
+
+void RayHits::store(size_t ray, double distance, const glm::dvec3& unit_normal, ObjectPrimitive source) {
+  t[ray] = static_cast<float>(distance);
+  for (int c = 0; c < 3; ++c) normal[c * count + ray] = static_cast<float>(unit_normal[c]);
+  if (!t64.empty()) {
+    t64[ray] = distance;
+    for (int c = 0; c < 3; ++c) normal64[c * count + ray] = unit_normal[c];
+  }
+  object[ray] = source.object;
+  primitive[ray] = source.primitive;
+}
+
+void Renderer::Impl::cast_given(std::span<const GivenRay> rays, RaycastMode mode, uint32_t width, uint32_t tile_rows,
+                                size_t positions, const glm::dvec3* origin, const std::vector<uint32_t>* order,
+                                RayHits& hits) {
+  auto ray_at = [&](size_t position) {  // rays.size() for padding
+    if (!order) return position;
+    const size_t n = packet_order_index(position);
+    return n < order->size() ? size_t{(*order)[n]} : rays.size();
+  };
+  const AovSet aovs{Aov::depth, Aov::normal};
+  // The lo parts of positions as for a camera (needs_lo_parts), wherever any of the rays starts.
+  const bool lo_parts = origin ? needs_lo_parts(anchor, scene_radius, *origin)
+                               : std::any_of(rays.begin(), rays.end(), [&](const GivenRay& ray) {
+                                   return needs_lo_parts(anchor, scene_radius, {ray[0], ray[1], ray[2]});
+                                 });
+  const vk::raii::Pipeline& chosen = pipeline->pipeline(aovs, lo_parts, mode, timings.pipeline_ms);
+  // The planes' heights above the one origin; rays from their own origins subtract it themselves.
+  if (origin) set_planes_above(*origin);
+  prepare_tile(width, tile_rows, aovs, nullptr, mode);
+  double& ms_per_ray = origin ? camera_ms_per_pixel : given_ms_per_ray;  // packets cost as pixels do
+  DispatchSizer sizer(width, tile_rows, options.dispatch_budget_ms, ms_per_ray, workgroup_footprint(mode).height);
+  gpu::RayGenParams params{};
+  if (origin) params = make_ray_gen_params(CameraBasis{*origin, {}, {}, {}, 0.0}, anchor, precision(), 0, 0, 0, 0, counts);
+  params.counts = counts;
+  for (size_t first = 0, count = 0; first < positions; first += count) {
+    count = std::min(size_t{width} * sizer.next_rows(), positions - first);
+    const auto encode_start = Clock::now();
+    parallel_for_chunks(count, [&](size_t begin, size_t end) {
+      for (size_t p = begin; p < end; ++p) {
+        const size_t k = ray_at(first + p);
+        const GivenRay& ray = rays[k < rays.size() ? k : order->back()];
+        const glm::dvec3 direction(ray[3], ray[4], ray[5]);
+        if (origin) {  // float32 alone: the packet walk's
+          static_cast<glm::vec4*>(tile.rays->buffer.mapped)[p] = glm::vec4(glm::vec3(unit_vector(direction)), 0.0f);
+        } else {
+          static_cast<gpu::GpuRay*>(tile.rays->buffer.mapped)[p] = encode_ray({ray[0], ray[1], ray[2]}, direction, anchor, precision());
+        }
+      }
+    });
+    timings.rays_ms += elapsed_ms(encode_start);
+    params.image = glm::uvec4(width, static_cast<uint32_t>(count), 0, static_cast<uint32_t>((count + width - 1) / width));
+    sizer.measured(params.image.w, dispatch_tile(chosen, params));
+    ms_per_ray = sizer.slowest_ms_per_pixel();
+
+    const auto copy_start = Clock::now();
+    const auto* slots = static_cast<const uint32_t*>(tile.hits->host());
+    const size_t plane_size = size_t{width} * params.image.w;  // the shader's planes span whole rows
+    auto copy = [&]<typename T>(const T* depths, const T* unit_normals) {
+      parallel_for_chunks(count, [&](size_t begin, size_t end) {
+        for (size_t p = begin; p < end; ++p) {
+          const size_t k = ray_at(first + p);
+          if (k >= rays.size()) continue;
+          const glm::dvec3 normal(unit_normals[p], unit_normals[plane_size + p], unit_normals[2 * plane_size + p]);
+          hits.store(k, depths[p], normal, hit_sources(slots[p]));
+        }
+      });
+    };
+    if (!order && precision() == Precision::float32) {  // in place: the planes as they are, the ids named
+      const auto* unit_normals = static_cast<const float*>(tile.normal->host());
+      std::memcpy(hits.t.data() + first, tile.depth->host(), count * sizeof(float));
+      for (size_t c = 0; c < 3; ++c) {
+        std::memcpy(hits.normal.data() + c * hits.count + first, unit_normals + c * plane_size, count * sizeof(float));
+      }
+      parallel_for_chunks(count, [&](size_t begin, size_t end) {
+        for (size_t k = begin; k < end; ++k) {
+          const ObjectPrimitive source = hit_sources(slots[k]);
+          hits.object[first + k] = source.object;
+          hits.primitive[first + k] = source.primitive;
+        }
+      });
+    } else if (precision() == Precision::float64) {
+      copy(static_cast<const double*>(tile.depth->host()), static_cast<const double*>(tile.normal->host()));
+    } else {
+      copy(static_cast<const float*>(tile.depth->host()), static_cast<const float*>(tile.normal->host()));
+    }
+    timings.readback_ms += elapsed_ms(copy_start);
+    if (tile.overflow) {
+      finish_unfinished([&](uint32_t position) {
+        const size_t k = ray_at(first + position);
+        if (k >= rays.size()) return;
+        const GivenRay& ray = rays[k];
+        const ReferenceHit hit = reference->trace(glm::dvec3(ray[0], ray[1], ray[2]), unit_vector(glm::dvec3(ray[3], ray[4], ray[5])));
+        hits.store(k, hit.t, hit.normal, reference->source(hit));
+      });
+    }
+  }
+}
+
+RayHits Renderer::Impl::cast_rays(std::span<const GivenRay> rays) {
+  check_given_rays(rays);
+  RayHits hits;
+  hits.allocate(rays.size(), precision() == Precision::float64);
+  reset_timings();
+  if (rays.empty()) return hits;
+
+  with_vulkan_errors("casting rays", [&] {
+    const AovSet aovs{Aov::depth, Aov::normal};
+    // Rows of `width` holding `positions`, at most as many as the device's buffers hold.
+    auto tile_rows = [&](uint32_t width, size_t positions, RaycastMode mode) {
+      const auto rows = static_cast<uint32_t>(std::min<size_t>((positions + width - 1) / width, UINT32_MAX));
+      return rows_per_tile(width, rows, aovs, mode);
+    };
+    // Rays from one origin (a camera's, a LiDAR's) walk the tree in packets as a camera's pixels
+    // do, where the camera's rays would (the float32 packet walk): one by one they take five times
+    // as long (README, "Python"). A packet's rays must point nearly the same way: rays listed as an
+    // image's rows keep their places, as a camera's pixels; others are ordered by direction, 64
+    // consecutive ones a packet, in tiles of whole packets (where the device's buffers hold one).
+    const std::optional<glm::dvec3> origin =
+        stats.search == PrimitiveSearch::bvh_packet && precision() == Precision::float32 ? shared_origin(rays)
+                                                                                         : std::nullopt;
+    if (const std::optional<uint32_t> rows_width = origin ? scan_width(rays) : std::nullopt) {
+      timings.given_walk = GivenRayWalk::packets_in_place;
+      cast_given(rays, RaycastMode::given_directions, *rows_width,
+                 tile_rows(*rows_width, rays.size(), RaycastMode::given_directions), rays.size(), &*origin, nullptr, hits);
+      return;
+    }
+    if (origin) {
+      const size_t positions = (rays.size() + packet_block_positions - 1) / packet_block_positions * packet_block_positions;
+      const uint32_t rows = tile_rows(VKRAY_PACKET_GROUP_WIDTH, positions, RaycastMode::given_directions) /
+                            VKRAY_PACKET_ROWS * VKRAY_PACKET_ROWS;
+      if (rows > 0) {
+        timings.given_walk = GivenRayWalk::packets_by_direction;
+        const auto order_start = Clock::now();
+        const std::vector<uint32_t> order = order_by_direction(rays);
+        timings.rays_ms += elapsed_ms(order_start);
+        cast_given(rays, RaycastMode::given_directions, VKRAY_PACKET_GROUP_WIDTH, rows, positions, &*origin, &order, hits);
+        return;
+      }
+    }
+    // Rows of one workgroup's width: a workgroup then holds consecutive rays, which callers
+    // usually order as they lie in space (a scan line, an image's rows).
+    timings.given_walk = GivenRayWalk::one_by_one;
+    const uint32_t width = options.shader.workgroup_width;
+    cast_given(rays, RaycastMode::given_rays, width, tile_rows(width, rays.size(), RaycastMode::given_rays), rays.size(),
+               nullptr, nullptr, hits);
+  });
+  return hits;
+}
+
+void Renderer::Impl::render_by_given_rays(const Camera& camera, Frame& frame) {
+  const uint32_t width = frame.width, height = frame.height;
+  const CameraBasis basis = make_camera_basis(camera, width, height);
+  std::vector<GivenRay> rays(frame.pixel_count());
+  parallel_for_chunks(height, [&](size_t first_row, size_t end_row) {
+    for (auto j = static_cast<uint32_t>(first_row); j < end_row; ++j) {
+      for (uint32_t i = 0; i < width; ++i) {
+        const PixelRay ray = pixel_ray(camera, basis, i, j, width, height);
+        rays[size_t{j} * width + i] = {ray.origin.x, ray.origin.y, ray.origin.z, ray.direction.x, ray.direction.y, ray.direction.z};
+      }
+    }
+  }, 16);
+  const RayHits hits = cast_rays(rays);
+  const size_t pixels = frame.pixel_count();
+  parallel_for_chunks(pixels, [&](size_t begin, size_t end) {
+    for (size_t p = begin; p < end; ++p) {
+      if (!frame.depth.empty()) frame.depth[p] = hits.t[p];
+      if (!frame.depth64.empty()) frame.depth64[p] = hits.t64[p];
+      for (size_t c = 0; c < 3; ++c) {
+        if (!frame.normal.empty()) frame.normal[c * pixels + p] = hits.normal[c * pixels + p];
+        if (!frame.normal64.empty()) frame.normal64[c * pixels + p] = hits.normal64[c * pixels + p];
+      }
+      store_ids(frame, p, {hits.object[p], hits.primitive[p]});
+    }
+  });
+}
+
+}  // namespace vkray

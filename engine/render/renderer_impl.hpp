@@ -1,0 +1,191 @@
+// The Renderer's state on the device and the steps of a render, shared by the files that each
+// hold one concern of it: scene_upload.cpp (the scene's buffers), render_buffers.cpp (a render's
+// outputs and bindings), dispatch.cpp (dispatches and their sizes), given_rays.cpp (rays the caller
+// gives), unfinished_rays.cpp (rays the CPU finishes), renderer.cpp (the public calls).
+#pragma once
+
+#include "engine/reference/reference.hpp"
+#include "engine/scene/camera.hpp"
+#include "engine/render/renderer.hpp"
+#include "engine/vulkan/acceleration_structures.hpp"
+#include "engine/vulkan/buffer.hpp"
+#include "engine/vulkan/raycast_pipeline.hpp"
+
+#include <functional>
+#include <optional>
+
+namespace vkray {
+
+// Geometry the shader reads as RGBA32 texels (see gpu_layout.h), with a float view and, where the
+// texels hold indices, a uint view of the same memory.
+struct TexelBuffer {
+  GpuBuffer buffer;
+  vk::raii::BufferView floats{nullptr};
+  vk::raii::BufferView uints{nullptr};
+};
+
+constexpr vk::DeviceSize texel_bytes = 16;
+
+// Geometry buffers serve as uniform texel buffers or, for the storage-geometry variant, storage buffers.
+constexpr vk::BufferUsageFlags geometry_usage = vk::BufferUsageFlagBits::eUniformTexelBuffer | vk::BufferUsageFlagBits::eStorageBuffer;
+
+// `buffer` with its float and uint views.
+TexelBuffer texel_views_of(VulkanContext& context, GpuBuffer buffer);
+
+// What the shader reads of a given ray: a GpuRay, or a direction from the shared origin (a texel).
+inline vk::DeviceSize given_ray_bytes(RaycastMode mode) {
+  return mode == RaycastMode::given_directions ? texel_bytes : sizeof(gpu::GpuRay);
+}
+
+// One output of one tile: the buffer the shader writes and, where that buffer is not host-visible,
+// the buffer it is copied into for reading. A dispatch of n pixels writes its first
+// header_bytes + n * pixel_bytes (planes packed to the dispatch's rows, see raycast.comp): only
+// those are copied back (at 8K a whole normal buffer is 400 MB).
+struct OutputBuffer {
+  GpuBuffer written;
+  std::optional<GpuBuffer> readback;
+  vk::DeviceSize pixel_bytes = 0;
+  vk::DeviceSize header_bytes = 0;
+  const void* host() const { return readback ? readback->mapped : written.mapped; }
+  vk::DeviceSize bytes_written(vk::DeviceSize pixels) const {
+    return std::min(written.size, header_bytes + pixels * pixel_bytes);
+  }
+};
+
+// Output buffers for tiles of `width` x `rows`, kept between renders of the same shape; with the
+// storage-image target (image_id != 0) the outputs go to that image instead.
+struct TileOutputs {
+  uint32_t width = 0;
+  uint32_t rows = 0;
+  uint32_t aov_bits = 0;
+  uint64_t image_id = 0;  // ImageTarget::id
+  RaycastMode mode = RaycastMode::image_buffers;
+  std::optional<OutputBuffer> depth, normal, uv;
+  std::optional<OutputBuffer> overflow;  // only where a loop budget applies
+  // RaycastMode::given_rays: the tile's rays (GpuRay, written by the host) and what each hit.
+  std::optional<TexelBuffer> rays;
+  std::optional<OutputBuffer> hits;
+};
+
+// A pixel of a storage-image target written by the host: a ray the CPU finished.
+struct PixelPatch {
+  uint32_t i, j;
+  glm::vec4 value;  // as the shader stores it
+};
+
+struct Renderer::Impl {
+  Impl(VulkanContext& vulkan_context, RendererOptions renderer_options)
+      : context(vulkan_context), options(renderer_options) {}
+
+  VulkanContext& context;
+  RendererOptions options;
+  glm::dvec3 anchor{0.0};
+  double scene_radius = 0.0;  // GpuScene::radius
+  glm::uvec4 counts{0};  // RayGenParams.counts
+  // Bound wherever the scene lacks a primitive type or an output is off.
+  GpuBuffer placeholder;
+  TexelBuffer placeholder_texels;
+  std::optional<TexelBuffer> spheres, planes, primitives, vertices, normals, bvh_nodes;
+  std::optional<AccelerationStructures> structures;  // the ray-query traversal's
+  HitSources hit_sources;
+  std::vector<gpu::GpuPlane> gpu_planes;  // what `planes` holds, its heights set per render
+  std::vector<Plane> scene_planes;
+  SceneStats stats;
+  // The scene on the host: the surface outputs read its meshes, and rays the device leaves
+  // unfinished (a loop budget) are traced by a reference made from it.
+  Scene host_scene;
+  std::optional<ReferenceScene> reference;
+  std::optional<RaycastPipeline> pipeline;
+  std::unique_ptr<ImageTarget> placeholder_image;  // 1x1, bound while rendering to buffers
+  std::optional<OutputBuffer> depth_range;  // DepthRangeBits, made on the first render to an image
+  vk::raii::QueryPool timestamps{nullptr};
+  TileOutputs tile;
+  // The last tile of the other kind of work (a camera's pixels, or given rays), kept while this kind
+  // runs: a Renderer that alternates renders and ray casts makes neither's buffers again (for a
+  // million given rays, the fresh memory's page clearing cost about 7 ms a call on lavapipe).
+  TileOutputs parked_tile;
+  RenderTimings timings;
+  // The slowest pixels' (or given rays') cost in the last render, ms each: the next one's first
+  // dispatch is sized by it (DispatchSizer).
+  double camera_ms_per_pixel = 0.0, given_ms_per_ray = 0.0;
+
+  Precision precision() const { return options.shader.precision; }
+
+  // scene_upload.cpp: the scene's geometry (and the ray-query traversal's structures) on the device.
+  void upload_scene(const GpuScene& gpu_scene, const Scene& scene);
+  // Throws where the device has no such workgroup, or Morton order cannot walk it.
+  void check_workgroup() const;
+
+  // render_buffers.cpp
+  // The pixels (or given rays, as rows) one workgroup covers in `mode`: its own invocations', or
+  // the packet walk's columns (VKRAY_PACKET_*).
+  vk::Extent2D workgroup_footprint(RaycastMode mode) const;
+  // The most bytes one geometry (or given-ray) buffer may hold: what one texel buffer or, for the
+  // storage-geometry variant, one storage buffer binds, and one allocation holds.
+  vk::DeviceSize binding_limit() const;
+  // An output of `pixels` pixels of `pixel_bytes` each after `header_bytes`.
+  OutputBuffer make_output(vk::DeviceSize pixels, vk::DeviceSize pixel_bytes, vk::DeviceSize header_bytes = 0);
+  // Output buffers and bindings for tiles of `width` x `rows` writing `aovs` to buffers, or to
+  // `target` when given; with given rays, their buffer and the hits' too.
+  void prepare_tile(uint32_t width, uint32_t rows, AovSet aovs, const ImageTarget* target,
+                    RaycastMode mode = RaycastMode::image_buffers);
+  // Rows per dispatch: every output buffer within the device's storage-buffer range (and the
+  // caller's cap), and the workgroup count within the device's limit.
+  // `buffer_aovs`: the outputs written to buffers (none with the storage-image target).
+  uint32_t rows_per_tile(uint32_t width, uint32_t height, AovSet buffer_aovs,
+                         RaycastMode mode = RaycastMode::image_buffers) const;
+  void reset_timings();
+  // What a render needs before its tiles: the pipeline (returned), the planes' heights above this
+  // camera, the tile's outputs and bindings; `tile_rows` receives the rows per tile.
+  const vk::raii::Pipeline& begin_render(const Camera& camera, uint32_t width, uint32_t height, AovSet aovs,
+                                         const ImageTarget* target, uint32_t& tile_rows);
+  // The outputs of the tile of `rows` rows from `first_row` into their places in `frame`.
+  void read_tile(Frame& frame, uint32_t first_row, uint32_t rows);
+  // The planes' heights above `origin` into their buffer (no submission is in flight: every render
+  // waits for its own).
+  void set_planes_above(const glm::dvec3& origin);
+
+  // renderer.cpp: a perspective camera's `device_aovs` into `frame`, in dispatches of rows.
+  void render_camera_rows(const Camera& camera, AovSet device_aovs, Frame& frame);
+
+  // dispatch.cpp
+  // Casts the rays of one tile: resets the overflow list (and the depth range, for an image),
+  // dispatches, and copies what the host reads into host-visible memory; waits for it.
+  // Returns the dispatch's GPU time (its wall time, submission included, where there are no
+  // timestamps).
+  double dispatch_tile(const vk::raii::Pipeline& chosen, const gpu::RayGenParams& params);
+  // A camera's rows in dispatches, each sized by what the earlier ones took (DispatchSizer);
+  // `tile_done(first_row, rows)` reads each back before the next runs.
+  void dispatch_camera_rows(const vk::raii::Pipeline& camera_pipeline, const CameraBasis& basis, uint32_t width,
+                            uint32_t height, uint32_t tile_rows, RaycastMode mode,
+                            const std::function<void(uint32_t first_row, uint32_t rows)>& tile_done);
+  // The GPU time of `repeats` passes over a camera's whole image in one submission, back to back,
+  // with nothing read back: see Renderer::sustained_dispatch_ms.
+  double sustained_dispatch_ms(const Camera& camera, uint32_t width, uint32_t height, AovSet aovs, uint32_t repeats);
+
+  // given_rays.cpp
+  RayHits cast_rays(std::span<const GivenRay> rays);
+  // Given rays in dispatches of at most `tile_rows` rows of `width` positions. Position p holds ray
+  // p, or with an `order` (by direction) the ray at its place packet_order_index(p) in it; places
+  // past its end are padding, which trace its last ray again and keep nothing. `origin`: the rays'
+  // one origin (given_directions), sent as a camera's.
+  void cast_given(std::span<const GivenRay> rays, RaycastMode mode, uint32_t width, uint32_t tile_rows, size_t positions,
+                  const glm::dvec3* origin, const std::vector<uint32_t>* order, RayHits& hits);
+  // The depth, normal and ids of a camera whose rays do not leave one point through an image
+  // plane's pixels, into `frame`: its pixels' rays cast as given rays.
+  void render_by_given_rays(const Camera& camera, Frame& frame);
+
+  // unfinished_rays.cpp
+  // Rays listed in the overflow buffer ran out of the loop budget with part of the tree not yet
+  // visited: they are traced again, exactly, by the double-precision reference. Rare: a primary ray
+  // visits tens to hundreds of nodes, the budget is ~65000 on lavapipe.
+  // `finish` receives each such ray's index within the tile (row-major).
+  void finish_unfinished(const std::function<void(uint32_t index)>& finish);
+  // The same for a camera's pixels: `finish` receives each pixel (i, j) and its hit.
+  void finish_unfinished_rays(const CameraBasis& basis, uint32_t width, uint32_t height, uint32_t first_row,
+                              const std::function<void(uint32_t i, uint32_t j, const ReferenceHit& hit)>& finish);
+  // Writes the pixels the CPU finished into `target`, after the shader's writes.
+  void write_patches(const std::vector<PixelPatch>& patches, ImageTarget& target);
+};
+
+}  // namespace vkray

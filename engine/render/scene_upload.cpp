@@ -1,0 +1,106 @@
+#include "engine/render/renderer_impl.hpp"
+#include "engine/render/specialization.hpp"
+
+#include <cstring>
+#include <string>
+
+namespace vkray {
+namespace {
+
+TexelBuffer make_texel_buffer(VulkanContext& context, const void* data, vk::DeviceSize bytes,
+                              vk::BufferUsageFlags extra_usage = {}) {
+  return texel_views_of(context, upload_buffer(context, data, bytes, geometry_usage | extra_usage));
+}
+
+uint32_t checked_count(size_t count, const char* what) {
+  if (count > UINT32_MAX) throw InputError(std::string("too many ") + what + " for one scene");
+  return static_cast<uint32_t>(count);
+}
+
+}  // namespace
+
+void Renderer::Impl::upload_scene(const GpuScene& gpu_scene, const Scene& scene) {
+  const vk::DeviceSize buffer_limit = binding_limit();
+  auto upload = [&]<typename T>(const std::vector<T>& items, const char* what,
+                                vk::BufferUsageFlags extra_usage = {}) -> std::optional<TexelBuffer> {
+    static_assert(sizeof(T) % texel_bytes == 0);
+    if (items.empty()) return std::nullopt;
+    const vk::DeviceSize bytes = items.size() * sizeof(T);
+    if (bytes > buffer_limit) {
+      throw GpuError("the scene's " + std::string(what) + " take " + std::to_string(bytes >> 20) + " MiB, more than " +
+                     context.info.name + " can bind as one buffer (" + std::to_string(buffer_limit >> 20) +
+                     " MiB)");
+    }
+    return make_texel_buffer(context, items.data(), bytes, extra_usage);
+  };
+  spheres = upload(gpu_scene.spheres, "spheres");
+  if (!gpu_scene.planes.empty()) {  // host-visible: their heights above the camera change every render
+    const vk::DeviceSize bytes = gpu_scene.planes.size() * sizeof(gpu::GpuPlane);
+    planes = texel_views_of(context, create_upload_buffer(context, bytes, geometry_usage));
+    std::memcpy(planes->buffer.mapped, gpu_scene.planes.data(), bytes);
+    gpu_planes = gpu_scene.planes;
+    scene_planes = scene.planes;
+  }
+  primitives = upload(gpu_scene.primitives, "triangles and spheres");
+  const bool ray_query = gpu_scene.search == PrimitiveSearch::ray_query;
+  // The ray-query traversal's structures are built from the vertex buffer itself.
+  vertices = upload(gpu_scene.vertices, "vertices",
+                    ray_query ? vk::BufferUsageFlagBits::eAccelerationStructureBuildInputReadOnlyKHR |
+                                    vk::BufferUsageFlagBits::eShaderDeviceAddress
+                              : vk::BufferUsageFlags{});
+  normals = upload(gpu_scene.normal_texels, "triangle normals");
+  bvh_nodes = upload(gpu_scene.bvh_nodes, "BVH nodes");
+  hit_sources = gpu_scene.hit_sources;
+  stats = SceneStats{gpu_scene.triangle_count, static_cast<uint32_t>(scene.spheres.size()),
+                     gpu_scene.geometry_bytes(), static_cast<uint32_t>(gpu_scene.bvh_nodes.size()),
+                     gpu_scene.bvh_depth, gpu_scene.search, 0};
+  if (ray_query) {
+    StructureInput input;
+    input.vertices = &vertices->buffer;
+    input.vertex_count = static_cast<uint32_t>(gpu_scene.vertices.size());
+    input.vertex_stride = sizeof(gpu::GpuPoint);
+    for (const auto& mesh : gpu_scene.structure_meshes) {
+      input.meshes.push_back({mesh.first, mesh.count});
+      for (uint32_t slot = mesh.first; slot < mesh.first + mesh.count; ++slot) {
+        const glm::uvec4& record = gpu_scene.primitives[slot].indices;
+        input.triangles.push_back({record.x, record.y, record.z});
+      }
+    }
+    input.sphere_boxes = gpu_scene.sphere_boxes;
+    input.first_sphere_slot = gpu_scene.structure_spheres.first;
+    structures.emplace(context, input);
+    stats.geometry_bytes += structures->bytes();
+    timings.structures_ms = structures->build_ms();
+  }
+  stats.loop_budget = tree_loop_budget(gpu_scene.shape(), context.info, options.loop_budget);
+  host_scene = scene;
+  anchor = gpu_scene.anchor;
+  scene_radius = gpu_scene.radius;
+  counts = run_time_counts(gpu_scene);
+  checked_count(gpu_scene.spheres.size(), "spheres");
+  checked_count(gpu_scene.planes.size(), "planes");
+  timings.bvh_build_ms = gpu_scene.bvh_build_ms;
+  placeholder = create_storage_buffer(context, texel_bytes);
+  const std::array<uint32_t, 4> zero_texel{};
+  placeholder_texels = make_texel_buffer(context, zero_texel.data(), texel_bytes);
+  if (context.info.timestamp_period_ns > 0.0) {
+    timestamps = vk::raii::QueryPool(context.device, vk::QueryPoolCreateInfo({}, vk::QueryType::eTimestamp, 3));
+  }
+}
+
+void Renderer::Impl::check_workgroup() const {
+  const ShaderVariant& shader = options.shader;
+  const uint32_t group_size = shader.workgroup_width * shader.workgroup_height;
+  if (group_size == 0 || group_size > context.limits.maxComputeWorkGroupInvocations ||
+      shader.workgroup_width > context.limits.maxComputeWorkGroupSize[0] ||
+      shader.workgroup_height > context.limits.maxComputeWorkGroupSize[1]) {
+    throw GpuError(context.info.name + " has no " + std::to_string(shader.workgroup_width) + "x" +
+                   std::to_string(shader.workgroup_height) + " compute workgroups");
+  }
+  const bool square_power_of_two = shader.workgroup_width == shader.workgroup_height && (group_size & (group_size - 1)) == 0;
+  if (shader.morton_order && !(square_power_of_two && shader.workgroup_width <= 16)) {
+    throw std::invalid_argument("Morton order needs a square power-of-two workgroup of at most 16x16");
+  }
+}
+
+}  // namespace vkray

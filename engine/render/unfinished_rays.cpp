@@ -1,0 +1,50 @@
+#include "engine/render/renderer_impl.hpp"
+#include "engine/stopwatch.hpp"
+#include "engine/vulkan/image.hpp"
+
+namespace vkray {
+
+void Renderer::Impl::finish_unfinished(const std::function<void(uint32_t index)>& finish) {
+  const auto* overflow = static_cast<const uint32_t*>(tile.overflow->host());
+  const uint32_t count = overflow[0];
+  if (count == 0) return;
+  const auto start = Clock::now();
+  if (!reference) reference.emplace(host_scene);
+  for (uint32_t k = 0; k < count; ++k) finish(overflow[1 + k]);
+  timings.unfinished_rays += count;
+  timings.cpu_finish_ms += elapsed_ms(start);
+}
+
+void Renderer::Impl::finish_unfinished_rays(
+    const CameraBasis& basis, uint32_t width, uint32_t height, uint32_t first_row,
+    const std::function<void(uint32_t i, uint32_t j, const ReferenceHit& hit)>& finish) {
+  finish_unfinished([&](uint32_t index) {
+    const uint32_t i = index % width;
+    const uint32_t j = first_row + index / width;
+    finish(i, j, reference->trace(basis.origin, basis.direction(pixel_uv(i, j, width, height))));
+  });
+}
+
+void Renderer::Impl::write_patches(const std::vector<PixelPatch>& patches, ImageTarget& target) {
+  GpuBuffer staging = create_upload_buffer(context, patches.size() * sizeof(glm::vec4));
+  std::vector<vk::BufferImageCopy> regions;
+  regions.reserve(patches.size());
+  auto* values = static_cast<glm::vec4*>(staging.mapped);
+  for (size_t k = 0; k < patches.size(); ++k) {
+    values[k] = patches[k].value;
+    regions.emplace_back(k * sizeof(glm::vec4), 0, 0, color_layer,
+                         vk::Offset3D(int32_t(patches[k].i), int32_t(patches[k].j), 0), vk::Extent3D(1, 1, 1));
+  }
+  const vk::Image image = *target.image().image;
+  context.submit_and_wait([&](const vk::raii::CommandBuffer& commands) {
+    transition_image(commands, image, vk::PipelineStageFlagBits::eComputeShader, vk::AccessFlagBits::eShaderWrite,
+                     vk::ImageLayout::eGeneral, vk::PipelineStageFlagBits::eTransfer, vk::AccessFlagBits::eTransferWrite,
+                     vk::ImageLayout::eTransferDstOptimal);
+    commands.copyBufferToImage(*staging.buffer, image, vk::ImageLayout::eTransferDstOptimal, regions);
+    transition_image(commands, image, vk::PipelineStageFlagBits::eTransfer, vk::AccessFlagBits::eTransferWrite,
+                     vk::ImageLayout::eTransferDstOptimal, vk::PipelineStageFlagBits::eComputeShader,
+                     vk::AccessFlagBits::eShaderRead | vk::AccessFlagBits::eShaderWrite, vk::ImageLayout::eGeneral);
+  });
+}
+
+}  // namespace vkray
