@@ -5,7 +5,7 @@
 // viewer's frame); or traces rays the caller gave (RAY_INPUT), writing depth, normal and what each
 // hit, or directions the caller gave from one origin. Compiled seven times (shaders/CMakeLists.txt):
 // float32; float32 with VKRAY_DOUBLE_EDGES defined (triangle edge functions from exact double
-// products, for CPU devices: see intersect.glsl); each of those two with VKRAY_STORAGE_GEOMETRY
+// products, for devices whose doubles are fast: see intersect.glsl); each of those two with VKRAY_STORAGE_GEOMETRY
 // (geometry in storage buffers, not texel buffers: see primitives.glsl) and with VKRAY_RAY_QUERY
 // (the device's acceleration structures: ray_query_walk.glsl); and float64 with VKRAY_FLOAT64
 // defined (`--precision double`), which writes depth and normals as doubles.
