@@ -62,7 +62,9 @@ py::array_t<double, py::array::c_style> float_rows(py::handle value, const char*
   if (!array || (array.dtype().kind() != 'f' && array.dtype().kind() != 'i' && array.dtype().kind() != 'u')) {
     throw InputError(std::string(what) + ": expected an array of numbers, N x " + std::to_string(columns));
   }
-  auto rows = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(array);
+  // The converting constructor, not ensure(): a conversion numpy cannot allocate raises its
+  // MemoryError here, where ensure() would clear it and hand back an empty handle.
+  const py::array_t<double, py::array::c_style | py::array::forcecast> rows(array);
   if (rows.ndim() != 2 || rows.shape(1) != columns) {
     std::string shape;
     for (py::ssize_t d = 0; d < array.ndim(); ++d) shape += (d ? ", " : "") + std::to_string(array.shape(d));

@@ -239,6 +239,12 @@ TEST(ObjText, CrlfLineEndings) {
   EXPECT_NEAR(total_area(mesh), 1.0, 1e-12);
 }
 
+TEST(ObjText, AByteOrderMarkIsNotPartOfTheFirstLine) {
+  const Mesh mesh = vkray::load_obj_text("\xEF\xBB\xBFv 0 0 7\nv 1 0 0\nv 0 1 0\nf 1 2 3\n", "t.obj");
+  ASSERT_EQ(mesh.positions.size(), 3u);
+  EXPECT_EQ(mesh.positions[0], glm::dvec3(0, 0, 7));
+}
+
 TEST(ObjText, TabsBetweenTokens) {
   const Mesh mesh = vkray::load_obj_text("v\t0\t0\t0\nv 1  0 0\nv  0 1 0\nf\t1\t2  3\n", "t.obj");
   ASSERT_EQ(mesh.triangles.size(), 1u);

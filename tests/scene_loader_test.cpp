@@ -69,6 +69,10 @@ TEST(SceneJson, InvalidJsonOnFirstLine) {
   expect_error(parse_error("{\"camera\" {}}"), "t.json:1:11: ", "invalid JSON: syntax error while parsing object separator");
 }
 
+TEST(SceneJson, AByteOrderMarkIsSkipped) {
+  EXPECT_EQ(parse("\xEF\xBB\xBF" + with_camera("")).camera.from, glm::dvec3(0, 0, 5));
+}
+
 TEST(SceneJson, EmptyText) { expect_error(parse_error(""), "t.json:1:1: ", "invalid JSON"); }
 
 TEST(SceneJson, TrailingGarbage) { expect_error(parse_error(with_camera("") + "\n}"), "t.json:2:1: ", "invalid JSON"); }

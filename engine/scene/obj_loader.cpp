@@ -1,5 +1,7 @@
 #include "engine/scene/obj_loader.hpp"
 
+#include "engine/scene/text_start.hpp"
+
 #include <tiny_obj_loader.h>
 
 #include <algorithm>
@@ -186,6 +188,7 @@ Mesh load_obj_text(std::string_view text, const std::string& name) {
   // One pass checks every statement and, for a mesh of triangles alone (scanned meshes, most
   // exports), builds it: the bunny loads in 16 ms instead of 45 with tinyobjloader's second parse.
   // Polygons of more vertices take tinyobjloader's triangulation.
+  text = without_byte_order_mark(text);
   ParsedObj parsed = parse_obj_text(text, name);
   if (parsed.only_triangles) {
     if (parsed.mesh.triangles.empty()) throw InputError(name + ": no faces ('f' lines) found");

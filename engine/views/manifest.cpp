@@ -21,8 +21,11 @@ namespace {
 using Json = nlohmann::json;
 
 std::string relative_name(const std::filesystem::path& file, const std::filesystem::path& folder) {
+  // A manifest named without a folder ("manifest.jsonl", the default) has the parent "", which
+  // std::filesystem::absolute refuses: it is the working folder.
+  const std::filesystem::path base = folder.empty() ? std::filesystem::path(".") : folder;
   const std::filesystem::path relative = std::filesystem::absolute(file).lexically_normal().lexically_relative(
-      std::filesystem::absolute(folder).lexically_normal());
+      std::filesystem::absolute(base).lexically_normal());
   return relative.empty() ? file.string() : relative.string();
 }
 

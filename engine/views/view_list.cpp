@@ -1,6 +1,7 @@
 #include "engine/views/view_list.hpp"
 
 #include "engine/scene/scene_loader.hpp"
+#include "engine/scene/text_start.hpp"
 
 #include <glm/geometric.hpp>
 #include <nlohmann/json.hpp>
@@ -14,18 +15,20 @@ namespace vkray {
 namespace {
 
 // The camera objects of a JSON array: where each element starts and ends in `text`, found by
-// tracking nesting outside strings, so that an error can name its element's line.
+// tracking nesting outside strings, and the line each starts on, so that an error can name it (lines
+// counted in the same walk: a million cameras take one pass, not one a camera).
 struct Element {
-  size_t begin, end;
+  size_t begin, end, line;
 };
 
 std::vector<Element> array_elements(std::string_view text) {
   std::vector<Element> elements;
   int depth = 0;
   bool in_string = false, escaped = false;
-  size_t begin = std::string_view::npos;
+  size_t begin = std::string_view::npos, begin_line = 0, line = 1;
   for (size_t k = 0; k < text.size(); ++k) {
     const char c = text[k];
+    if (c == '\n') ++line;
     if (in_string) {
       if (escaped) {
         escaped = false;
@@ -40,25 +43,24 @@ std::vector<Element> array_elements(std::string_view text) {
     // brings the walk back to depth 1 (an object or array) or leaves it there (a scalar, which,
     // parsed alone, fails as not a camera).
     const bool element_pending = begin != std::string_view::npos;
-    if (depth == 1 && !element_pending && !std::isspace(static_cast<unsigned char>(c)) && c != ',' && c != ']') begin = k;
+    if (depth == 1 && !element_pending && !std::isspace(static_cast<unsigned char>(c)) && c != ',' && c != ']') {
+      begin = k;
+      begin_line = line;
+    }
     if (c == '"') {
       in_string = true;
     } else if (c == '[' || c == '{') {
       ++depth;
     } else if (c == ']' || c == '}') {
       --depth;
-      if (depth == 1 && begin != std::string_view::npos) elements.push_back({begin, k + 1}), begin = std::string_view::npos;
-      if (depth == 0 && begin != std::string_view::npos) elements.push_back({begin, k}), begin = std::string_view::npos;
+      if (depth == 1 && begin != std::string_view::npos) elements.push_back({begin, k + 1, begin_line}), begin = std::string_view::npos;
+      if (depth == 0 && begin != std::string_view::npos) elements.push_back({begin, k, begin_line}), begin = std::string_view::npos;
     } else if (c == ',' && depth == 1 && begin != std::string_view::npos) {
-      elements.push_back({begin, k});
+      elements.push_back({begin, k, begin_line});
       begin = std::string_view::npos;
     }
   }
   return elements;
-}
-
-size_t line_of(std::string_view text, size_t offset) {
-  return 1 + static_cast<size_t>(std::count(text.begin(), text.begin() + static_cast<std::ptrdiff_t>(offset), '\n'));
 }
 
 // `direction` turned by `angle` radians about the unit `axis` (Rodrigues' formula).
@@ -70,6 +72,7 @@ glm::dvec3 rotated(const glm::dvec3& direction, const glm::dvec3& axis, double a
 }  // namespace
 
 std::vector<Camera> parse_views(std::string_view text, const std::string& name) {
+  text = without_byte_order_mark(text);
   std::vector<Camera> views;
   const size_t first = text.find_first_not_of(" \t\r\n");
   if (first != std::string_view::npos && text[first] == '[') {
@@ -78,7 +81,7 @@ std::vector<Camera> parse_views(std::string_view text, const std::string& name) 
     }
     for (const Element& element : array_elements(text)) {
       views.push_back(parse_camera_object(text.substr(element.begin, element.end - element.begin),
-                                          name + ":" + std::to_string(line_of(text, element.begin))));
+                                          name + ":" + std::to_string(element.line)));
     }
   } else {
     size_t line = 0;

@@ -281,6 +281,12 @@ def test_bad_scenes_raise_value_error_with_the_place(arguments, message):
     assert message in str(raised.value)
 
 
+def test_an_array_too_large_to_convert_raises_memory_error():
+    """A float64 copy of 10^12 broadcast rows (24 TB) cannot be made: numpy's MemoryError, no crash."""
+    with pytest.raises(MemoryError):
+        vkray.Scene(np.broadcast_to(np.zeros(3, dtype=np.float32), (10**12, 3)), [[0, 1, 2]])
+
+
 def test_bad_files_raise_value_error_naming_the_file(tmp_path):
     broken = tmp_path / "broken.obj"
     broken.write_text("v 0 0 0\nv 1 0 0\nf 1 2 3\n")

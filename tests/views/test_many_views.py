@@ -148,6 +148,16 @@ def test_overwrite_renders_all_again_and_starts_the_manifest_afresh(tmp_path):
     assert len(manifest_records(tmp_path / "manifest.jsonl")) == 3
 
 
+def test_the_default_names_work_in_the_working_folder(tmp_path):
+    """No -o and no --manifest: view-NNNNN.exr and manifest.jsonl, named without a folder."""
+    vkray("render", "--orbit", "3", *SIZE, cwd=tmp_path)
+    assert views_in(tmp_path) == ["view-00000.exr", "view-00001.exr", "view-00002.exr"]
+    records = manifest_records(tmp_path / "manifest.jsonl")
+    assert [record["exr"] for record in records] == views_in(tmp_path)
+    again = vkray("render", "--orbit", "3", *SIZE, cwd=tmp_path)  # resumes: every view is there
+    assert manifest_records(tmp_path / "manifest.jsonl") == records, again.stderr
+
+
 def test_views_file_as_json_array_and_as_json_lines(tmp_path):
     cameras = [{"from": [0, 1.8, 6], "to": [0, 0.7, 0], "fovy": 45}, {"from": [3, 2, 5], "to": [0, 0.7, 0], "fovy": 30}]
     (tmp_path / "views.json").write_text(json.dumps(cameras, indent=2))
