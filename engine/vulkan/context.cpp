@@ -412,9 +412,11 @@ void VulkanContext::submit_and_wait(const std::function<void(const vk::raii::Com
   if (waited == vk::Result::eSuccess) return;
   if (waited != vk::Result::eTimeout) throw GpuError("waiting for the GPU failed: " + vk::to_string(waited));
   timed_out = true;
-  // A short grace before the objects the work uses are destroyed while the error unwinds: work
-  // that only overran its time ends here, and nothing is destroyed under it.
-  constexpr uint64_t grace_ns = 2'000'000'000;
+  // A grace before the objects the work uses are destroyed while the error unwinds: work that only
+  // overran its time ends here, and nothing is destroyed under it. As long as the default timeout:
+  // 2 s was too short for lavapipe under AddressSanitizer with another test beside it (given rays of
+  // the report's, VKRAY_FENCE_TIMEOUT_MS=1: the validation layer saw a buffer destroyed in use).
+  constexpr uint64_t grace_ns = default_fence_timeout_ms * 1'000'000;
   (void)device.waitForFences(*fence, VK_TRUE, grace_ns);
   throw DeviceLostError("the GPU did not finish a submission within " + std::to_string(fence_timeout_ns / 1'000'000) +
                         " ms (VKRAY_FENCE_TIMEOUT_MS): a shader that never ends, or work far over its dispatch "
