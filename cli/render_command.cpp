@@ -130,6 +130,7 @@ int run_render_views(const RenderOptions& options, const AovSet& aovs) {
                      (batch.exr.has_index() ? batch.png->text() : batch.exr.text()) + "' has no {index}, so the " +
                      std::to_string(batch.cameras.size()) + " views would overwrite one file (as out/view-{index:05}.exr)");
   }
+  check_view_names(batch);
   const std::unique_ptr<GpuDevice> device = opening.get();
   print_cpu_device_note(device->info());
   RendererOptions renderer_options;

@@ -10,6 +10,7 @@
 #include <OpenImageIO/imageio.h>
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -1332,6 +1333,28 @@ TEST_F(CliTest, ReadOnlyOutputIsRefusedAndKept) {
   EXPECT_NE(run.err.find("kept.exr: cannot write: the file is read-only"), std::string::npos) << run.err;
   EXPECT_EQ(read_text(output), "older contents\n");
   fs::permissions(output, fs::perms::owner_write, fs::perm_options::add);
+}
+
+// A link, device node or FIFO named as an output is refused and left as it was: the rename into
+// place would replace it (`-o /dev/null` as root would replace the system's).
+TEST_F(CliTest, OutputsThatAreNotRegularFilesAreRefusedAndKept) {
+  const auto target = write("target.exr", "older contents\n");
+  fs::create_symlink(target, dir_ / "link.exr");
+  ASSERT_EQ(::mkfifo((dir_ / "fifo.exr").c_str(), 0600), 0);
+  write("part.jsonl", "");
+  for (const auto& [name, kind] : {std::pair{"link.exr", "a symbolic link"}, std::pair{"fifo.exr", "a FIFO"}}) {
+    for (const std::vector<std::string>& arguments :
+         {std::vector<std::string>{"render", "--width", "8", "--height", "8", "-o", name, "--no-preview"},
+          std::vector<std::string>{"manifest", "merge", "part.jsonl", "-o", name}}) {
+      const RunResult run = vkray(arguments);
+      EXPECT_EQ(run.exit_code, 1) << arguments[0];
+      EXPECT_EQ(count_lines(run.err), 1u) << run.err;
+      EXPECT_NE(run.err.find(std::string(name) + ": cannot write: it is " + kind), std::string::npos) << run.err;
+    }
+  }
+  EXPECT_TRUE(fs::is_symlink(dir_ / "link.exr"));
+  EXPECT_TRUE(fs::is_fifo(dir_ / "fifo.exr"));
+  EXPECT_EQ(read_text(target), "older contents\n");
 }
 
 TEST_F(CliTest, DuplicateSceneKeysAreRefused) {

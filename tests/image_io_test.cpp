@@ -46,6 +46,22 @@ TEST_F(ImageIoTest, FailedPreviewLeavesTheOlderExrAsItWas) {
   expect_no_temporary_files();
 }
 
+// A preview that may not be replaced (read-only, as a many-view run with --overwrite met it): the
+// EXR beside it is not replaced either.
+TEST_F(ImageIoTest, AReadOnlyPreviewLeavesTheOlderExrAsItWas) {
+  const auto exr = dir_ / "out.exr";
+  const auto preview = dir_ / "out.png";
+  write_outputs(exr, &preview, frame(1.0f));
+  const std::string older_exr = read(exr), older_png = read(preview);
+  std::filesystem::permissions(preview, std::filesystem::perms::owner_write | std::filesystem::perms::group_write |
+                                            std::filesystem::perms::others_write, std::filesystem::perm_options::remove);
+  EXPECT_THROW(write_outputs(exr, &preview, frame(2.0f)), std::runtime_error);
+  EXPECT_EQ(read(exr), older_exr);
+  EXPECT_EQ(read(preview), older_png);
+  expect_no_temporary_files();
+  std::filesystem::permissions(preview, std::filesystem::perms::owner_write, std::filesystem::perm_options::add);
+}
+
 TEST_F(ImageIoTest, TextFilesAreReplacedWhole) {
   const auto file = dir_ / "report.json";
   write_text_file(file, "first\n");

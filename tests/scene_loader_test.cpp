@@ -138,6 +138,8 @@ TEST(SceneJson, FovyIsABoolean) {
 
 TEST(SceneJson, ObjIsNotAString) {
   expect_error(parse_error(with_camera(R"("meshes": [{"obj": 5}])")), "t.json: meshes[0].obj: ", "expected a string, got 5");
+  expect_error(parse_error(with_camera(R"("meshes": [{"obj": "cow.obj\u0000junk"}])")), "t.json: meshes[0].obj: ",
+               "a file name cannot hold a NUL character");
 }
 
 TEST(SceneJson, LongValueIsShortenedInMessage) {
@@ -659,6 +661,8 @@ TEST(SceneJson, CameraIntrinsicsAndMatrixChecks) {
                "t.json: camera.world_to_camera: ", "give either world_to_camera or from, to and up, not both (from given)");
   expect_error(parse_error(R"({"camera": {"world_to_camera": [[2, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]], "fovy": 40}})"),
                "t.json: camera.world_to_camera: ", "must be a rotation");
+  expect_error(parse_error(R"({"camera": {"world_to_camera": [[1, 0, 0, 1e300], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]], "fovy": 40}})"),
+               "t.json: camera.world_to_camera: ", "places the camera beyond the supported coordinate magnitude");
   expect_error(parse_error(R"({"camera": {"world_to_camera": [[1, 0, 0], [0, 1, 0], [0, 0, 1]], "fovy": 40}})"),
                "t.json: camera.world_to_camera: ", "expected 4 rows of 4 numbers");
   expect_error(parse_error(R"({"camera": {"from": [0, 0, 1], "to": [0, 0, 0], "fovy": 40,
@@ -684,4 +688,8 @@ TEST(SceneJson, OrthographicAndEquirectangularCameras) {
                "t.json: camera.fovy: ", "fovy describes a perspective camera");
   expect_error(parse_error(R"({"camera": {"from": [0, 0, 5], "to": [0, 0, 0], "projection": "orthographic", "view_height": -1}})"),
                "t.json: camera.view_height: ", "must be in (0, 1e15]");
+  expect_error(parse_error(R"({"camera": {"from": [0, 0, 5], "to": [0, 0, 0], "view_height": 3}})"),
+               "t.json: camera.view_height: ", "view_height describes an orthographic camera; this one is perspective");
+  expect_error(parse_error(R"({"camera": {"from": [0, 0, 5], "to": [0, 0, 0], "projection": "equirectangular", "view_height": 3}})"),
+               "t.json: camera.view_height: ", "this one is equirectangular");
 }

@@ -10,6 +10,8 @@
 #include <glm/geometric.hpp>
 #include <gtest/gtest.h>
 
+#include <sys/stat.h>
+
 #include <fstream>
 #include <sstream>
 
@@ -23,6 +25,8 @@ TEST(OutputPattern, IndexPlainPaddedAndBraces) {
   EXPECT_EQ(OutputPattern("out/v{index}.exr", "-o").path(42), "out/v42.exr");
   EXPECT_EQ(OutputPattern("out/v{index:05}.exr", "-o").path(42), "out/v00042.exr");
   EXPECT_EQ(OutputPattern("v{index:02}.exr", "-o").path(1234), "v1234.exr");  // wider than the padding
+  EXPECT_EQ(OutputPattern("v{index:032}.exr", "-o").path(2), "v" + std::string(31, '0') + "2.exr");
+  EXPECT_EQ(OutputPattern("v{index:099}.exr", "-o").path(4'294'967'295u), "v" + std::string(89, '0') + "4294967295.exr");
   EXPECT_EQ(OutputPattern("{{x}}-{index}-{index:03}.exr", "-o").path(7), "{x}-7-007.exr");
   EXPECT_FALSE(OutputPattern("render.exr", "-o").has_index());
   EXPECT_TRUE(OutputPattern("{index}.exr", "-o").has_index());
@@ -168,6 +172,34 @@ TEST_F(ManifestTest, ACutOffLastLineIsDroppedAndWritingGoesOn) {
 // The default many-view run: `manifest.jsonl` and `view-00000.exr`, names without a folder.
 TEST_F(ManifestTest, NamesWithoutAFolderAreTheWorkingFolders) {
   EXPECT_NE(manifest_line(record(0, ""), "").find("\"exr\":\"v0.exr\""), std::string::npos);
+}
+
+TEST_F(ManifestTest, AFileThatIsNotAManifestIsRefusedAndLeftAlone) {
+  for (const std::string text : {"v 0 0 0\nv 1 0 0\n", "{\"from\": [0, 0, 5], \"to\": [0, 0, 0]}\n", "no newline"}) {
+    const auto path = write("cams.jsonl", text);
+    for (const bool fresh : {false, true}) {
+      expect_error(error_of([&] { ManifestWriter manifest(path, fresh); }), path.string() + ": ",
+                   "is not a manifest (its first line is no view record)");
+      EXPECT_EQ(read(path), text);
+    }
+  }
+  const auto fifo = dir_ / "fifo";  // opened, it would block until a writer came
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  expect_error(error_of([&] { ManifestWriter manifest(fifo, true); }), fifo.string() + ": ", "not a regular file");
+  // A first record cut off by a kill is a manifest still: the cut line goes, the run goes on.
+  const auto cut = write("cut.jsonl", manifest_line(record(0, dir_), dir_).substr(0, 30));
+  EXPECT_FALSE(ManifestWriter(cut, false).has(0));
+  EXPECT_EQ(read(cut), "");
+}
+
+TEST_F(ManifestTest, ALineNestedTooDeepIsNoRecordAndNoCrash) {
+  const std::string deep = R"({"index": 0, "exr": "v0.exr", "x": )" + std::string(200'000, '[') + std::string(200'000, ']') + "}";
+  EXPECT_FALSE(manifest_line_index(deep));
+  const auto path = write("deep.jsonl", deep + "\n");
+  expect_error(error_of([&] { merge_manifests({path}); }), path.string() + ":1: ", "not a view record");
+  ViewRecord brackets = record(0, dir_);
+  brackets.exr = dir_ / "[[[[[[[[[[[[.exr";  // inside a string: no nesting
+  EXPECT_EQ(manifest_line_index(manifest_line(brackets, dir_)), 0u);
 }
 
 TEST_F(ManifestTest, MergeSortsJoinsCopiesAndRefusesConflicts) {

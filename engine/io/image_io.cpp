@@ -52,9 +52,22 @@ std::atomic<unsigned> partial_counter{0};
 // if never committed.
 // vkray's own rule: a file with no write permission bit for anyone is not replaced, by root either
 // (cp refuses such a file to other users, and the rename into place would replace it silently).
-void refuse_read_only(const std::filesystem::path& target) {
+// What an output may replace: nothing yet, or a writable regular file. The rename that puts an
+// output in place would replace a link, a device node or a FIFO of that name (`-o /dev/null` as root,
+// the system's), or a file made read-only: each is refused, and left as it is.
+void refuse_to_replace(const std::filesystem::path& target) {
   struct stat status {};
-  if (stat(target.c_str(), &status) == 0 && S_ISREG(status.st_mode) && (status.st_mode & 0222) == 0) {
+  if (lstat(target.c_str(), &status) != 0) return;
+  const char* kind = S_ISLNK(status.st_mode)                              ? "a symbolic link"
+                     : S_ISCHR(status.st_mode) || S_ISBLK(status.st_mode) ? "a device"
+                     : S_ISFIFO(status.st_mode)                           ? "a FIFO"
+                     : S_ISSOCK(status.st_mode)                           ? "a socket"
+                                                                           : nullptr;
+  if (kind) {
+    throw std::runtime_error(target.string() + ": cannot write: it is " + kind +
+                             ", which an output never replaces (name a new file or a regular one)");
+  }
+  if (S_ISREG(status.st_mode) && (status.st_mode & 0222) == 0) {
     throw std::runtime_error(target.string() + ": cannot write: the file is read-only (make it writable or remove it)");
   }
 }
@@ -85,7 +98,7 @@ class PartialFile {
 
   const std::filesystem::path& path() const { return temp_; }
   void commit() {
-    refuse_read_only(target_);
+    refuse_to_replace(target_);
     std::error_code error;
     std::filesystem::rename(temp_, target_, error);
     if (error) throw std::runtime_error(target_.string() + ": cannot write: " + error.message());
@@ -161,7 +174,7 @@ void check_output_path(const std::filesystem::path& path) {
     throw std::runtime_error(path.string() + ": cannot write: folder '" + folder.string() + "' does not exist");
   }
   if (std::filesystem::is_directory(path)) throw std::runtime_error(path.string() + ": cannot write: it is a folder");
-  refuse_read_only(path);
+  refuse_to_replace(path);
   // Creating the temporary file is the one check that sees everything that can stop the write
   // (permissions, which root bypasses, a read-only file system, quotas on the folder).
   const PartialFile probe(path);
@@ -377,6 +390,9 @@ void write_outputs(const std::filesystem::path& exr, const std::filesystem::path
   // older one unless both are complete.
   if (exr_failure) std::rethrow_exception(exr_failure);
   if (png_failure) std::rethrow_exception(png_failure);
+  // Nor when one of them may not be replaced: both targets are checked before either moves.
+  refuse_to_replace(exr);
+  if (preview) refuse_to_replace(*preview);
   exr_file.commit();
   if (png_file) png_file->commit();
 }

@@ -34,8 +34,9 @@ struct ExrSettings {
 // good one was.
 
 // Throws std::runtime_error naming the path when it cannot be written: its folder is missing or
-// refuses a new file, it is a folder, or it is a read-only file (no write bit for anyone: refused
-// to root too). For checking outputs before any work is done.
+// refuses a new file, it is a folder, a link, a device, a FIFO or a socket (which the rename into
+// place would replace), or it is a read-only file (no write bit for anyone: refused to root too).
+// For checking outputs before any work is done; the rename checks again.
 void check_output_path(const std::filesystem::path& path);
 
 // A text file (the bench's JSON and CSV), written the same way. Throws std::runtime_error.

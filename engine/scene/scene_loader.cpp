@@ -203,6 +203,11 @@ Camera parse_camera(const Node& node, const Camera* base = nullptr) {
     std::string fault;
     camera = with_world_to_camera(camera, parse_matrix4(matrix), fault);
     if (!fault.empty()) matrix.fail(fault);
+    // The camera it places is held to from's limit: the manifest and --camera print it back.
+    const glm::dvec3& from = camera.from;
+    if (!(std::max({std::abs(from.x), std::abs(from.y), std::abs(from.z)}) <= max_coordinate)) {  // NaN too
+      matrix.fail("places the camera beyond the supported coordinate magnitude " + describe(Json(max_coordinate)));
+    }
   } else {
     if (!base || node.has("from")) camera.from = node.at("from").point();
     if (!base || node.has("to")) camera.to = node.at("to").point();
@@ -224,6 +229,10 @@ Camera parse_camera(const Node& node, const Camera* base = nullptr) {
     if (!(camera.view_height > 0.0 && camera.view_height <= max_coordinate)) {
       height.fail("the image's height in world units must be in (0, 1e15], got " + describe(height.json()));
     }
+  }
+  if (node.has("view_height") && camera.projection != Projection::orthographic) {
+    node.at("view_height").fail("view_height describes an orthographic camera; this one is " +
+                                std::string(projection_name(camera.projection)));
   }
   if (camera.projection == Projection::orthographic && !(camera.view_height > 0.0)) {
     node.fail("an orthographic camera needs view_height, the image's height in world units");
@@ -299,6 +308,8 @@ Mesh parse_mesh(const Node& node, const std::filesystem::path& base_dir, const O
   if (node.has("obj")) {
     if (node.has("positions") || node.has("triangles")) node.fail("give either 'obj' or 'positions' and 'triangles', not both");
     const Node obj = node.at("obj");
+    // The system would read a name only up to a NUL ("cow.obj\u0000junk" as cow.obj).
+    if (obj.string().find('\0') != std::string::npos) obj.fail("a file name cannot hold a NUL character (\\u0000)");
     const std::filesystem::path path = base_dir / obj.string();
     try {
       mesh = load_obj(path);

@@ -3,6 +3,7 @@
 #include "engine/io/image_io.hpp"
 #include "engine/scene/camera_description.hpp"
 #include "engine/scene/scene.hpp"
+#include "engine/views/json_strings.hpp"
 
 #include <fcntl.h>
 #include <unistd.h>
@@ -36,8 +37,25 @@ std::string read_file(const std::filesystem::path& path) {
   return contents.str();
 }
 
+// Whether `line` nests arrays and objects deeper than `limit`, counted outside strings.
+bool nested_deeper_than(std::string_view line, int limit) {
+  int depth = 0;
+  JsonStringTracker strings;
+  for (const char c : line) {
+    if (!strings.outside_strings(c)) continue;
+    if ((c == '[' || c == '{') && ++depth > limit) return true;
+    if (c == ']' || c == '}') --depth;
+  }
+  return false;
+}
+
+// A record nests three deep (world_to_camera's rows). A line nested far deeper is no record, and is
+// refused before nlohmann builds it: copying a 200,000-deep value recursed off the stack.
+constexpr int max_record_depth = 8;
+
 // The record a line holds, or nothing.
 std::optional<Json> parse_record(const std::string& line) {
+  if (nested_deeper_than(line, max_record_depth)) return std::nullopt;
   const Json record = Json::parse(line, nullptr, false);
   if (!record.is_object() || !record.contains("index") || !record["index"].is_number_unsigned() ||
       !record.contains("exr") || !record["exr"].is_string()) {
@@ -66,7 +84,28 @@ std::optional<uint32_t> manifest_line_index(const std::string& line) {
   return (*record)["index"].get<uint32_t>();
 }
 
+// A record is under 10 KB (two paths and a camera), so the first 64 KiB hold the first line.
+void check_is_a_manifest(const std::filesystem::path& path) {
+  std::error_code error;
+  const std::filesystem::file_status status = std::filesystem::status(path, error);
+  if (!std::filesystem::exists(status)) return;
+  const std::string refused = path.string() + ": is not a manifest (";
+  const std::string remedy = "): --manifest names a manifest to continue or a new file";
+  if (!std::filesystem::is_regular_file(status)) throw InputError(refused + "not a regular file" + remedy);
+  std::ifstream file(path, std::ios::binary);
+  std::string start(64 * 1024, '\0');
+  file.read(start.data(), static_cast<std::streamsize>(start.size()));
+  start.resize(static_cast<size_t>(file.gcount()));
+  if (start.empty()) return;
+  const size_t end = start.find('\n');
+  const bool first_line_is_record = end == std::string::npos
+                                        ? start.size() < 64 * 1024 && start.starts_with("{\"index\":")
+                                        : manifest_line_index(start.substr(0, end)).has_value();
+  if (!first_line_is_record) throw InputError(refused + "its first line is no view record" + remedy);
+}
+
 ManifestWriter::ManifestWriter(const std::filesystem::path& path, bool fresh) : path_(path) {
+  check_is_a_manifest(path);
   std::error_code error;
   if (!fresh && std::filesystem::exists(path, error)) {
     // Keep the whole records; a line an interruption cut off (no newline, or no record) goes.

@@ -35,9 +35,16 @@ std::string manifest_line(const ViewRecord& record, const std::filesystem::path&
 // The index of a manifest line that is a complete record; nothing for any other line.
 std::optional<uint32_t> manifest_line_index(const std::string& line);
 
+// Throws InputError unless `path` is what a manifest writer may continue or start afresh: nothing
+// yet, or a regular file whose first line is a record (or the start of one, cut off). Any other file
+// named by mistake (the views file, a model, a device node, a FIFO) is refused before a byte of it
+// is read past its first line or written.
+void check_is_a_manifest(const std::filesystem::path& path);
+
 // A manifest being written: opened, it keeps the complete records already there (a line cut off by
 // an interruption is dropped) unless `fresh`, which starts it empty. Each append writes one whole
-// line with a single write(). Throws std::runtime_error naming the file.
+// line with a single write(). Throws InputError as check_is_a_manifest does, std::runtime_error
+// naming the file where it cannot be read or written.
 class ManifestWriter {
  public:
   ManifestWriter(const std::filesystem::path& path, bool fresh);

@@ -2,7 +2,7 @@
 
 #include "engine/scene/scene.hpp"
 
-#include <cstdio>
+#include <string>
 
 namespace vkray {
 
@@ -40,9 +40,10 @@ OutputPattern::OutputPattern(const std::string& text, const std::string& option)
 
 std::filesystem::path OutputPattern::path(uint32_t index) const {
   std::string result = pieces_[0];
+  const std::string digits = std::to_string(index);
   for (size_t k = 0; k < widths_.size(); ++k) {
-    char digits[32];
-    std::snprintf(digits, sizeof digits, "%0*u", widths_[k], index);
+    const size_t width = static_cast<size_t>(widths_[k]);  // up to 99: any padding asked for, never cut
+    if (digits.size() < width) result.append(width - digits.size(), '0');
     result += digits;
     result += pieces_[k + 1];
   }

@@ -8,6 +8,7 @@
 #include <condition_variable>
 #include <deque>
 #include <exception>
+#include <map>
 #include <mutex>
 #include <set>
 #include <thread>
@@ -116,6 +117,24 @@ void prepare_folders(const ViewBatch& batch, const std::vector<uint32_t>& views)
 
 }  // namespace
 
+void check_view_names(const ViewBatch& batch) {
+  check_is_a_manifest(batch.manifest);
+  const std::filesystem::path working = std::filesystem::current_path();
+  std::map<std::filesystem::path, std::string> writers;  // file, as absolute and normal -> who writes it
+  auto claim = [&](const std::filesystem::path& file, std::string writer) {
+    const auto [taken, claimed] = writers.emplace((working / file).lexically_normal(), writer);
+    if (!claimed) {
+      throw InputError(file.string() + ": " + taken->second + " and " + writer +
+                       " would write this one file: give each view names of its own (-o, --preview, --manifest)");
+    }
+  };
+  claim(batch.manifest, "the manifest");
+  for (uint32_t index = 0; index < batch.cameras.size(); ++index) {
+    claim(batch.exr.path(index), "view " + std::to_string(index) + "'s EXR");
+    if (batch.png) claim(batch.png->path(index), "view " + std::to_string(index) + "'s preview");
+  }
+}
+
 ViewBatchSummary render_views(Renderer& renderer, const ViewBatch& batch,
                               const std::function<void(const ViewBatchProgress&)>& progress) {
   if (batch.cameras.size() > 1 && (!batch.exr.has_index() || (batch.png && !batch.png->has_index()))) {
@@ -127,6 +146,7 @@ ViewBatchSummary render_views(Renderer& renderer, const ViewBatch& batch,
   for (uint32_t index = 0; index < batch.cameras.size(); ++index) {
     if (batch.shard.holds(index)) shard_views.push_back(index);
   }
+  check_view_names(batch);
   prepare_folders(batch, shard_views);
   ManifestWriter manifest(batch.manifest, batch.overwrite);
   std::vector<uint32_t> to_render;

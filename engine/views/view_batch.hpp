@@ -53,10 +53,18 @@ struct ViewBatchSummary {
   double queue_wait_seconds = 0.0;  // the device waiting for a writer (the writing took longer)
 };
 
+// Throws InputError where the batch's names would have two views, or a view and the manifest,
+// write one file ("d{index}/../v.exr", a manifest named like a view's EXR: views overwritten, or a
+// view counted complete that never rendered), or where its manifest is a file that is no manifest
+// (check_is_a_manifest). Every view of every shard is checked. render_views checks this first; a
+// front end calls it before it opens a device.
+void check_view_names(const ViewBatch& batch);
+
 // Creates the output folders, checks that they take files, then renders and writes the shard's
 // views that are not complete. `progress` is called after each view is written, on a writer
 // thread. Throws std::runtime_error for a file that cannot be written (after the views before it
-// are written and recorded), InputError for a batch without an index in its output pattern.
+// are written and recorded), InputError for a batch without an index in its output pattern or
+// whose names give two views, or a view and the manifest, one file.
 ViewBatchSummary render_views(Renderer& renderer, const ViewBatch& batch,
                               const std::function<void(const ViewBatchProgress&)>& progress = {});
 

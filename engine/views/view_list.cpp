@@ -2,6 +2,7 @@
 
 #include "engine/scene/scene_loader.hpp"
 #include "engine/scene/text_start.hpp"
+#include "engine/views/json_strings.hpp"
 
 #include <glm/geometric.hpp>
 #include <nlohmann/json.hpp>
@@ -24,21 +25,12 @@ struct Element {
 std::vector<Element> array_elements(std::string_view text) {
   std::vector<Element> elements;
   int depth = 0;
-  bool in_string = false, escaped = false;
+  JsonStringTracker strings;
   size_t begin = std::string_view::npos, begin_line = 0, line = 1;
   for (size_t k = 0; k < text.size(); ++k) {
     const char c = text[k];
     if (c == '\n') ++line;
-    if (in_string) {
-      if (escaped) {
-        escaped = false;
-      } else if (c == '\\') {
-        escaped = true;
-      } else if (c == '"') {
-        in_string = false;
-      }
-      continue;
-    }
+    if (!strings.outside_strings(c)) continue;
     // An element starts at depth 1 with its first character, and ends at the comma or bracket that
     // brings the walk back to depth 1 (an object or array) or leaves it there (a scalar, which,
     // parsed alone, fails as not a camera).
@@ -47,9 +39,7 @@ std::vector<Element> array_elements(std::string_view text) {
       begin = k;
       begin_line = line;
     }
-    if (c == '"') {
-      in_string = true;
-    } else if (c == '[' || c == '{') {
+    if (c == '[' || c == '{') {
       ++depth;
     } else if (c == ']' || c == '}') {
       --depth;

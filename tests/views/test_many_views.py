@@ -158,6 +158,35 @@ def test_the_default_names_work_in_the_working_folder(tmp_path):
     assert manifest_records(tmp_path / "manifest.jsonl") == records, again.stderr
 
 
+def test_a_manifest_option_naming_another_file_is_refused_and_leaves_it(tmp_path):
+    """--manifest naming the views file or a model (a slip of the shell's completion) changes nothing."""
+    views = tmp_path / "cams.jsonl"
+    views.write_text(json.dumps({"from": [0, 1.8, 6], "to": [0, 0.7, 0], "fovy": 45}) + "\n")
+    before = views.read_text()
+    for overwrite in ([], ["--overwrite"]):
+        result = vkray("render", *SIZE, "--views", str(views), "-o", str(tmp_path / "v{index}.exr"),
+                       "--manifest", str(views), *overwrite, check=False)
+        assert result.returncode == 2, result.stderr
+        assert result.stderr == f"vkray: {views}: is not a manifest (its first line is no view record): " \
+                                "--manifest names a manifest to continue or a new file\n"
+        assert views.read_text() == before and not views_in(tmp_path)
+
+
+def test_names_that_give_two_views_one_file_are_refused_before_rendering(tmp_path):
+    out = tmp_path / "out"
+    for options, message in [
+        (["-o", str(out / "d{index}/../same.exr")], "view 0's EXR and view 1's EXR would write this one file"),
+        (["-o", str(out / "v-{index}.exr"), "--manifest", str(out / "v-2.exr")], "the manifest and view 2's EXR"),
+        (["-o", str(out / "v-{index}.exr"), "--preview", str(out / "p{index}/../p.png")], "view 1's preview"),
+    ]:
+        result = vkray("render", *SIZE, "--orbit", "3", *options, check=False)
+        assert result.returncode == 2 and result.stderr.count("\n") == 1, result.stderr
+        assert message in result.stderr and "give each view names of its own" in result.stderr
+        assert not out.exists()  # no folder made, nothing written
+    names = vkray("render", *SIZE, "--orbit", "3", "-o", str(out / "v{index:032}.exr"))  # 32 digits, never cut
+    assert views_in(out) == [f"v{index:032}.exr" for index in range(3)], names.stderr
+
+
 def test_views_file_as_json_array_and_as_json_lines(tmp_path):
     cameras = [{"from": [0, 1.8, 6], "to": [0, 0.7, 0], "fovy": 45}, {"from": [3, 2, 5], "to": [0, 0.7, 0], "fovy": 30}]
     (tmp_path / "views.json").write_text(json.dumps(cameras, indent=2))
