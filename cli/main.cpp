@@ -31,6 +31,9 @@ void install_signal_handlers() {
   action.sa_handler = end_on_signal;
   sigemptyset(&action.sa_mask);
   for (int signal : {SIGINT, SIGTERM, SIGHUP}) sigaction(signal, &action, nullptr);
+  // A reader of what vkray prints that went away (`vkray ... | head -1`) is no reason to die in the
+  // middle: the write to it fails, and the files vkray writes are finished all the same.
+  signal(SIGPIPE, SIG_IGN);
 }
 
 }  // namespace

@@ -67,7 +67,11 @@ float miss_value(const std::string& text) {
   if (text == "nan") return NAN;
   float value = 0.0f;
   const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), value);
-  if (error != std::errc() || end != text.data() + text.size() || !std::isfinite(value)) {
+  const bool whole = end == text.data() + text.size();
+  if (error == std::errc::result_out_of_range && whole) {
+    throw InputError("--miss: '" + text + "' is beyond float32's range (magnitudes to 3.4e38; or inf, -inf)");
+  }
+  if (error != std::errc() || !whole || !std::isfinite(value)) {
     throw InputError("--miss: '" + text + "' is not inf, -inf, nan or a number");
   }
   return value;

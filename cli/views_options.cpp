@@ -81,14 +81,16 @@ Shard parse_shard(const ViewsOptions& options) {
     const size_t slash = text.find('/');
     const auto index = whole_number(std::string_view(text).substr(0, slash));
     const auto count = slash == std::string::npos ? std::nullopt : whole_number(std::string_view(text).substr(slash + 1));
-    if (!index || !count) throw InputError("--shard: '" + text + "' is not I/N (as 0/4) or auto");
+    if (!index || !count) throw InputError("--shard: '" + text + "' is not I/N of whole numbers to 4294967295 (as 0/4), or auto");
     return checked_shard(*index, *count, "'" + text + "'");
   }
   if (const auto task = environment_number("SLURM_ARRAY_TASK_ID")) {
+    if (options.shard_count) throw InputError("--shard-count: under Slurm the array gives the count (SLURM_ARRAY_TASK_COUNT)");
     const auto count = environment_number("SLURM_ARRAY_TASK_COUNT");
     if (!count) throw InputError("--shard auto: SLURM_ARRAY_TASK_ID is set but SLURM_ARRAY_TASK_COUNT is not");
     const uint32_t first = environment_number("SLURM_ARRAY_TASK_MIN").value_or(0);
-    const uint32_t step = std::max(1u, environment_number("SLURM_ARRAY_TASK_STEP").value_or(1));
+    const uint32_t step = environment_number("SLURM_ARRAY_TASK_STEP").value_or(1);
+    if (step == 0) throw InputError("--shard auto: SLURM_ARRAY_TASK_STEP=0 is no array's step (1 or more)");
     if (*task < first || (*task - first) % step != 0) {
       throw InputError("--shard auto: SLURM_ARRAY_TASK_ID " + std::to_string(*task) + " is not in the array " +
                        std::to_string(first) + "+" + std::to_string(step) + "k");

@@ -472,7 +472,8 @@ TEST_F(CliTest, CameraOutputsOnAPlaneMatchClosedForm) {
 // a value that is not one is refused before any work.
 TEST_F(CliTest, MissValueReplacesOnlyMissedDepths) {
   expect_error(vkray({"render", "missing.json", "--miss", "zero"}), 2, {"--miss", "'zero'", "inf, -inf, nan or a number"});
-  expect_error(vkray({"render", "missing.json", "--miss", "1e99"}), 2, {"--miss", "'1e99'"});
+  expect_error(vkray({"render", "missing.json", "--miss", "1e99"}), 2, {"--miss", "'1e99'", "beyond float32's range"});
+  expect_error(vkray({"render", "missing.json", "--miss", "1e39"}), 2, {"--miss", "'1e39'", "beyond float32's range"});
   write("sphere.json", sphere_scene);
   Image reference;
   ASSERT_EQ(vkray({"render", "sphere.json", "--aov", "depth,planar-depth", "--no-preview", "-o", "inf.exr"}).exit_code, 0);

@@ -5,6 +5,8 @@
 
 #include <gtest/gtest.h>
 
+#include <unistd.h>
+
 #include <fstream>
 #include <sstream>
 
@@ -62,12 +64,45 @@ TEST_F(ImageIoTest, AReadOnlyPreviewLeavesTheOlderExrAsItWas) {
   std::filesystem::permissions(preview, std::filesystem::perms::owner_write, std::filesystem::perm_options::add);
 }
 
+// A name of 250 bytes is legal (NAME_MAX is 255); its temporary name must be too.
+TEST_F(ImageIoTest, ALongLegalNameIsWritten) {
+  const auto file = dir_ / (std::string(245, 'n') + ".json");
+  write_text_file(file, "whole\n");
+  EXPECT_EQ(read(file), "whole\n");
+  expect_no_temporary_files();
+}
+
+// A resumed many-view run removes what killed writers left beside the files it will write, in one
+// read of each folder: not another target's, not a live process's.
+TEST_F(ImageIoTest, StaleTemporaryFilesOfTheTargetsGoInOneCall) {
+  const std::string dead = "4194305";  // above Linux's largest pid_max (2^22): no process has it
+  const std::string live = std::to_string(getpid());
+  // A long name's temporary names cut its stem to 255 - 1 ('.') - 7 (".vkray-") - 10 (a pid) - 1 -
+  // 10 (a counter) - 4 (".exr") = 222 bytes.
+  const std::string long_stem(250, 'n');
+  const auto stale_a = write(".a.vkray-" + dead + "-0.exr", "half");
+  const auto stale_long = write("." + long_stem.substr(0, 222) + ".vkray-" + dead + "-3.exr", "half");
+  const auto other_target = write(".b.vkray-" + dead + "-1.exr", "half");
+  const auto other_kind = write(".a.vkray-" + dead + "-2.png", "half");
+  const auto in_progress = write(".a.vkray-" + live + "-4.exr", "half");
+  remove_stale_partial_files({dir_ / "a.exr", dir_ / (long_stem + ".exr")});
+  EXPECT_FALSE(std::filesystem::exists(stale_a));
+  EXPECT_FALSE(std::filesystem::exists(stale_long));
+  for (const auto& kept : {other_target, other_kind, in_progress}) EXPECT_TRUE(std::filesystem::exists(kept)) << kept;
+}
+
 TEST_F(ImageIoTest, TextFilesAreReplacedWhole) {
   const auto file = dir_ / "report.json";
   write_text_file(file, "first\n");
   write_text_file(file, "second\n");
   EXPECT_EQ(read(file), "second\n");
-  EXPECT_THROW(write_text_file(dir_ / "missing-folder" / "report.json", "x"), std::runtime_error);
+  try {
+    write_text_file(dir_ / "missing-folder" / "report.json", "x");
+    ADD_FAILURE() << "no error for a missing folder";
+  } catch (const std::runtime_error& error) {
+    EXPECT_NE(std::string(error.what()).find("report.json: cannot write: No such file or directory"), std::string::npos)
+        << error.what();  // with the reason
+  }
   expect_no_temporary_files();
 }
 

@@ -349,6 +349,11 @@ TEST(ObjErrors, LineNumbersCountCrlfLines) {
   expect_error(text_error("v 0 0 0\r\n\r\nv 1 0 0\r\nv 0 1\r\nf 1 2 3\r\n"), "t.obj:4: ", "'v' needs 3 coordinates, got 2");
 }
 
+TEST(ObjErrors, ControlCharactersInTheMessageAreEscaped) {
+  // Printed raw, a NUL ended the line at "t.obj:4: '3".
+  expect_error(text_error(tri_vertices + std::string("f 1 2 3\0junk\n", 13)), "t.obj:4: ", "3\\x00junk");
+}
+
 TEST(ObjErrors, EmptyFile) {
   expect_error(text_error(""), "t.obj: ", "no vertices");
   expect_error(text_error("# only a comment\n\n"), "t.obj: ", "no vertices");

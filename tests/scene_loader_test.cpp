@@ -73,6 +73,10 @@ TEST(SceneJson, AByteOrderMarkIsSkipped) {
   EXPECT_EQ(parse("\xEF\xBB\xBF" + with_camera("")).camera.from, glm::dvec3(0, 0, 5));
 }
 
+TEST(SceneJson, ANulByteIsRefusedNotTakenForTheEnd) {
+  expect_error(parse_error(with_camera("") + std::string(1, '\0') + "\n}"), "t.json:1:", "a NUL byte");
+}
+
 TEST(SceneJson, EmptyText) { expect_error(parse_error(""), "t.json:1:1: ", "invalid JSON"); }
 
 TEST(SceneJson, TrailingGarbage) { expect_error(parse_error(with_camera("") + "\n}"), "t.json:2:1: ", "invalid JSON"); }

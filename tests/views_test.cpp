@@ -60,6 +60,8 @@ TEST(Views, ErrorsNameTheLine) {
   expect_error(error_of([&] { parse_views("[\n" + good + ",\n" + good, "v.json"); }), "v.json:", "invalid JSON");
   expect_error(error_of([&] { parse_views(good + "\n{\"from\": [1,\n", "v.jsonl"); }), "v.jsonl:2: ", "invalid JSON");
   expect_error(error_of([] { parse_views("[]", "v.json"); }), "v.json: ", "no cameras");
+  expect_error(error_of([&] { parse_views("[\n" + good + "]" + std::string(1, '\0') + "junk", "v.json"); }), "v.json:2:",
+               "a NUL byte");  // nlohmann would stop at it, silently
   expect_error(error_of([] { parse_views("\n\n", "v.jsonl"); }), "v.jsonl: ", "no cameras");
   expect_error(error_of([] { load_views("/nonexistent/views.json"); }), "/nonexistent/views.json", "no such views file");
 }
@@ -213,6 +215,11 @@ TEST_F(ManifestTest, MergeSortsJoinsCopiesAndRefusesConflicts) {
   expect_error(error_of([&] { merge_manifests({a, b, c}); }), c.string() + ":2: ", "differs from its record at " + b.string() + ":1");
   const auto d = write("d.jsonl", "{\"index\": 3}\n");
   expect_error(error_of([&] { merge_manifests({d}); }), d.string() + ":1: ", "not a view record");
+  // An index past uint32 is no view's (it was cut to its low bits: "view 0 differs").
+  const std::string line = manifest_line(record(0, dir_), dir_);
+  const auto e = write("e.jsonl", "{\"index\":4294967296" + line.substr(line.find(',')) + "\n");
+  expect_error(error_of([&] { merge_manifests({a, e}); }), e.string() + ":1: ", "not a view record");
+  expect_error(error_of([&] { merge_manifests({dir_}); }), dir_.string() + ": ", "is a folder, not a manifest");
 }
 
 }  // namespace

@@ -46,9 +46,10 @@ void write_text_file(const std::filesystem::path& path, std::string_view text);
 // then end the process (see cli/main.cpp).
 void remove_partial_outputs() noexcept;
 
-// Removes temporary files beside `target` that a vkray process no longer running left when it was
-// killed (SIGKILL leaves no chance to clean up): a resumed many-view run starts clean.
-void remove_stale_partial_files(const std::filesystem::path& target);
+// Removes the temporary files beside each of `targets` that a vkray process no longer running left
+// when it was killed (SIGKILL leaves no chance to clean up): a resumed many-view run starts clean.
+// Each folder is read once.
+void remove_stale_partial_files(const std::vector<std::filesystem::path>& targets);
 
 // Threads OpenEXR compresses one file on: by default one a core, for one file at a time; 0 compresses
 // on the writing thread, for several threads each writing its own file. Takes effect only before the

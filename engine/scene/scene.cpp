@@ -12,6 +12,21 @@
 
 namespace vkray {
 
+std::string with_controls_escaped(const std::string& text) {
+  std::string escaped;
+  escaped.reserve(text.size());
+  for (const char c : text) {
+    const auto byte = static_cast<unsigned char>(c);
+    if ((byte >= 0x20 && byte != 0x7f) || c == '\t') {
+      escaped += c;
+      continue;
+    }
+    constexpr char hex[] = "0123456789abcdef";
+    escaped += {'\\', 'x', hex[byte >> 4], hex[byte & 15]};
+  }
+  return escaped;
+}
+
 size_t Scene::triangle_count() const {
   size_t count = 0;
   for (const auto& mesh : meshes) count += mesh.triangles.size();

@@ -17,11 +17,16 @@
 
 namespace vkray {
 
+// `text` with its control characters but tab as \xNN: a NUL from the input would end a printed
+// line there, a line break would make two of one message.
+std::string with_controls_escaped(const std::string& text);
+
 // Bad input from the user (scene file, OBJ file, option value). The message names the file and the
-// place (a JSON path or a line number). The CLI maps it to exit code 2.
+// place (a JSON path or a line number), on one line whatever bytes it quotes from the input. The CLI
+// maps it to exit code 2.
 class InputError : public std::runtime_error {
  public:
-  using std::runtime_error::runtime_error;
+  explicit InputError(const std::string& message) : std::runtime_error(with_controls_escaped(message)) {}
 };
 
 struct Sphere {

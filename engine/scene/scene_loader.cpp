@@ -397,6 +397,7 @@ class JsonPathTracker : public Json::json_sax_t {
 
 // Parses a whole JSON document; every error names `name` and the line and column or JSON path.
 Json parse_document(std::string_view json_text, const std::string& name) {
+  refuse_nul_bytes(json_text, name);
   Json root;
   try {
     root = Json::parse(json_text);
@@ -425,6 +426,12 @@ Json parse_document(std::string_view json_text, const std::string& name) {
 }
 
 }  // namespace
+
+void refuse_nul_bytes(std::string_view text, const std::string& name) {
+  if (const size_t nul = text.find('\0'); nul != std::string_view::npos) {
+    throw InputError(name + ":" + line_and_column(text, nul) + ": a NUL byte: a JSON file is text, and the parser would stop there");
+  }
+}
 
 Scene parse_scene(std::string_view json_text, const std::string& name, const std::filesystem::path& base_dir,
                   const ObjFileLoader& load_obj) {

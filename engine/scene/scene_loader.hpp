@@ -21,6 +21,10 @@ Scene load_scene_file(const std::filesystem::path& path);
 // file"). Throws InputError.
 std::string read_input_file(const std::filesystem::path& path, const std::string& what);
 
+// Throws InputError naming the line and column of the first NUL byte in JSON `text`: nlohmann's
+// parser takes a NUL for the end of the text, so what follows would be dropped unread.
+void refuse_nul_bytes(std::string_view text, const std::string& name);
+
 // Parses scene JSON held in memory. `name` stands for the file in messages; relative OBJ paths
 // resolve against `base_dir` and load through `load_obj`.
 Scene parse_scene(std::string_view json_text, const std::string& name, const std::filesystem::path& base_dir,

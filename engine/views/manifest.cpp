@@ -58,7 +58,7 @@ std::optional<Json> parse_record(const std::string& line) {
   if (nested_deeper_than(line, max_record_depth)) return std::nullopt;
   const Json record = Json::parse(line, nullptr, false);
   if (!record.is_object() || !record.contains("index") || !record["index"].is_number_unsigned() ||
-      !record.contains("exr") || !record["exr"].is_string()) {
+      record["index"].get<uint64_t>() > UINT32_MAX || !record.contains("exr") || !record["exr"].is_string()) {
     return std::nullopt;
   }
   return record;
@@ -153,6 +153,7 @@ std::string merge_manifests(const std::vector<std::filesystem::path>& parts) {
   std::map<uint32_t, std::pair<std::string, std::string>> records;  // index -> line, where it came from
   for (const auto& part : parts) {
     std::error_code error;
+    if (std::filesystem::is_directory(part, error)) throw InputError(part.string() + ": is a folder, not a manifest");
     if (!std::filesystem::is_regular_file(part, error)) throw InputError(part.string() + ": no such manifest");
     const std::string text = read_file(part);
     size_t line_number = 0;

@@ -122,6 +122,9 @@ void check_view_names(const ViewBatch& batch) {
   const std::filesystem::path working = std::filesystem::current_path();
   std::map<std::filesystem::path, std::string> writers;  // file, as absolute and normal -> who writes it
   auto claim = [&](const std::filesystem::path& file, std::string writer) {
+    if (file.filename().string().size() > 255) {  // NAME_MAX: the write would fail after the renders before it
+      throw InputError(file.string() + ": the name of " + writer + " is longer than the 255 bytes a file name may have");
+    }
     const auto [taken, claimed] = writers.emplace((working / file).lexically_normal(), writer);
     if (!claimed) {
       throw InputError(file.string() + ": " + taken->second + " and " + writer +
@@ -150,6 +153,7 @@ ViewBatchSummary render_views(Renderer& renderer, const ViewBatch& batch,
   prepare_folders(batch, shard_views);
   ManifestWriter manifest(batch.manifest, batch.overwrite);
   std::vector<uint32_t> to_render;
+  std::vector<std::filesystem::path> to_write;
   for (uint32_t index : shard_views) {
     if (!batch.overwrite && complete(batch, index)) {
       ++summary.skipped;
@@ -157,10 +161,11 @@ ViewBatchSummary render_views(Renderer& renderer, const ViewBatch& batch,
       if (!manifest.has(index)) manifest.append(record_of(batch, index));
       continue;
     }
-    remove_stale_partial_files(batch.exr.path(index));
-    if (batch.png) remove_stale_partial_files(batch.png->path(index));
+    to_write.push_back(batch.exr.path(index));
+    if (batch.png) to_write.push_back(batch.png->path(index));
     to_render.push_back(index);
   }
+  remove_stale_partial_files(to_write);
   if (to_render.empty()) return summary;
 
   // Each writer compresses its own file: with several views in flight, that keeps the cores as busy

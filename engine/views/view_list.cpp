@@ -63,6 +63,7 @@ glm::dvec3 rotated(const glm::dvec3& direction, const glm::dvec3& axis, double a
 
 std::vector<Camera> parse_views(std::string_view text, const std::string& name) {
   text = without_byte_order_mark(text);
+  refuse_nul_bytes(text, name);
   std::vector<Camera> views;
   const size_t first = text.find_first_not_of(" \t\r\n");
   if (first != std::string_view::npos && text[first] == '[') {
