@@ -52,12 +52,12 @@ std::atomic<unsigned> partial_counter{0};
 
 // ".STEM.vkray-", how the temporary names beside `target` start. The stem is cut so that the whole
 // name, with the process id, a counter and the extension, keeps within the 255 bytes a file name
-// may have (NAME_MAX on Linux): a legal long name is never refused for its temporary one.
+// may have (max_file_name_bytes): a legal long name is never refused for its temporary one.
 std::string partial_name_prefix(const std::filesystem::path& target) {
-  constexpr size_t name_max = 255;
   constexpr size_t decoration = 1 + 7 + 10 + 1 + 10;  // '.', ".vkray-", a pid, '-', an unsigned counter
   const std::string stem = target.stem().string();
-  const size_t room = name_max - std::min(name_max, decoration + target.extension().string().size());
+  const size_t room = max_file_name_bytes -
+                      std::min(max_file_name_bytes, decoration + target.extension().string().size());
   return "." + stem.substr(0, room) + ".vkray-";
 }
 

@@ -33,6 +33,9 @@ struct ExrSettings {
 // into place once complete, so a failed or interrupted write never leaves a truncated file where a
 // good one was.
 
+// The longest file name (one path component) Linux file systems take: NAME_MAX.
+inline constexpr size_t max_file_name_bytes = 255;
+
 // Throws std::runtime_error naming the path when it cannot be written: its folder is missing or
 // refuses a new file, it is a folder, a link, a device, a FIFO or a socket (which the rename into
 // place would replace), or it is a read-only file (no write bit for anyone: refused to root too).

@@ -84,8 +84,9 @@ std::optional<uint32_t> manifest_line_index(const std::string& line) {
   return (*record)["index"].get<uint32_t>();
 }
 
-// A record is under 10 KB (two paths and a camera), so the first 64 KiB hold the first line.
 void check_is_a_manifest(const std::filesystem::path& path) {
+  // A record is under 10 KB (two paths and a camera): the first 64 KiB hold a manifest's first line.
+  constexpr size_t first_line_room = 64 * 1024;
   std::error_code error;
   const std::filesystem::file_status status = std::filesystem::status(path, error);
   if (!std::filesystem::exists(status)) return;
@@ -93,13 +94,13 @@ void check_is_a_manifest(const std::filesystem::path& path) {
   const std::string remedy = "): --manifest names a manifest to continue or a new file";
   if (!std::filesystem::is_regular_file(status)) throw InputError(refused + "not a regular file" + remedy);
   std::ifstream file(path, std::ios::binary);
-  std::string start(64 * 1024, '\0');
+  std::string start(first_line_room, '\0');
   file.read(start.data(), static_cast<std::streamsize>(start.size()));
   start.resize(static_cast<size_t>(file.gcount()));
   if (start.empty()) return;
   const size_t end = start.find('\n');
   const bool first_line_is_record = end == std::string::npos
-                                        ? start.size() < 64 * 1024 && start.starts_with("{\"index\":")
+                                        ? start.size() < first_line_room && start.starts_with("{\"index\":")
                                         : manifest_line_index(start.substr(0, end)).has_value();
   if (!first_line_is_record) throw InputError(refused + "its first line is no view record" + remedy);
 }

@@ -8,7 +8,6 @@
 #include <condition_variable>
 #include <deque>
 #include <exception>
-#include <map>
 #include <mutex>
 #include <set>
 #include <thread>
@@ -119,22 +118,42 @@ void prepare_folders(const ViewBatch& batch, const std::vector<uint32_t>& views)
 
 void check_view_names(const ViewBatch& batch) {
   check_is_a_manifest(batch.manifest);
+  // Checked without a list of every name (a run may have millions): from the patterns' structure.
   const std::filesystem::path working = std::filesystem::current_path();
-  std::map<std::filesystem::path, std::string> writers;  // file, as absolute and normal -> who writes it
-  auto claim = [&](const std::filesystem::path& file, std::string writer) {
-    if (file.filename().string().size() > 255) {  // NAME_MAX: the write would fail after the renders before it
-      throw InputError(file.string() + ": the name of " + writer + " is longer than the 255 bytes a file name may have");
-    }
-    const auto [taken, claimed] = writers.emplace((working / file).lexically_normal(), writer);
-    if (!claimed) {
-      throw InputError(file.string() + ": " + taken->second + " and " + writer +
-                       " would write this one file: give each view names of its own (-o, --preview, --manifest)");
-    }
+  auto normal = [&](const std::filesystem::path& file) { return (working / file).lexically_normal(); };
+  auto refuse = [](const std::filesystem::path& file, const std::string& one, const std::string& other) {
+    throw InputError(file.string() + ": " + one + " and " + other +
+                     " would write this one file: give each view names of its own (-o, --preview, --manifest)");
   };
-  claim(batch.manifest, "the manifest");
-  for (uint32_t index = 0; index < batch.cameras.size(); ++index) {
-    claim(batch.exr.path(index), "view " + std::to_string(index) + "'s EXR");
-    if (batch.png) claim(batch.png->path(index), "view " + std::to_string(index) + "'s preview");
+  const uint32_t views = static_cast<uint32_t>(batch.cameras.size());
+  if (views == 0) return;
+  std::vector<std::pair<const OutputPattern*, std::string>> patterns = {{&batch.exr, "EXR"}};
+  if (batch.png) patterns.emplace_back(&*batch.png, "preview");
+  for (const auto& [pattern, kind] : patterns) {
+    // The longest name is the last view's (its index has the most digits). A name too long would
+    // fail only when its view is written, after the views before it.
+    const std::filesystem::path last = pattern->path(views - 1);
+    if (last.filename().string().size() > max_file_name_bytes) {
+      throw InputError(last.string() + ": the name of view " + std::to_string(views - 1) + "'s " + kind + " is longer than the " +
+                       std::to_string(max_file_name_bytes) + " bytes a file name may have");
+    }
+    // Different indices give different names unless ".." takes every {index} out of the path
+    // ("d{index}/../v.exr"): then views 0 and 1 already meet.
+    if (views > 1 && normal(pattern->path(0)) == normal(pattern->path(1))) {
+      refuse(pattern->path(1), "view 0's " + kind, "view 1's " + kind);
+    }
+  }
+  // A manifest named as a view's file would count that view complete before it rendered. (An EXR
+  // and a preview never meet: the front end gives them the extensions .exr and .png.)
+  const std::string manifest_name = batch.manifest.filename().string();
+  const std::filesystem::path manifest = normal(batch.manifest);
+  for (uint32_t index = 0; index < views; ++index) {
+    for (const auto& [pattern, kind] : patterns) {
+      const std::filesystem::path file = pattern->path(index);
+      if (file.filename() == manifest_name && normal(file) == manifest) {
+        refuse(file, "the manifest", "view " + std::to_string(index) + "'s " + kind);
+      }
+    }
   }
 }
 

@@ -178,7 +178,7 @@ def test_names_that_give_two_views_one_file_are_refused_before_rendering(tmp_pat
         (["-o", str(out / "d{index}/../same.exr")], "view 0's EXR and view 1's EXR would write this one file"),
         (["-o", str(out / "v-{index}.exr"), "--manifest", str(out / "v-2.exr")], "the manifest and view 2's EXR"),
         (["-o", str(out / "v-{index}.exr"), "--preview", str(out / "p{index}/../p.png")], "view 1's preview"),
-        (["-o", str(out / ("n" * 251 + "{index}.exr"))], "the name of view 0's EXR is longer than the 255 bytes"),
+        (["-o", str(out / ("n" * 251 + "{index}.exr"))], "the name of view 2's EXR is longer than the 255 bytes"),
     ]:
         result = vkray("render", *SIZE, "--orbit", "3", *options, check=False)
         assert result.returncode == 2 and result.stderr.count("\n") == 1, result.stderr
