@@ -3,11 +3,14 @@
 #include "tests/input_error_test.hpp"
 #include "tests/temp_dir_test.hpp"
 #include "engine/scene/obj_loader.hpp"
+#include "engine/scene/polygon_triangulation.hpp"
 
 #include <gtest/gtest.h>
 #include <glm/geometric.hpp>
+#include <glm/mat3x3.hpp>
 
 #include <algorithm>
+#include <cmath>
 #include <array>
 #include <filesystem>
 #include <fstream>
@@ -92,31 +95,101 @@ TEST(ObjText, HexagonBecomesFourTriangles) {
   EXPECT_NEAR(total_area(mesh), 4.0, 1e-12);
 }
 
-// A file of triangles alone is built by the checking pass; one polygon sends the whole file through
-// tinyobjloader. Both must give the same positions and triangles (the polygon's aside).
-void expect_both_paths_agree(const std::string& triangles_text) {
-  const Mesh direct = vkray::load_obj_text(triangles_text, "t.obj");
-  const Mesh through_tinyobj = vkray::load_obj_text(triangles_text + "v 9 9 9\nv 10 9 9\nv 10 10 9\nv 9 10 9\nf -4 -3 -2 -1\n", "t.obj");
-  ASSERT_EQ(through_tinyobj.positions.size(), direct.positions.size() + 4);
-  ASSERT_EQ(through_tinyobj.triangles.size(), direct.triangles.size() + 2);
-  EXPECT_TRUE(std::equal(direct.positions.begin(), direct.positions.end(), through_tinyobj.positions.begin()));
-  EXPECT_TRUE(std::equal(direct.triangles.begin(), direct.triangles.end(), through_tinyobj.triangles.begin()));
-}
-
-TEST(ObjText, TrianglesReadAlikeWithAndWithoutTinyobjloader) {
-  expect_both_paths_agree(tri_vertices + "f 1 2 3\nv 1 1 0\nf -3 -2 -1\nvn 0 0 1\nf 3//1 1//1 2//1\nf 2 4 3 # c\n"
-                          "v +1.5e-3 -0.25 1e2 7\nvt 0 0\nf 5/1 4/1 1/1\n");
-}
-
-TEST(ObjText, SharedModelsReadAlikeWithAndWithoutTinyobjloader) {
-  const std::filesystem::path models = VKRAY_MODELS_DIR;
-  if (!std::filesystem::is_directory(models)) GTEST_SKIP() << "shared models folder " << models << " is absent";
-  for (const char* name : {"stanford-bunny.obj", "armadillo-50k.obj"}) {
-    SCOPED_TRACE(name);
-    std::ifstream file(models / name, std::ios::binary);
-    const std::string text((std::istreambuf_iterator<char>(file)), std::istreambuf_iterator<char>());
-    expect_both_paths_agree(text);
+// A polygon given by its corners in the z = 0 plane, as an OBJ face; `tilt` turns it out of that plane.
+std::string polygon_obj(const std::vector<glm::dvec2>& corners, const glm::dmat3& tilt = glm::dmat3(1.0)) {
+  std::string text;
+  for (const glm::dvec2 corner : corners) {
+    const glm::dvec3 p = tilt * glm::dvec3(corner, 0.0);
+    text += "v " + std::to_string(p.x) + " " + std::to_string(p.y) + " " + std::to_string(p.z) + "\n";
   }
+  text += "f";
+  for (size_t k = 1; k <= corners.size(); ++k) text += " " + std::to_string(k);
+  return text + "\n";
+}
+
+// Twice a polygon's signed area (shoelace formula): positive where its corners run counter-clockwise.
+double signed_area(const std::vector<glm::dvec2>& corners) {
+  double twice = 0.0;
+  for (size_t k = 0; k < corners.size(); ++k) {
+    const glm::dvec2 a = corners[k], b = corners[(k + 1) % corners.size()];
+    twice += a.x * b.y - b.x * a.y;
+  }
+  return 0.5 * twice;
+}
+
+// A simple polygon is cut exactly when its n - 2 triangles all face the polygon's way and their areas
+// add up to its area: a triangle reaching outside, or two overlapping, would make the sum larger.
+void expect_exact_triangulation(const std::vector<glm::dvec2>& corners, const glm::dmat3& tilt = glm::dmat3(1.0)) {
+  const Mesh mesh = vkray::load_obj_text(polygon_obj(corners, tilt), "t.obj");
+  ASSERT_EQ(mesh.triangles.size(), corners.size() - 2);
+  expect_valid_triangles(mesh);
+  const glm::dvec3 facing = tilt * glm::dvec3(0, 0, signed_area(corners) > 0.0 ? 1.0 : -1.0);
+  for (const auto& t : mesh.triangles) {
+    const glm::dvec3 normal = glm::cross(mesh.positions[t[1]] - mesh.positions[t[0]], mesh.positions[t[2]] - mesh.positions[t[0]]);
+    EXPECT_GE(glm::dot(normal, facing), 0.0) << "a triangle faces away from the polygon";
+  }
+  const double area = std::abs(signed_area(corners));
+  EXPECT_NEAR(total_area(mesh), area, 1e-5 * area);  // the corners went through 6-digit text
+}
+
+std::vector<glm::dvec2> star(size_t points) {
+  std::vector<glm::dvec2> corners;
+  for (size_t k = 0; k < 2 * points; ++k) {
+    const double angle = 6.283185307179586 * static_cast<double>(k) / static_cast<double>(2 * points);
+    corners.push_back((k % 2 == 0 ? 1.0 : 0.6) * glm::dvec2(std::cos(angle), std::sin(angle)));
+  }
+  return corners;
+}
+
+// A comb: 20 teeth on a bar. tinyobjloader's ear clipping (which vkray used before) filled the gaps
+// between the teeth: 184.5 square units for a polygon of 148.5.
+std::vector<glm::dvec2> comb() {
+  std::vector<glm::dvec2> corners{{0, -1}};
+  for (int k = 0; k < 20; ++k) {
+    for (const glm::dvec2 corner : {glm::dvec2(2 * k, 0), glm::dvec2(2 * k, 5), glm::dvec2(2 * k + 1, 5), glm::dvec2(2 * k + 1, 1)}) {
+      corners.push_back(corner);
+    }
+  }
+  corners.emplace_back(39, -1);
+  return corners;
+}
+
+TEST(ObjText, ConcavePolygonsAreCutExactlyEitherWayRound) {
+  const std::vector<glm::dvec2> l_shape{{10, 10}, {12, 10}, {12, 11}, {11, 11}, {11, 12}, {10, 12}};
+  const glm::dmat3 tilt = glm::dmat3(glm::dvec3(0.36, 0.48, -0.8), glm::dvec3(-0.8, 0.6, 0.0), glm::dvec3(0.48, 0.64, 0.6));
+  for (const auto& corners : {l_shape, star(8), star(300), comb()}) {
+    for (const bool reversed : {false, true}) {
+      SCOPED_TRACE(std::to_string(corners.size()) + " corners" + (reversed ? ", clockwise" : ""));
+      const std::vector<glm::dvec2> ordered = reversed ? std::vector<glm::dvec2>(corners.rbegin(), corners.rend()) : corners;
+      expect_exact_triangulation(ordered);
+      expect_exact_triangulation(ordered, tilt);
+    }
+  }
+}
+
+// A square with a square hole, joined to it by a doubled edge (how n-gons with holes are written):
+// the hole's corners sit at the same places twice.
+TEST(ObjText, PolygonWithAHoleJoinedByADoubledEdge) {
+  expect_exact_triangulation({{0, 0}, {4, 0}, {4, 4}, {0, 4}, {0, 0}, {1, 1}, {1, 3}, {3, 3}, {3, 1}, {1, 1}});
+}
+
+// Collinear corners (a rectangle with extra corners along its sides) are used, with no sliver left out.
+TEST(ObjText, CollinearCornersAreKept) {
+  expect_exact_triangulation({{0, 0}, {1, 0}, {2, 0}, {3, 0}, {3, 1}, {2, 1}, {1, 1}, {0, 1}});
+}
+
+// A bow tie crosses itself: no triangulation is right, but every corner is used and none is lost.
+TEST(ObjText, SelfIntersectingPolygonStillGivesEveryTriangle) {
+  const Mesh mesh = vkray::load_obj_text(polygon_obj({{0, 0}, {2, 2}, {2, 0}, {0, 2}, {-1, 1}}), "t.obj");
+  ASSERT_EQ(mesh.triangles.size(), 3u);
+  expect_valid_triangles(mesh);
+}
+
+TEST(ObjText, PolygonsUpToTheLimitAreTriangulatedAndLargerOnesRefused) {
+  expect_exact_triangulation(star(vkray::max_polygon_corners / 2));
+  const std::string too_large = polygon_obj(star(vkray::max_polygon_corners / 2 + 1));
+  expect_error(text_error("# a large star\n" + too_large), "t.obj:" + std::to_string(vkray::max_polygon_corners + 4) + ": ",
+               "a face of 4098 vertices; vkray takes at most 4096");
 }
 
 TEST(ObjText, NegativeIndicesCountBackFromTheNewestVertex) {
@@ -135,9 +208,8 @@ TEST(ObjText, VertexTexcoordNormalReferences) {
   EXPECT_EQ(mesh.triangles[0], (std::array<uint32_t, 3>{0, 1, 2}));
 }
 
-// vn and vt are kept, with each triangle's corners' indices into them: by the direct path and by
-// tinyobjloader's triangulation of polygons alike; faces without them (before the first that gives
-// them and after) get no_attribute.
+// vn and vt are kept, with each triangle's corners' indices into them, for triangles and polygons
+// alike; faces without them (before the first that gives them and after) get no_attribute.
 TEST(ObjText, NormalsAndTexcoordsByCorner) {
   constexpr uint32_t none = vkray::no_attribute;
   const std::string attributes = "vt 0 0\nvt 1 0\nvt 0.25 1\nvn 0 0 1\nvn 0 1 0\n";

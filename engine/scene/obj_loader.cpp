@@ -1,8 +1,8 @@
 #include "engine/scene/obj_loader.hpp"
 
+#include "engine/scene/polygon_triangulation.hpp"
 #include "engine/scene/text_start.hpp"
 
-#include <tiny_obj_loader.h>
 
 #include <algorithm>
 #include <array>
@@ -34,7 +34,7 @@ void split_tokens(std::string_view line, std::vector<std::string_view>& tokens) 
   }
 }
 
-// from_chars takes no leading '+', but OBJ writers emit it ("+0.5") and tinyobjloader reads it.
+// from_chars takes no leading '+', but OBJ writers emit it ("+0.5") and other readers take it.
 std::string_view without_plus(std::string_view token) {
   return token.size() >= 2 && token[0] == '+' && token[1] != '-' ? token.substr(1) : token;
 }
@@ -68,11 +68,12 @@ std::string check_index(std::string_view token, long defined, const char* what, 
   return {};
 }
 
-// What one pass over the text finds: the positions, and the faces while every one is a triangle
-// (larger polygons go to tinyobjloader's triangulation).
+// What one pass over the text finds, and room for one face's corners reused from face to face.
 struct ParsedObj {
   Mesh mesh;
-  bool only_triangles = true;
+  std::vector<std::array<uint32_t, 3>> face_corners;  // vertex, texture coordinate and normal of each corner
+  std::vector<glm::dvec3> polygon;                    // the corners' positions, for triangulation
+  std::vector<std::array<uint32_t, 3>> polygon_triangles;
 };
 
 // Records the corners' attribute indices of triangle `triangle_index`; the list starts at the first
@@ -81,6 +82,28 @@ void add_corners(std::vector<std::array<uint32_t, 3>>& list, const std::array<ui
   if (list.empty() && corners[0] == no_attribute) return;
   list.resize(triangle_index, {no_attribute, no_attribute, no_attribute});
   list.push_back(corners);
+}
+
+// Adds the triangles of the face in `parsed.face_corners`: a polygon of more corners is triangulated.
+void add_face(ParsedObj& parsed) {
+  const auto& corners = parsed.face_corners;
+  parsed.polygon_triangles.clear();
+  if (corners.size() == 3) {
+    parsed.polygon_triangles.push_back({0, 1, 2});
+  } else {
+    parsed.polygon.clear();
+    for (const auto& corner : corners) parsed.polygon.push_back(parsed.mesh.positions[corner[0]]);
+    triangulate_polygon(parsed.polygon, parsed.polygon_triangles);
+  }
+  Mesh& mesh = parsed.mesh;
+  for (const auto& triangle : parsed.polygon_triangles) {
+    const auto attribute = [&](size_t which) {
+      return std::array<uint32_t, 3>{corners[triangle[0]][which], corners[triangle[1]][which], corners[triangle[2]][which]};
+    };
+    add_corners(mesh.texcoord_corners, attribute(1), mesh.triangles.size());
+    add_corners(mesh.normal_corners, attribute(2), mesh.triangles.size());
+    mesh.triangles.push_back(attribute(0));
+  }
 }
 
 // Returns an empty string when the statement is acceptable, else what is wrong with it; adds what
@@ -108,9 +131,13 @@ std::string check_statement(const std::vector<std::string_view>& tokens, Element
   }
   if (keyword != "f") return {};  // groups, materials, smoothing, lines and points: not geometry we use
   if (tokens.size() < 4) return "a face needs at least 3 vertices, got " + std::to_string(tokens.size() - 1);
+  if (tokens.size() - 1 > max_polygon_corners) {
+    return "a face of " + std::to_string(tokens.size() - 1) + " vertices; vkray takes at most " +
+           std::to_string(max_polygon_corners) + " (split it into smaller faces)";
+  }
   size_t form = std::string_view::npos;  // number of '/'-separated fields (with "//" as an empty one)
   bool form_has_texcoord = false;
-  std::array<uint32_t, 3> triangle{}, normal_corners{}, texcoord_corners{};
+  parsed.face_corners.clear();
   for (size_t k = 1; k < tokens.size(); ++k) {
     std::array<std::string_view, 4> fields;  // a fourth one is already malformed
     size_t field_count = 0;
@@ -142,19 +169,10 @@ std::string check_statement(const std::vector<std::string_view>& tokens, Element
     if (field_count == 3) {
       if (auto error = check_index(fields[2], counts.normals, "normal", normal); !error.empty()) return error;
     }
-    if (k <= 3) {
-      triangle[k - 1] = static_cast<uint32_t>(vertex);
-      texcoord_corners[k - 1] = texcoord < 0 ? no_attribute : static_cast<uint32_t>(texcoord);
-      normal_corners[k - 1] = normal < 0 ? no_attribute : static_cast<uint32_t>(normal);
-    }
+    parsed.face_corners.push_back({static_cast<uint32_t>(vertex), texcoord < 0 ? no_attribute : static_cast<uint32_t>(texcoord),
+                                   normal < 0 ? no_attribute : static_cast<uint32_t>(normal)});
   }
-  if (tokens.size() == 4) {
-    add_corners(parsed.mesh.normal_corners, normal_corners, parsed.mesh.triangles.size());
-    add_corners(parsed.mesh.texcoord_corners, texcoord_corners, parsed.mesh.triangles.size());
-    parsed.mesh.triangles.push_back(triangle);
-  } else {
-    parsed.only_triangles = false;
-  }
+  add_face(parsed);
   return {};
 }
 
@@ -185,74 +203,13 @@ ParsedObj parse_obj_text(std::string_view text, const std::string& name) {
 }  // namespace
 
 Mesh load_obj_text(std::string_view text, const std::string& name) {
-  // One pass checks every statement and, for a mesh of triangles alone (scanned meshes, most
-  // exports), builds it: the bunny loads in 16 ms instead of 45 with tinyobjloader's second parse.
-  // Polygons of more vertices take tinyobjloader's triangulation.
-  text = without_byte_order_mark(text);
-  ParsedObj parsed = parse_obj_text(text, name);
-  if (parsed.only_triangles) {
-    if (parsed.mesh.triangles.empty()) throw InputError(name + ": no faces ('f' lines) found");
-    for (auto* corners : {&parsed.mesh.normal_corners, &parsed.mesh.texcoord_corners}) {
-      if (!corners->empty()) corners->resize(parsed.mesh.triangles.size(), {no_attribute, no_attribute, no_attribute});
-    }
-    return std::move(parsed.mesh);
-  }
-
-  tinyobj::ObjReaderConfig config;
-  config.triangulate = true;
-  config.vertex_color = false;
-  // tinyobjloader only knows comments that start a line: in "f 1 2 3 # note" it reads '#' as index 0
-  // and fails. The validation pass takes '#' anywhere as the start of a comment, so blank those out.
-  std::string source(text);
-  for (size_t hash = source.find('#'); hash != std::string::npos; hash = source.find('#', hash)) {
-    const size_t end = std::min(source.find('\n', hash), source.size());
-    std::fill(source.begin() + static_cast<long>(hash), source.begin() + static_cast<long>(end), ' ');
-    hash = end;
-  }
-  tinyobj::ObjReader reader;
-  if (!reader.ParseFromString(source, "", config)) {
-    // The validation pass should leave nothing for tinyobjloader to reject; if it does, keep the
-    // message on one line (tinyobjloader ends each of its messages with a newline).
-    std::string detail = reader.Error();
-    while (!detail.empty() && (detail.back() == '\n' || detail.back() == '\r')) detail.pop_back();
-    std::replace(detail.begin(), detail.end(), '\n', ' ');
-    throw InputError(name + ": " + detail);
-  }
-
-  // The positions are the checking pass's: std::from_chars rounds each number correctly, where
-  // tinyobjloader's own parser is often an ulp off (46% of the bunny's coordinates).
-  // So are the normals and texture coordinates, in the file's order as tinyobjloader's indices.
-  Mesh mesh;
-  mesh.positions = std::move(parsed.mesh.positions);
-  mesh.normals = std::move(parsed.mesh.normals);
-  mesh.texcoords = std::move(parsed.mesh.texcoords);
-  auto attribute = [&](int index, size_t count) {
-    if (index >= 0 && static_cast<size_t>(index) >= count) throw InputError(name + ": face refers to a missing normal or texture coordinate");
-    return index < 0 ? no_attribute : static_cast<uint32_t>(index);
-  };
-  for (const auto& shape : reader.GetShapes()) {
-    const auto& indices = shape.mesh.indices;
-    for (size_t k = 0; k + 2 < indices.size(); k += 3) {
-      std::array<uint32_t, 3> triangle, normal_corners, texcoord_corners;
-      for (size_t c = 0; c < 3; ++c) {
-        const int index = indices[k + c].vertex_index;
-        if (index < 0 || static_cast<size_t>(index) >= mesh.positions.size()) {
-          throw InputError(name + ": face refers to a missing vertex");  // the validation pass rules this out
-        }
-        triangle[c] = static_cast<uint32_t>(index);
-        normal_corners[c] = attribute(indices[k + c].normal_index, mesh.normals.size());
-        texcoord_corners[c] = attribute(indices[k + c].texcoord_index, mesh.texcoords.size());
-      }
-      add_corners(mesh.normal_corners, normal_corners, mesh.triangles.size());
-      add_corners(mesh.texcoord_corners, texcoord_corners, mesh.triangles.size());
-      mesh.triangles.push_back(triangle);
-    }
-  }
+  ParsedObj parsed = parse_obj_text(without_byte_order_mark(text), name);
+  Mesh& mesh = parsed.mesh;
   if (mesh.triangles.empty()) throw InputError(name + ": no faces ('f' lines) found");
   for (auto* corners : {&mesh.normal_corners, &mesh.texcoord_corners}) {
     if (!corners->empty()) corners->resize(mesh.triangles.size(), {no_attribute, no_attribute, no_attribute});
   }
-  return mesh;
+  return std::move(mesh);
 }
 
 Mesh load_obj_file(const std::filesystem::path& path) {

@@ -1,8 +1,7 @@
-// Wavefront OBJ meshes. Polygons are triangulated (by tinyobjloader), negative (relative) indices
-// work, and every group and object merges into one mesh. One strict pass checks every statement
-// (missing coordinates, NaN, bad or out-of-range indices, a face line cut off at the end of a
-// truncated file) and reports the line; where every face is a triangle it builds the mesh itself,
-// else tinyobjloader parses the file again to triangulate its polygons.
+// Wavefront OBJ meshes. Polygons are triangulated (polygon_triangulation.hpp), negative (relative)
+// indices work, and every group and object merges into one mesh. One strict pass checks every
+// statement (missing coordinates, NaN, bad or out-of-range indices, a face line cut off at the end of
+// a truncated file), reports the line, and builds the mesh.
 #pragma once
 
 #include "engine/scene/scene.hpp"

@@ -6,5 +6,6 @@ set(VKRAY_PARSER_SOURCES
   ${CMAKE_CURRENT_LIST_DIR}/../typed_names.cpp
   ${CMAKE_CURRENT_LIST_DIR}/camera.cpp
   ${CMAKE_CURRENT_LIST_DIR}/obj_loader.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/polygon_triangulation.cpp
   ${CMAKE_CURRENT_LIST_DIR}/scene.cpp
   ${CMAKE_CURRENT_LIST_DIR}/scene_loader.cpp)
