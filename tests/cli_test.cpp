@@ -1358,6 +1358,19 @@ TEST_F(CliTest, OutputsThatAreNotRegularFilesAreRefusedAndKept) {
   EXPECT_EQ(read_text(target), "older contents\n");
 }
 
+// In a many-view run, a link at a later view's name is refused before the first view renders: no
+// view is written, and the link stays.
+TEST_F(CliTest, ALinkAmongLaterViewsIsRefusedBeforeAnyViewRenders) {
+  fs::create_directory(path("out"));
+  fs::create_symlink("/dev/null", dir_ / "out" / "v-2.exr");
+  const RunResult run = vkray({"render", "--width", "8", "--height", "8", "--orbit", "4", "-o", "out/v-{index}.exr"});
+  EXPECT_EQ(run.exit_code, 1);
+  EXPECT_EQ(count_lines(run.err), 1u) << run.err;
+  EXPECT_NE(run.err.find("v-2.exr: cannot write: it is a symbolic link"), std::string::npos) << run.err;
+  EXPECT_FALSE(fs::exists(path("out/v-0.exr")));
+  EXPECT_TRUE(fs::is_symlink(dir_ / "out" / "v-2.exr"));
+}
+
 TEST_F(CliTest, DuplicateSceneKeysAreRefused) {
   write("twice.json", R"({"camera": {"from": [0, 0, 5], "to": [0, 0, 0], "fovy": 40, "fovy": 50}})");
   expect_error(vkray({"render", "twice.json"}), 2, {"twice.json", "camera.fovy", "'fovy'", "twice"});

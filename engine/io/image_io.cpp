@@ -61,27 +61,6 @@ std::string partial_name_prefix(const std::filesystem::path& target) {
   return "." + stem.substr(0, room) + ".vkray-";
 }
 
-// What an output may replace: nothing yet, or a writable regular file. The rename that puts an
-// output in place would replace a link, a device node or a FIFO of that name (`-o /dev/null` as root,
-// the system's): each is refused, and left as it is. So is a file with no write permission bit for
-// anyone, by root too: vkray's own rule (cp refuses such a file to other users, and the rename
-// would replace it silently).
-void refuse_to_replace(const std::filesystem::path& target) {
-  struct stat status {};
-  if (lstat(target.c_str(), &status) != 0) return;
-  const char* kind = S_ISLNK(status.st_mode)                              ? "a symbolic link"
-                     : S_ISCHR(status.st_mode) || S_ISBLK(status.st_mode) ? "a device"
-                     : S_ISFIFO(status.st_mode)                           ? "a FIFO"
-                     : S_ISSOCK(status.st_mode)                           ? "a socket"
-                                                                           : nullptr;
-  if (kind) {
-    throw std::runtime_error(target.string() + ": cannot write: it is " + kind +
-                             ", which an output never replaces (name a new file or a regular one)");
-  }
-  if (S_ISREG(status.st_mode) && (status.st_mode & 0222) == 0) {
-    throw std::runtime_error(target.string() + ": cannot write: the file is read-only (make it writable or remove it)");
-  }
-}
 
 // A file written under a temporary name beside `target`, renamed onto it by commit() and removed
 // if never committed.
@@ -180,6 +159,28 @@ void write_exr_to(const PartialFile& file, const std::filesystem::path& target, 
 void write_preview_png_to(const PartialFile& file, const std::filesystem::path& target, const Frame& frame);
 
 }  // namespace
+
+// What an output may replace: nothing yet, or a writable regular file. The rename that puts an
+// output in place would replace a link, a device node or a FIFO of that name (`-o /dev/null` as root,
+// the system's): each is refused, and left as it is. So is a file with no write permission bit for
+// anyone, by root too: vkray's own rule (cp refuses such a file to other users, and the rename
+// would replace it silently).
+void refuse_to_replace(const std::filesystem::path& target) {
+  struct stat status {};
+  if (lstat(target.c_str(), &status) != 0) return;
+  const char* kind = S_ISLNK(status.st_mode)                              ? "a symbolic link"
+                     : S_ISCHR(status.st_mode) || S_ISBLK(status.st_mode) ? "a device"
+                     : S_ISFIFO(status.st_mode)                           ? "a FIFO"
+                     : S_ISSOCK(status.st_mode)                           ? "a socket"
+                                                                           : nullptr;
+  if (kind) {
+    throw std::runtime_error(target.string() + ": cannot write: it is " + kind +
+                             ", which an output never replaces (name a new file or a regular one)");
+  }
+  if (S_ISREG(status.st_mode) && (status.st_mode & 0222) == 0) {
+    throw std::runtime_error(target.string() + ": cannot write: the file is read-only (make it writable or remove it)");
+  }
+}
 
 void check_output_path(const std::filesystem::path& path) {
   const std::filesystem::path folder = path.parent_path().empty() ? "." : path.parent_path();

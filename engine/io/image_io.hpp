@@ -42,6 +42,10 @@ inline constexpr size_t max_file_name_bytes = 255;
 // For checking outputs before any work is done; the rename checks again.
 void check_output_path(const std::filesystem::path& path);
 
+// The part of check_output_path that needs no folder scan or trial file, for many outputs in one
+// folder: throws when `path` is a link, a device, a FIFO, a socket or a read-only file.
+void refuse_to_replace(const std::filesystem::path& path);
+
 // A text file (the bench's JSON and CSV), written the same way. Throws std::runtime_error.
 void write_text_file(const std::filesystem::path& path, std::string_view text);
 

@@ -85,6 +85,11 @@ bool complete(const ViewBatch& batch, uint32_t index) {
          (!batch.png || std::filesystem::is_regular_file(batch.png->path(index), error));
 }
 
+// The views this run renders: its shard's, less those complete unless it overwrites.
+bool to_be_rendered(const ViewBatch& batch, uint32_t index) {
+  return batch.shard.holds(index) && (batch.overwrite || !complete(batch, index));
+}
+
 ViewRecord record_of(const ViewBatch& batch, uint32_t index) {
   ViewRecord record;
   record.index = index;
@@ -145,14 +150,18 @@ void check_view_names(const ViewBatch& batch) {
   }
   // A manifest named as a view's file would count that view complete before it rendered. (An EXR
   // and a preview never meet: the front end gives them the extensions .exr and .png.)
+  // A link, a device or a read-only file at a view's name is refused now, not when that view comes
+  // to be written after the ones before it.
   const std::string manifest_name = batch.manifest.filename().string();
   const std::filesystem::path manifest = normal(batch.manifest);
   for (uint32_t index = 0; index < views; ++index) {
+    const bool rendered = to_be_rendered(batch, index);
     for (const auto& [pattern, kind] : patterns) {
       const std::filesystem::path file = pattern->path(index);
       if (file.filename() == manifest_name && normal(file) == manifest) {
         refuse(file, "the manifest", "view " + std::to_string(index) + "'s " + kind);
       }
+      if (rendered) refuse_to_replace(file);
     }
   }
 }
@@ -174,7 +183,7 @@ ViewBatchSummary render_views(Renderer& renderer, const ViewBatch& batch,
   std::vector<uint32_t> to_render;
   std::vector<std::filesystem::path> to_write;
   for (uint32_t index : shard_views) {
-    if (!batch.overwrite && complete(batch, index)) {
+    if (!to_be_rendered(batch, index)) {
       ++summary.skipped;
       // Its files were in place before an interruption could record them.
       if (!manifest.has(index)) manifest.append(record_of(batch, index));

@@ -56,8 +56,10 @@ struct ViewBatchSummary {
 // Throws InputError where the batch's names would have two views, or a view and the manifest,
 // write one file ("d{index}/../v.exr", a manifest named like a view's EXR: views overwritten, or a
 // view counted complete that never rendered), or where its manifest is a file that is no manifest
-// (check_is_a_manifest), or a name over 255 bytes. Every view of every shard is checked.
-// render_views checks this first; a front end calls it before it opens a device.
+// (check_is_a_manifest), or a name over 255 bytes. Every view of every shard is checked. Throws
+// std::runtime_error where a view this run would render has a link, a device, a FIFO or a read-only
+// file at its name (refuse_to_replace). render_views checks this first; a front end calls it before
+// it opens a device.
 void check_view_names(const ViewBatch& batch);
 
 // Creates the output folders, checks that they take files, then renders and writes the shard's
