@@ -9,6 +9,7 @@
 #include <glm/geometric.hpp>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -48,6 +49,26 @@ TEST(GpuReference, TinyFarSphereAndHugeNearSphere) {
   huge.camera = {{0, 2, 0}, {0, 0, -10}, {0, 1, 0}, 70};
   huge.spheres.push_back({{0, -1e5, 0}, 1e5});
   expect_matches_reference(sized(huge, 64, 48), Percentiles::ill_conditioned);
+}
+
+// A field of view of 1e-18 degrees and a focal length of 1e30 pixels put the image plane 1e20 and
+// more away: its vectors' squares overflow float32 unless scaled (CameraBasis::step_scale), and the
+// GPU missed every pixel the reference hit.
+TEST(GpuReference, ExtremelyNarrowFieldsOfView) {
+  Scene scene = sized(default_scene(), 32, 24);
+  Scene by_intrinsics = scene;
+  by_intrinsics.camera.intrinsics = PinholeIntrinsics{1e30, 1e30, 15.5, 11.5};
+  for (const double fovy : {1e-18, 1e-300}) {
+    scene.camera.fovy_degrees = fovy;
+    for (const Scene& narrow : {scene, by_intrinsics}) {
+      SCOPED_TRACE(narrow.camera.intrinsics ? "fx = 1e30" : "fovy = " + std::to_string(fovy));
+      const Frame frame = render(narrow);
+      // The default camera looks at the middle sphere: every pixel sees it.
+      EXPECT_EQ(std::count_if(frame.depth.begin(), frame.depth.end(), [](float depth) { return std::isfinite(depth); }),
+                32 * 24);
+      expect_frame_matches_reference(narrow, frame);
+    }
+  }
 }
 
 TEST(GpuReference, CameraInsideSphere) {

@@ -2,6 +2,7 @@
 
 #include "engine/unit_vector.hpp"
 
+#include <glm/common.hpp>
 #include <glm/geometric.hpp>
 
 #include <algorithm>
@@ -81,6 +82,15 @@ glm::dvec3 least_aligned_axis(const glm::dvec3& direction) {
   return *best;
 }
 
+// CameraBasis::step_scale for the basis's vectors.
+double power_of_two_step_scale(const CameraBasis& basis) {
+  const glm::dvec3 largest = glm::max(glm::max(glm::abs(basis.right_step()), glm::abs(basis.up_step())),
+                                      glm::abs(basis.centre_direction()));
+  int exponent = 0;
+  std::frexp(std::max({largest.x, largest.y, largest.z}), &exponent);
+  return std::ldexp(basis.step_scale, -exponent);
+}
+
 }  // namespace
 
 CameraBasis make_camera_basis(const Camera& camera, uint32_t width, uint32_t height) {
@@ -95,6 +105,7 @@ CameraBasis make_camera_basis(const Camera& camera, uint32_t width, uint32_t hei
     const double half_height = static_cast<double>(height) / std::min(width, height);
     const double half_fovy = camera.fovy_degrees * std::numbers::pi / 360.0;
     basis.plane_distance = half_height / std::tan(half_fovy);
+    basis.step_scale = power_of_two_step_scale(basis);
     return basis;
   }
   // Pixel (i, j)'s centre has uv = (2 i + 1 - W, H - 2 j - 1) / S, S = min(W, H), and the pinhole
@@ -108,6 +119,7 @@ CameraBasis make_camera_basis(const Camera& camera, uint32_t width, uint32_t hei
   basis.plane_distance = 2.0 * k.fx / shorter;
   basis.scale = {1.0, k.fx / k.fy};
   basis.shift = {((width - 1.0) / 2.0 - k.cx) * 2.0 / shorter, -((height - 1.0) / 2.0 - k.cy) * 2.0 * k.fx / (shorter * k.fy)};
+  basis.step_scale = power_of_two_step_scale(basis);
   return basis;
 }
 

@@ -63,11 +63,17 @@ struct CameraBasis {
   glm::dvec2 shift{0.0, 0.0};
 
   // The three vectors the ray direction combines (the shader's: see RayGenParams): uv.x times the
-  // first plus uv.y times the second plus the third. Exactly right, up and -plane_distance forward
-  // for a camera given by fovy.
-  glm::dvec3 right_step() const { return scale.x * right; }
-  glm::dvec3 up_step() const { return scale.y * up; }
-  glm::dvec3 centre_direction() const { return shift.x * right + shift.y * up - plane_distance * forward; }
+  // first plus uv.y times the second plus the third, then normalized. Right, up and -plane_distance
+  // forward for a camera given by fovy, all times step_scale().
+  glm::dvec3 right_step() const { return step_scale * scale.x * right; }
+  glm::dvec3 up_step() const { return step_scale * scale.y * up; }
+  glm::dvec3 centre_direction() const { return step_scale * (shift.x * right + shift.y * up - plane_distance * forward); }
+  // The power of two that brings the vectors' largest component into [0.5, 1) (make_camera_basis
+  // sets it). The direction is normalized, so it changes only their range: a fovy of 1e-18 degrees
+  // puts plane_distance near 1e20, whose square overflows float32 (every GPU ray NaN, every pixel a
+  // miss). A power of two moves only the exponent: float32 rounds an ordinary camera's vectors to
+  // the same rays as without it.
+  double step_scale = 1.0;
   // Unit direction of the primary ray through image-plane point uv.
   glm::dvec3 direction(glm::dvec2 uv) const;
 };
