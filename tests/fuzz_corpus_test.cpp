@@ -3,6 +3,8 @@
 // accepted or rejected with InputError, nothing else.
 #include "engine/scene/obj_loader.hpp"
 #include "engine/scene/scene_loader.hpp"
+#include "engine/views/manifest_record.hpp"
+#include "engine/views/view_list.hpp"
 
 #include <gtest/gtest.h>
 
@@ -56,6 +58,22 @@ TEST(FuzzCorpus, ObjInputsAreAcceptedOrRejectedCleanly) {
     }
   });
   EXPECT_GE(inputs, 3u);
+}
+
+TEST(FuzzCorpus, ViewsInputsAreAcceptedOrRejectedCleanly) {
+  const size_t inputs = for_each_input("views", [](const std::string& text, const std::string& name) { parse_views(text, name); });
+  EXPECT_GE(inputs, 2u);
+}
+
+// Manifest lines give an index or nothing, never an exception; the seeds' complete records give one.
+TEST(FuzzCorpus, ManifestLinesGiveAnIndexOrNothing) {
+  size_t records = 0;
+  const size_t inputs = for_each_input("manifest", [&](const std::string& text, const std::string&) {
+    std::istringstream lines(text);
+    for (std::string line; std::getline(lines, line);) records += manifest_line_index(line).has_value();
+  });
+  EXPECT_GE(inputs, 2u);
+  EXPECT_GE(records, 3u);
 }
 
 }  // namespace

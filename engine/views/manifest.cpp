@@ -3,7 +3,7 @@
 #include "engine/io/image_io.hpp"
 #include "engine/scene/camera_description.hpp"
 #include "engine/scene/scene.hpp"
-#include "engine/views/json_strings.hpp"
+#include "engine/views/manifest_record.hpp"
 
 #include <fcntl.h>
 #include <unistd.h>
@@ -18,8 +18,6 @@
 
 namespace vkray {
 namespace {
-
-using Json = nlohmann::json;
 
 std::string relative_name(const std::filesystem::path& file, const std::filesystem::path& folder) {
   // A manifest named without a folder ("manifest.jsonl", the default) has the parent "", which
@@ -37,33 +35,6 @@ std::string read_file(const std::filesystem::path& path) {
   return contents.str();
 }
 
-// Whether `line` nests arrays and objects deeper than `limit`, counted outside strings.
-bool nested_deeper_than(std::string_view line, int limit) {
-  int depth = 0;
-  JsonStringTracker strings;
-  for (const char c : line) {
-    if (!strings.outside_strings(c)) continue;
-    if ((c == '[' || c == '{') && ++depth > limit) return true;
-    if (c == ']' || c == '}') --depth;
-  }
-  return false;
-}
-
-// A record nests three deep (world_to_camera's rows). A line nested far deeper is no record, and is
-// refused before nlohmann builds it: copying a 200,000-deep value recursed off the stack.
-constexpr int max_record_depth = 8;
-
-// The record a line holds, or nothing.
-std::optional<Json> parse_record(const std::string& line) {
-  if (nested_deeper_than(line, max_record_depth)) return std::nullopt;
-  const Json record = Json::parse(line, nullptr, false);
-  if (!record.is_object() || !record.contains("index") || !record["index"].is_number_unsigned() ||
-      record["index"].get<uint64_t>() > UINT32_MAX || !record.contains("exr") || !record["exr"].is_string()) {
-    return std::nullopt;
-  }
-  return record;
-}
-
 }  // namespace
 
 std::string manifest_line(const ViewRecord& record, const std::filesystem::path& folder) {
@@ -76,12 +47,6 @@ std::string manifest_line(const ViewRecord& record, const std::filesystem::path&
   const nlohmann::ordered_json camera = camera_description(record.camera, record.width, record.height);
   for (auto key = camera.begin(); key != camera.end(); ++key) line[key.key()] = key.value();
   return line.dump();
-}
-
-std::optional<uint32_t> manifest_line_index(const std::string& line) {
-  const auto record = parse_record(line);
-  if (!record) return std::nullopt;
-  return (*record)["index"].get<uint32_t>();
 }
 
 void check_is_a_manifest(const std::filesystem::path& path) {

@@ -11,6 +11,7 @@
 #pragma once
 
 #include "engine/scene/camera.hpp"
+#include "engine/views/manifest_record.hpp"
 
 #include <cstdint>
 #include <filesystem>
@@ -31,9 +32,6 @@ struct ViewRecord {
 
 // One line, without its newline; file names relative to `folder`.
 std::string manifest_line(const ViewRecord& record, const std::filesystem::path& folder);
-
-// The index of a manifest line that is a complete record; nothing for any other line.
-std::optional<uint32_t> manifest_line_index(const std::string& line);
 
 // Throws InputError unless `path` is what a manifest writer may continue or start afresh: nothing
 // yet, or a regular file whose first line is a record (or the start of one, cut off). Any other file
