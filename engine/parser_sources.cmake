@@ -9,5 +9,6 @@ set(VKRAY_PARSER_SOURCES
   ${CMAKE_CURRENT_LIST_DIR}/scene/polygon_triangulation.cpp
   ${CMAKE_CURRENT_LIST_DIR}/scene/scene.cpp
   ${CMAKE_CURRENT_LIST_DIR}/scene/scene_loader.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/scene/text_lines.cpp
   ${CMAKE_CURRENT_LIST_DIR}/views/manifest_record.cpp
   ${CMAKE_CURRENT_LIST_DIR}/views/view_list.cpp)

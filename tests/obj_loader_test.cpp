@@ -4,6 +4,7 @@
 #include "tests/temp_dir_test.hpp"
 #include "engine/scene/obj_loader.hpp"
 #include "engine/scene/polygon_triangulation.hpp"
+#include "engine/scene/text_lines.hpp"
 
 #include <gtest/gtest.h>
 #include <glm/geometric.hpp>
@@ -456,6 +457,23 @@ TEST_F(ObjFileTest, TruncatedFile) {
   const auto path = write("cut.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nf 1 2");
   const std::string message = error_of([&] { vkray::load_obj_file(path); });
   expect_error(message, path.string() + ":5: ", "cut off");
+}
+
+// A file is read a block at a time and checked as it comes: a fault on line 3 of a 64 GB file (a
+// hole after it, which takes no disk) is reported there, where reading the whole file first ran out
+// of memory.
+TEST_F(ObjFileTest, AFaultEarlyInAHugeFileIsFoundWithoutReadingTheRest) {
+  const auto path = write("huge.obj", "v 0 0 0\nv 1 0 0\nf 1 2 x\n");
+  std::filesystem::resize_file(path, uintmax_t{64} << 30);
+  expect_error(error_of([&] { vkray::load_obj_file(path); }), path.string() + ":3: ", "'x' is not an integer vertex index");
+}
+
+// No line of an OBJ file is longer than max_line_bytes: a longer one is refused, not buffered without end.
+TEST_F(ObjFileTest, ALineLongerThanTheLimitIsRefused) {
+  const auto path = write("long.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n# " + std::string(vkray::max_line_bytes, ' ') + "\n");
+  expect_error(error_of([&] { vkray::load_obj_file(path); }), path.string() + ":5: ", "a line longer than 1 MiB");
+  expect_error(text_error("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n# " + std::string(vkray::max_line_bytes, ' ') + "\n"), "t.obj:5: ",
+               "a line longer than 1 MiB");
 }
 
 TEST_F(ObjFileTest, MissingFile) {

@@ -148,6 +148,25 @@ std::string read(const std::filesystem::path& path) {
   return text.str();
 }
 
+class ViewsFileTest : public test::TempDirTest {};
+
+// JSON Lines are read and checked a line at a time: a fault on line 2 of a 64 GB file (a hole after
+// it, which takes no disk) is reported there, where reading the whole file first ran out of memory.
+TEST_F(ViewsFileTest, AFaultEarlyInHugeJsonLinesIsFoundWithoutReadingTheRest) {
+  const auto path = write("huge.jsonl", "{\"from\": [0, 1, 5], \"to\": [0, 0, 0], \"fovy\": 40}\n{\"from\": [0, 1, 5]}\n");
+  std::filesystem::resize_file(path, uintmax_t{64} << 30);
+  expect_error(error_of([&] { load_views(path); }), path.string() + ":2: ", "missing required key 'to'");
+}
+
+// A JSON array is parsed whole, so one past 1 GiB is refused before a byte of it is read.
+TEST_F(ViewsFileTest, AJsonArrayOverAGibibyteIsRefusedUnread) {
+  const auto path = write("huge.json", "\xEF\xBB\xBF\n [{\"from\": [0, 1, 5], \"to\": [0, 0, 0], \"fovy\": 40},\n");
+  std::filesystem::resize_file(path, (uintmax_t{1} << 30) + 1);
+  expect_error(error_of([&] { load_views(path); }), path.string() + ": ", "write the cameras one a line (JSON Lines)");
+  std::filesystem::resize_file(path, 200);  // the same start and a hole, below the limit: read, and refused
+  expect_error(error_of([&] { load_views(path); }), path.string() + ":3:", "a NUL byte");
+}
+
 TEST_F(ManifestTest, ACutOffLastLineIsDroppedAndWritingGoesOn) {
   const auto path = dir_ / "manifest.jsonl";
   {

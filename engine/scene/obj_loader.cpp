@@ -1,15 +1,14 @@
 #include "engine/scene/obj_loader.hpp"
 
 #include "engine/scene/polygon_triangulation.hpp"
-#include "engine/scene/text_start.hpp"
+#include "engine/scene/text_lines.hpp"
 
 
 #include <algorithm>
 #include <array>
 #include <charconv>
 #include <cmath>
-#include <fstream>
-#include <sstream>
+#include <functional>
 #include <vector>
 
 namespace vkray {
@@ -176,34 +175,26 @@ std::string check_statement(const std::vector<std::string_view>& tokens, Element
   return {};
 }
 
-ParsedObj parse_obj_text(std::string_view text, const std::string& name) {
-  ParsedObj parsed;
-  ElementCounts counts;
-  std::vector<std::string_view> tokens;
-  size_t line_number = 0;
-  size_t pos = 0;
-  while (pos < text.size()) {
-    ++line_number;
-    const size_t newline = text.find('\n', pos);
-    const bool terminated = newline != std::string_view::npos;
-    std::string_view line = text.substr(pos, terminated ? newline - pos : std::string_view::npos);
-    pos = terminated ? newline + 1 : text.size();
-    if (const size_t hash = line.find('#'); hash != std::string_view::npos) line = line.substr(0, hash);
-    split_tokens(line, tokens);
-    if (tokens.empty()) continue;
-    if (const std::string error = check_statement(tokens, counts, parsed); !error.empty()) {
-      throw InputError(name + ":" + std::to_string(line_number) + ": " + error +
-                       (terminated ? "" : " (the file ends without a newline: cut off in the middle of this line?)"));
-    }
+// One line's statement, checked and added to `parsed`; throws InputError naming the line.
+void read_obj_line(const TextLine& line, const std::string& name, ElementCounts& counts, ParsedObj& parsed,
+                   std::vector<std::string_view>& tokens) {
+  std::string_view content = line.text;
+  if (const size_t hash = content.find('#'); hash != std::string_view::npos) content = content.substr(0, hash);
+  split_tokens(content, tokens);
+  if (tokens.empty()) return;
+  if (const std::string error = check_statement(tokens, counts, parsed); !error.empty()) {
+    throw InputError(name + ":" + std::to_string(line.number) + ": " + error +
+                     (line.terminated ? "" : " (the file ends without a newline: cut off in the middle of this line?)"));
   }
-  if (counts.positions == 0) throw InputError(name + ": no vertices ('v' lines) found");
-  return parsed;
 }
 
-}  // namespace
-
-Mesh load_obj_text(std::string_view text, const std::string& name) {
-  ParsedObj parsed = parse_obj_text(without_byte_order_mark(text), name);
+// The mesh of an OBJ given line by line to `read_lines`.
+Mesh parse_obj(const std::string& name, const std::function<void(const LineHandler&)>& read_lines) {
+  ParsedObj parsed;
+  ElementCounts counts;
+  std::vector<std::string_view> tokens;  // reused from line to line
+  read_lines([&](const TextLine& line) { read_obj_line(line, name, counts, parsed, tokens); });
+  if (counts.positions == 0) throw InputError(name + ": no vertices ('v' lines) found");
   Mesh& mesh = parsed.mesh;
   if (mesh.triangles.empty()) throw InputError(name + ": no faces ('f' lines) found");
   for (auto* corners : {&mesh.normal_corners, &mesh.texcoord_corners}) {
@@ -212,17 +203,14 @@ Mesh load_obj_text(std::string_view text, const std::string& name) {
   return std::move(mesh);
 }
 
+}  // namespace
+
+Mesh load_obj_text(std::string_view text, const std::string& name) {
+  return parse_obj(name, [&](const LineHandler& handle) { for_each_line(text, name, handle); });
+}
+
 Mesh load_obj_file(const std::filesystem::path& path) {
-  std::error_code error;
-  if (!std::filesystem::is_regular_file(path, error)) {
-    throw InputError(path.string() + (std::filesystem::exists(path, error) ? ": is not a regular file" : ": no such OBJ file"));
-  }
-  std::ifstream file(path, std::ios::binary);
-  if (!file) throw InputError(path.string() + ": cannot open OBJ file");
-  std::ostringstream contents;
-  contents << file.rdbuf();
-  if (file.bad()) throw InputError(path.string() + ": cannot read OBJ file");
-  return load_obj_text(contents.str(), path.string());
+  return parse_obj(path.string(), [&](const LineHandler& handle) { for_each_file_line(path, "OBJ file", handle); });
 }
 
 }  // namespace vkray

@@ -1,6 +1,7 @@
 #include "engine/views/view_list.hpp"
 
 #include "engine/scene/scene_loader.hpp"
+#include "engine/scene/text_lines.hpp"
 #include "engine/scene/text_start.hpp"
 #include "engine/views/json_strings.hpp"
 
@@ -10,6 +11,7 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <fstream>
 #include <numbers>
 
 namespace vkray {
@@ -53,6 +55,43 @@ std::vector<Element> array_elements(std::string_view text) {
   return elements;
 }
 
+// A JSON array is parsed whole (nlohmann finds its syntax errors): past this size a views file has to
+// be JSON Lines, whose lines are read and checked one at a time. 1 GiB holds millions of cameras.
+constexpr uintmax_t max_views_array_bytes = uintmax_t{1} << 30;
+
+// One line of a JSON Lines views file: a camera, or nothing where it is blank.
+void add_json_line_view(const TextLine& line, const std::string& name, std::vector<Camera>& views) {
+  if (line.text.find_first_not_of(" \t\r") == std::string_view::npos) return;
+  const std::string where = name + ":" + std::to_string(line.number);
+  refuse_nul_bytes(line.text, where);
+  if (!nlohmann::json::accept(line.text)) {
+    throw InputError(where + ": invalid JSON (JSON Lines: one camera object a line, or a JSON array of them)");
+  }
+  views.push_back(parse_camera_object(line.text, where));
+}
+
+std::vector<Camera> with_a_camera(std::vector<Camera> views, const std::string& name) {
+  if (views.empty()) throw InputError(name + ": no cameras (a JSON array of camera objects, or one a line)");
+  return views;
+}
+
+// Whether the file's first character but white space (and a byte-order mark) is '[', read up to
+// that character alone.
+bool starts_a_json_array(const std::filesystem::path& path) {
+  std::error_code error;
+  if (!std::filesystem::is_regular_file(path, error)) return false;  // for_each_file_line says what it is
+  std::ifstream file(path, std::ios::binary);
+  std::string start(4096, '\0');
+  for (bool first_block = true; file; first_block = false) {
+    file.read(start.data(), static_cast<std::streamsize>(start.size()));
+    std::string_view block(start.data(), static_cast<size_t>(file.gcount()));
+    if (first_block) block = without_byte_order_mark(block);
+    const size_t first = block.find_first_not_of(" \t\r\n");
+    if (first != std::string_view::npos) return block[first] == '[';
+  }
+  return false;
+}
+
 // `direction` turned by `angle` radians about the unit `axis` (Rodrigues' formula).
 glm::dvec3 rotated(const glm::dvec3& direction, const glm::dvec3& axis, double angle) {
   return direction * std::cos(angle) + glm::cross(axis, direction) * std::sin(angle) +
@@ -63,37 +102,35 @@ glm::dvec3 rotated(const glm::dvec3& direction, const glm::dvec3& axis, double a
 
 std::vector<Camera> parse_views(std::string_view text, const std::string& name) {
   text = without_byte_order_mark(text);
-  refuse_nul_bytes(text, name);
-  std::vector<Camera> views;
   const size_t first = text.find_first_not_of(" \t\r\n");
-  if (first != std::string_view::npos && text[first] == '[') {
-    if (!nlohmann::json::accept(text)) {
-      parse_camera_object(text, name);  // throws with the line and column of the syntax error
-    }
-    for (const Element& element : array_elements(text)) {
-      views.push_back(parse_camera_object(text.substr(element.begin, element.end - element.begin),
-                                          name + ":" + std::to_string(element.line)));
-    }
-  } else {
-    size_t line = 0;
-    for (size_t start = 0; start < text.size();) {
-      const size_t end = std::min(text.find('\n', start), text.size());
-      const std::string_view content = text.substr(start, end - start);
-      ++line;
-      start = end + 1;
-      if (content.find_first_not_of(" \t\r") == std::string_view::npos) continue;
-      const std::string where = name + ":" + std::to_string(line);
-      if (!nlohmann::json::accept(content)) {
-        throw InputError(where + ": invalid JSON (JSON Lines: one camera object a line, or a JSON array of them)");
-      }
-      views.push_back(parse_camera_object(content, where));
-    }
+  if (first == std::string_view::npos || text[first] != '[') {
+    std::vector<Camera> views;
+    for_each_line(text, name, [&](const TextLine& line) { add_json_line_view(line, name, views); });
+    return with_a_camera(std::move(views), name);
   }
-  if (views.empty()) throw InputError(name + ": no cameras (a JSON array of camera objects, or one a line)");
-  return views;
+  refuse_nul_bytes(text, name);
+  if (!nlohmann::json::accept(text)) {
+    parse_camera_object(text, name);  // throws with the line and column of the syntax error
+  }
+  std::vector<Camera> views;
+  for (const Element& element : array_elements(text)) {
+    views.push_back(parse_camera_object(text.substr(element.begin, element.end - element.begin),
+                                        name + ":" + std::to_string(element.line)));
+  }
+  return with_a_camera(std::move(views), name);
 }
 
 std::vector<Camera> load_views(const std::filesystem::path& path) {
+  if (!starts_a_json_array(path)) {
+    std::vector<Camera> views;
+    for_each_file_line(path, "views file", [&](const TextLine& line) { add_json_line_view(line, path.string(), views); });
+    return with_a_camera(std::move(views), path.string());
+  }
+  std::error_code error;
+  if (std::filesystem::file_size(path, error) > max_views_array_bytes) {
+    throw InputError(path.string() + ": a JSON array of over " + std::to_string(max_views_array_bytes >> 30) +
+                     " GiB, which is parsed whole: write the cameras one a line (JSON Lines), read as they come");
+  }
   return parse_views(read_input_file(path, "views file"), path.string());
 }
 
