@@ -94,6 +94,14 @@ Camera camera_from(py::handle camera, const Camera& base) {
                .cast<std::string>();
   } catch (const py::error_already_set& error) {
     if (!error.matches(PyExc_ValueError)) throw;
+    // json.dumps says only "Out of range float values are not JSON compliant": find the key.
+    for (const auto& [key, value] : camera.cast<py::dict>()) {
+      try {
+        py::module_::import("json").attr("dumps")(value, py::arg("default") = to_list, py::arg("allow_nan") = false);
+      } catch (const py::error_already_set&) {
+        throw InputError("camera: " + py::str(key).cast<std::string>() + ": every number must be finite");
+      }
+    }
     throw InputError("camera: every number must be finite");
   }
   return parse_camera_override(json, "camera", base);

@@ -1371,6 +1371,17 @@ TEST_F(CliTest, ALinkAmongLaterViewsIsRefusedBeforeAnyViewRenders) {
   EXPECT_TRUE(fs::is_symlink(dir_ / "out" / "v-2.exr"));
 }
 
+// A mirrored world_to_camera is exactly orthogonal: the message says it mirrors, with no "off by
+// 0.000000"; a scaled one says by how much, in two digits.
+TEST_F(CliTest, AMatrixThatIsNoRotationIsToldWithoutNoise) {
+  RunResult run = vkray({"render", "--camera", R"({"world_to_camera": [[-1, 0, 0, 0], [0, -1, 0, 0], [0, 0, -1, 5], [0, 0, 0, 1]]})"});
+  expect_error(run, 2, {"world_to_camera", "it mirrors (det R < 0)"});
+  EXPECT_EQ(run.err.find("off by"), std::string::npos) << run.err;
+  run = vkray({"render", "--camera", R"({"world_to_camera": [[1.5, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 5], [0, 0, 0, 1]]})"});
+  expect_error(run, 2, {"world_to_camera", "R R^T is off by 1.2"});
+  EXPECT_EQ(run.err.find("mirrors"), std::string::npos) << run.err;
+}
+
 TEST_F(CliTest, DuplicateSceneKeysAreRefused) {
   write("twice.json", R"({"camera": {"from": [0, 0, 5], "to": [0, 0, 0], "fovy": 40, "fovy": 50}})");
   expect_error(vkray({"render", "twice.json"}), 2, {"twice.json", "camera.fovy", "'fovy'", "twice"});

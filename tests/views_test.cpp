@@ -58,7 +58,7 @@ TEST(Views, ErrorsNameTheLine) {
   expect_error(error_of([&] { parse_views("[\n" + good + ",\n" + R"({"from": [1, 2, 3], "to": [1, 2, 3], "fovy": 30})" + "]", "v.json"); }),
                "v.json:3: ", "must differ");
   expect_error(error_of([&] { parse_views("[\n" + good + ",\n" + good, "v.json"); }), "v.json:", "invalid JSON");
-  expect_error(error_of([&] { parse_views(good + "\n{\"from\": [1,\n", "v.jsonl"); }), "v.jsonl:2: ", "invalid JSON");
+  expect_error(error_of([&] { parse_views(good + "\n{\"from\": [1,\n", "v.jsonl"); }), "v.jsonl:2:13: ", "invalid JSON: syntax error");
   expect_error(error_of([] { parse_views("[]", "v.json"); }), "v.json: ", "no cameras");
   expect_error(error_of([&] { parse_views("[\n" + good + "]" + std::string(1, '\0') + "junk", "v.json"); }), "v.json:2:",
                "a NUL byte");  // nlohmann would stop at it, silently

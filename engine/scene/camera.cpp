@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <numbers>
 
 namespace vkray {
@@ -149,8 +150,12 @@ Camera with_world_to_camera(Camera camera, const Matrix4& matrix, std::string& f
   }
   const double determinant = glm::dot(rows[0], glm::cross(rows[1], rows[2]));
   if (!(deviation <= tolerance) || !(determinant > 0.0)) {
-    fault = "the upper-left 3 x 3 part must be a rotation (R R^T = I within 1e-6, det R = 1): it is off by " +
-            std::to_string(deviation) + (determinant > 0.0 ? "" : ", and it mirrors (det R < 0)");
+    // The deviation in two digits, and only where it is over the tolerance: a mirror is exact.
+    char off_by[32];
+    std::snprintf(off_by, sizeof(off_by), "%.2g", deviation);
+    fault = "the upper-left 3 x 3 part must be a rotation (R R^T = I within 1e-6, det R = 1): " +
+            (deviation <= tolerance ? std::string("it mirrors (det R < 0)")
+                                    : "R R^T is off by " + std::string(off_by) + (determinant > 0.0 ? "" : ", and it mirrors (det R < 0)"));
     return camera;
   }
   // p_camera = R p + t: the camera sits at -R^T t, looks along R's third row, and its up is -R's second.

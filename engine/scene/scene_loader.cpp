@@ -339,9 +339,9 @@ Mesh parse_mesh(const Node& node, const std::filesystem::path& base_dir, const O
 }
 
 // 1-based line and column of the 0-based byte offset `byte`.
-std::string line_and_column(std::string_view text, size_t byte) {
+std::string line_and_column(std::string_view text, size_t byte, size_t first_line = 1) {
   byte = std::min(byte, text.size());
-  const size_t line = 1 + static_cast<size_t>(std::count(text.begin(), text.begin() + static_cast<long>(byte), '\n'));
+  const size_t line = first_line + static_cast<size_t>(std::count(text.begin(), text.begin() + static_cast<long>(byte), '\n'));
   const size_t line_start = byte == 0 ? std::string_view::npos : text.rfind('\n', byte - 1);
   const size_t column = 1 + (line_start == std::string_view::npos ? byte : byte - line_start - 1);
   return std::to_string(line) + ":" + std::to_string(column);
@@ -397,18 +397,10 @@ class JsonPathTracker : public Json::json_sax_t {
 
 // Parses a whole JSON document; every error names `name` and the line and column or JSON path.
 Json parse_document(std::string_view json_text, const std::string& name) {
-  refuse_nul_bytes(json_text, name);
+  refuse_invalid_json(json_text, name);
   Json root;
   try {
     root = Json::parse(json_text);
-  } catch (const Json::parse_error& error) {
-    // nlohmann's message starts with "[json.exception.parse_error.101] parse error at line L, column C: ";
-    // keep the part after "parse error" and put the location in our own form.
-    std::string detail = error.what();
-    if (const size_t colon = detail.find(": ", detail.find("parse error")); colon != std::string::npos) {
-      detail = detail.substr(colon + 2);
-    }
-    throw InputError(name + ":" + line_and_column(json_text, error.byte == 0 ? 0 : error.byte - 1) + ": invalid JSON: " + detail);
   } catch (const Json::out_of_range& error) {
     JsonPathTracker tracker;
     Json::sax_parse(json_text, &tracker);
@@ -427,9 +419,34 @@ Json parse_document(std::string_view json_text, const std::string& name) {
 
 }  // namespace
 
-void refuse_nul_bytes(std::string_view text, const std::string& name) {
+void refuse_nul_bytes(std::string_view text, const std::string& name, size_t first_line) {
   if (const size_t nul = text.find('\0'); nul != std::string_view::npos) {
-    throw InputError(name + ":" + line_and_column(text, nul) + ": a NUL byte: a JSON file is text, and the parser would stop there");
+    throw InputError(name + ":" + line_and_column(text, nul, first_line) +
+                     ": a NUL byte: a JSON file is text, and the parser would stop there");
+  }
+}
+
+void refuse_invalid_json(std::string_view text, const std::string& name, size_t first_line) {
+  refuse_nul_bytes(text, name, first_line);
+  if (Json::accept(text)) return;
+  try {
+    const Json ignored = Json::parse(text);  // reached only for text accept() refused: it throws
+  } catch (const Json::parse_error& error) {
+    // nlohmann's message starts with "[json.exception.parse_error.101] parse error at line L, column C: ";
+    // keep the part after "parse error" and put the location in our own form.
+    std::string detail = error.what();
+    if (const size_t colon = detail.find(": ", detail.find("parse error")); colon != std::string::npos) {
+      detail = detail.substr(colon + 2);
+    }
+    const size_t at = error.byte == 0 ? 0 : std::min(error.byte - 1, text.size());
+    // Python's json.dumps writes NaN, Infinity and -Infinity (allow_nan=True), which JSON has not:
+    // the parser stops at their first letter.
+    if (at < text.size() && (text[at] == 'N' || text[at] == 'I')) {
+      detail += " (JSON has no NaN or Infinity, which Python's json.dumps writes: give finite numbers)";
+    }
+    throw InputError(name + ":" + line_and_column(text, at, first_line) + ": invalid JSON: " + detail);
+  } catch (const Json::out_of_range&) {
+    // A number beyond a double (1e999): parse_document names its JSON path.
   }
 }
 

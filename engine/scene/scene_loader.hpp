@@ -22,8 +22,13 @@ Scene load_scene_file(const std::filesystem::path& path);
 std::string read_input_file(const std::filesystem::path& path, const std::string& what);
 
 // Throws InputError naming the line and column of the first NUL byte in JSON `text`: nlohmann's
-// parser takes a NUL for the end of the text, so what follows would be dropped unread.
-void refuse_nul_bytes(std::string_view text, const std::string& name);
+// parser takes a NUL for the end of the text, so what follows would be dropped unread. `text` starts
+// on line `first_line` of the file `name` (a line of JSON Lines starts further down).
+void refuse_nul_bytes(std::string_view text, const std::string& name, size_t first_line = 1);
+
+// Throws InputError "<name>:<line>:<column>: invalid JSON: <reason>" where `text` is no JSON (a NUL
+// byte included), saying so where the reason is a NaN or Infinity, which JSON has not.
+void refuse_invalid_json(std::string_view text, const std::string& name, size_t first_line = 1);
 
 // Parses scene JSON held in memory. `name` stands for the file in messages; relative OBJ paths
 // resolve against `base_dir` and load through `load_obj`.

@@ -62,12 +62,12 @@ constexpr uintmax_t max_views_array_bytes = uintmax_t{1} << 30;
 // One line of a JSON Lines views file: a camera, or nothing where it is blank.
 void add_json_line_view(const TextLine& line, const std::string& name, std::vector<Camera>& views) {
   if (line.text.find_first_not_of(" \t\r") == std::string_view::npos) return;
-  const std::string where = name + ":" + std::to_string(line.number);
-  refuse_nul_bytes(line.text, where);
-  if (!nlohmann::json::accept(line.text)) {
-    throw InputError(where + ": invalid JSON (JSON Lines: one camera object a line, or a JSON array of them)");
+  try {
+    refuse_invalid_json(line.text, name, line.number);
+  } catch (const InputError& error) {
+    throw InputError(std::string(error.what()) + " (JSON Lines: one camera object a line, or a JSON array of them)");
   }
-  views.push_back(parse_camera_object(line.text, where));
+  views.push_back(parse_camera_object(line.text, name + ":" + std::to_string(line.number)));
 }
 
 std::vector<Camera> with_a_camera(std::vector<Camera> views, const std::string& name) {
@@ -108,10 +108,7 @@ std::vector<Camera> parse_views(std::string_view text, const std::string& name) 
     for_each_line(text, name, [&](const TextLine& line) { add_json_line_view(line, name, views); });
     return with_a_camera(std::move(views), name);
   }
-  refuse_nul_bytes(text, name);
-  if (!nlohmann::json::accept(text)) {
-    parse_camera_object(text, name);  // throws with the line and column of the syntax error
-  }
+  refuse_invalid_json(text, name);
   std::vector<Camera> views;
   for (const Element& element : array_elements(text)) {
     views.push_back(parse_camera_object(text.substr(element.begin, element.end - element.begin),

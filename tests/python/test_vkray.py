@@ -458,8 +458,8 @@ def test_more_bad_scenes_raise_value_error_with_the_place(arguments, message):
 @pytest.mark.parametrize("call, message", [
     (lambda r: r.cast_rays(np.array([[0, 0, 0, np.nan, 0, 1]])), "ray 0: the direction is not finite"),
     (lambda r: r.cast_rays(np.array([[0, 0, 0, 0, 0, 1]], dtype=complex)), "rays: expected an array of numbers"),
-    (lambda r: r.render({"from": [0, np.nan, 5]}), "camera: every number must be finite"),
-    (lambda r: r.render({"fovy": float("inf")}), "camera: every number must be finite"),
+    (lambda r: r.render({"from": [0, np.nan, 5]}), "camera: from: every number must be finite"),
+    (lambda r: r.render({"to": [0, 0, 0], "fovy": float("inf")}), "camera: fovy: every number must be finite"),
     (lambda r: r.render(aovs=3), "aovs: expected a list of output names or one string"),
 ])
 def test_more_bad_calls_raise_value_error_with_the_place(default_renderer, call, message):

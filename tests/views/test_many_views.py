@@ -231,8 +231,24 @@ def test_a_bad_camera_is_named_by_its_line(tmp_path):
     (tmp_path / "broken.jsonl").write_text(lines[0] + "\n" + lines[1][:-3] + "\n")
     result = vkray("render", *SIZE, "--views", str(tmp_path / "broken.jsonl"), "-o", str(tmp_path / "v{index}.exr"),
                    check=False)
-    assert result.returncode == 2 and "broken.jsonl:2: invalid JSON" in result.stderr
+    assert result.returncode == 2 and re.search(r"broken.jsonl:2:\d+: invalid JSON: syntax error", result.stderr)
     assert not views_in(tmp_path)
+
+
+def test_json_lines_errors_give_line_column_and_reason(tmp_path):
+    """What Python's json.dumps writes for a NaN, and a trailing comma: the line, the column and why,
+    as a JSON array gets them."""
+    good = json.dumps({"from": [0, 1, 5], "to": [0, 0, 0], "fovy": 40})
+    nan = json.dumps({"from": [0, 1, float("nan")], "to": [0, 0, 0], "fovy": 40})
+    comma = good[:-1] + ", }"
+    for name, line, column, reason in [
+            ("nan.jsonl", nan, nan.index("NaN") + 1, "JSON has no NaN or Infinity"),
+            ("comma.jsonl", comma, len(comma), "unexpected '}'; expected string literal")]:
+        (tmp_path / name).write_text(good + "\n" + line + "\n")
+        result = vkray("render", *SIZE, "--views", str(tmp_path / name), "-o", str(tmp_path / "v{index}.exr"), check=False)
+        assert result.returncode == 2, result.stderr
+        assert result.stderr.startswith(f"vkray: {tmp_path / name}:2:{column}: invalid JSON: "), result.stderr
+        assert reason in result.stderr and result.stderr.count("\n") == 1, result.stderr
 
 
 def test_an_output_name_without_the_index_is_refused_before_rendering(tmp_path):
