@@ -17,15 +17,16 @@ Action add_manifest_command(CLI::App& app) {
   auto parts = std::make_shared<std::vector<std::string>>();
   auto output = std::make_shared<std::string>();
   merge->add_option("parts", *parts, "The shards' manifest parts (manifest-shard-*.jsonl)")->required();
-  merge->add_option("-o,--output", *output, "The merged manifest, in the parts' folder (its file names are relative to it)")
+  merge->add_option("-o,--output", *output, "The merged manifest, in any folder: its file names are made relative to it")
       ->required();
   return [parts, output] {
     const std::vector<std::filesystem::path> paths(parts->begin(), parts->end());
-    const std::string merged = merge_manifests(paths);
+    const std::string merged = merge_manifests(paths, *output);
     write_text_file(*output, merged);
     size_t views = 0;
     for (char c : merged) views += c == '\n';
-    std::printf("vkray: %s holds %zu views from %zu parts\n", output->c_str(), views, paths.size());
+    std::printf("vkray: %s holds %zu view%s from %zu part%s\n", output->c_str(), views, views == 1 ? "" : "s", paths.size(),
+                paths.size() == 1 ? "" : "s");
     return 0;
   };
 }

@@ -217,7 +217,7 @@ TEST_F(ManifestTest, ALineNestedTooDeepIsNoRecordAndNoCrash) {
   const std::string deep = R"({"index": 0, "exr": "v0.exr", "x": )" + std::string(200'000, '[') + std::string(200'000, ']') + "}";
   EXPECT_FALSE(manifest_line_index(deep));
   const auto path = write("deep.jsonl", deep + "\n");
-  expect_error(error_of([&] { merge_manifests({path}); }), path.string() + ":1: ", "not a view record");
+  expect_error(error_of([&] { merge_manifests({path}, dir_ / "merged.jsonl"); }), path.string() + ":1: ", "not a view record");
   ViewRecord brackets = record(0, dir_);
   brackets.exr = dir_ / "[[[[[[[[[[[[.exr";  // inside a string: no nesting
   EXPECT_EQ(manifest_line_index(manifest_line(brackets, dir_)), 0u);
@@ -226,19 +226,19 @@ TEST_F(ManifestTest, ALineNestedTooDeepIsNoRecordAndNoCrash) {
 TEST_F(ManifestTest, MergeSortsJoinsCopiesAndRefusesConflicts) {
   const auto a = write("a.jsonl", manifest_line(record(2, dir_), dir_) + "\n" + manifest_line(record(0, dir_), dir_) + "\n");
   const auto b = write("b.jsonl", manifest_line(record(1, dir_), dir_) + "\n" + manifest_line(record(2, dir_), dir_) + "\n");
-  EXPECT_EQ(merge_manifests({a, b}), manifest_line(record(0, dir_), dir_) + "\n" + manifest_line(record(1, dir_), dir_) +
+  EXPECT_EQ(merge_manifests({a, b}, dir_ / "merged.jsonl"), manifest_line(record(0, dir_), dir_) + "\n" + manifest_line(record(1, dir_), dir_) +
                                          "\n" + manifest_line(record(2, dir_), dir_) + "\n");
   ViewRecord other = record(1, dir_);
   other.camera.fovy_degrees = 10;
   const auto c = write("c.jsonl", "\n" + manifest_line(other, dir_) + "\n");
-  expect_error(error_of([&] { merge_manifests({a, b, c}); }), c.string() + ":2: ", "differs from its record at " + b.string() + ":1");
+  expect_error(error_of([&] { merge_manifests({a, b, c}, dir_ / "merged.jsonl"); }), c.string() + ":2: ", "differs from its record at " + b.string() + ":1");
   const auto d = write("d.jsonl", "{\"index\": 3}\n");
-  expect_error(error_of([&] { merge_manifests({d}); }), d.string() + ":1: ", "not a view record");
+  expect_error(error_of([&] { merge_manifests({d}, dir_ / "merged.jsonl"); }), d.string() + ":1: ", "not a view record");
   // An index past uint32 is no view's (it was cut to its low bits: "view 0 differs").
   const std::string line = manifest_line(record(0, dir_), dir_);
   const auto e = write("e.jsonl", "{\"index\":4294967296" + line.substr(line.find(',')) + "\n");
-  expect_error(error_of([&] { merge_manifests({a, e}); }), e.string() + ":1: ", "not a view record");
-  expect_error(error_of([&] { merge_manifests({dir_}); }), dir_.string() + ": ", "is a folder, not a manifest");
+  expect_error(error_of([&] { merge_manifests({a, e}, dir_ / "merged.jsonl"); }), e.string() + ":1: ", "not a view record");
+  expect_error(error_of([&] { merge_manifests({dir_}, dir_ / "merged.jsonl"); }), dir_.string() + ": ", "is a folder, not a manifest");
 }
 
 }  // namespace

@@ -115,7 +115,27 @@ void ManifestWriter::append(const ViewRecord& record) {
   recorded_.insert(record.index);
 }
 
-std::string merge_manifests(const std::vector<std::filesystem::path>& parts) {
+namespace {
+
+// `line` with its file names made relative to `to` instead of `from` (a merged manifest written to
+// another folder than its part's); the line itself where the two folders are one.
+std::string with_names_moved(const std::string& line, const std::filesystem::path& from, const std::filesystem::path& to) {
+  const auto absolute = [](const std::filesystem::path& folder) {
+    return std::filesystem::absolute(folder.empty() ? std::filesystem::path(".") : folder).lexically_normal();
+  };
+  if (absolute(from) == absolute(to)) return line;
+  nlohmann::ordered_json record = nlohmann::ordered_json::parse(line);  // a record: manifest_line_index took it
+  for (const char* key : {"exr", "png"}) {
+    if (record.contains(key) && record[key].is_string()) {
+      record[key] = relative_name(from / record[key].get<std::string>(), to);
+    }
+  }
+  return record.dump();
+}
+
+}  // namespace
+
+std::string merge_manifests(const std::vector<std::filesystem::path>& parts, const std::filesystem::path& output) {
   std::map<uint32_t, std::pair<std::string, std::string>> records;  // index -> line, where it came from
   for (const auto& part : parts) {
     std::error_code error;
@@ -132,8 +152,9 @@ std::string merge_manifests(const std::vector<std::filesystem::path>& parts) {
       const std::string where = part.string() + ":" + std::to_string(line_number);
       const auto index = manifest_line_index(line);
       if (!index) throw InputError(where + ": not a view record");
-      const auto [found, inserted] = records.emplace(*index, std::pair{line, where});
-      if (!inserted && found->second.first != line) {
+      const std::string moved = with_names_moved(line, part.parent_path(), output.parent_path());
+      const auto [found, inserted] = records.emplace(*index, std::pair{moved, where});
+      if (!inserted && found->second.first != moved) {
         throw InputError(where + ": view " + std::to_string(*index) + " differs from its record at " + found->second.second);
       }
     }

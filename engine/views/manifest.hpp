@@ -61,8 +61,9 @@ class ManifestWriter {
 };
 
 // The parts' records in index order, each index once (identical copies of a record merge; two
-// different records of one index are an error), as one manifest's text. Throws InputError naming
-// the file and line of a line that is no record, and of a conflicting one.
-std::string merge_manifests(const std::vector<std::filesystem::path>& parts);
+// different records of one index are an error), as the text of the manifest `output`: file names
+// relative to its folder, rewritten where a part lies in another. Throws InputError naming the
+// file and line of a line that is no record, and of a conflicting one.
+std::string merge_manifests(const std::vector<std::filesystem::path>& parts, const std::filesystem::path& output);
 
 }  // namespace vkray

@@ -114,6 +114,27 @@ def test_shards_together_are_the_whole_run(whole_run, tmp_path):
     assert manifest_records(tmp_path / "manifest.jsonl") == manifest_records(whole_run / "manifest.jsonl")
 
 
+def test_a_manifest_merged_into_another_folder_names_files_that_open(tmp_path):
+    """Its records' file names are rewritten relative to the merged manifest, wherever it is."""
+    renders = tmp_path / "renders"
+    for shard in range(2):
+        vkray("render", *SIZE, "--orbit", "4", "-o", str(renders / "v-{index}.exr"), "--preview", str(renders / "v-{index}.png"),
+              "--shard", f"{shard}/2")
+    parts = sorted(str(renders / name) for name in os.listdir(renders) if name.startswith("manifest-shard-"))
+    for merged in (tmp_path / "elsewhere" / "deeper" / "all.jsonl", tmp_path / "all.jsonl"):
+        merged.parent.mkdir(parents=True, exist_ok=True)
+        result = vkray("manifest", "merge", *parts, "-o", str(merged))
+        assert result.stdout == f"vkray: {merged} holds 4 views from 2 parts\n"
+        records = manifest_records(merged)
+        assert [record["index"] for record in records] == [0, 1, 2, 3]
+        for record in records:
+            for key in ("exr", "png"):
+                assert (merged.parent / record[key]).resolve() == (renders / f"v-{record['index']}.{key}").resolve()
+                assert (merged.parent / record[key]).is_file()
+    result = vkray("manifest", "merge", parts[0], "-o", str(tmp_path / "one.jsonl"))
+    assert result.stdout.endswith("holds 2 views from 1 part\n")
+
+
 def test_a_killed_run_started_again_completes_the_set(tmp_path):
     command = [VKRAY, "render", "--width", "160", "--height", "120", "--orbit", "120", "-o", str(tmp_path / "v-{index:05}.exr")]
     run = subprocess.Popen(command, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
