@@ -6,6 +6,11 @@
 #   sbatch docs/slurm-views.sh
 #   vkray manifest merge "$OUT"/manifest-shard-*-of-*.jsonl -o "$OUT"/manifest.jsonl
 #
+# Options of `vkray render` after the script's name (and a "--") go to every task, in place of the
+# defaults below for what they set (the views, the size, -o):
+#
+#   sbatch docs/slurm-views.sh -- --sphere 200 --aov depth,planar-depth --width 1024 --height 1024
+#
 # A task that is requeued or run again renders only the views it has not finished. The settings
 # below may also be given in the environment (sbatch --export). VKRAY is the relocatable bundle's
 # bin/vkray unpacked on the shared file system (README, "Installing on a GPU server"), e.g.
@@ -21,5 +26,20 @@ OUT="${OUT:-views}"
 VIEWS="${VIEWS:-100}"
 WIDTH="${WIDTH:-1920}"
 HEIGHT="${HEIGHT:-1080}"
-exec "$VKRAY" render "$MODEL" --width "$WIDTH" --height "$HEIGHT" --orbit "$VIEWS" \
-  -o "$OUT/view-{index:05}.exr" --shard auto
+if [ "${1-}" = "--" ]; then shift; fi
+options=("$@")
+given() {
+  local option name
+  for option in "${options[@]}"; do
+    for name in "$@"; do
+      case "$option" in "$name" | "$name"=*) return 0 ;; esac
+    done
+  done
+  return 1
+}
+defaults=()
+given --orbit --sphere --views || defaults+=(--orbit "$VIEWS")
+given --width || defaults+=(--width "$WIDTH")
+given --height || defaults+=(--height "$HEIGHT")
+given -o --output || defaults+=(-o "$OUT/view-{index:05}.exr")
+exec "$VKRAY" render "$MODEL" "${defaults[@]}" "${options[@]}" --shard auto

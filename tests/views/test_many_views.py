@@ -331,6 +331,22 @@ def test_the_slurm_array_script_runs_as_slurm_would_run_it(whole_run, tmp_path):
     check_sharded_views(whole_run, tmp_path, tasks)
 
 
+def test_the_slurm_script_passes_render_options_to_every_task(tmp_path):
+    """`sbatch docs/slurm-views.sh -- OPTIONS`: the options reach each task's render, in place of
+    the script's default views, size and names."""
+    script = os.path.join(SOURCE, "docs", "slurm-views.sh")
+    out = tmp_path / "sphere" / "s-{index:03}.exr"
+    for task in range(3):
+        env = dict(os.environ, VKRAY=VKRAY, MODEL="", OUT=str(tmp_path / "unused"),
+                   SLURM_ARRAY_TASK_ID=str(task), SLURM_ARRAY_TASK_MIN="0", SLURM_ARRAY_TASK_COUNT="3")
+        subprocess.run(["bash", script, "--", "--sphere", "6", "--aov", "depth,planar-depth", "--width", "40", "--height=30",
+                        "-o", str(out)], check=True, capture_output=True, env=env)
+    assert views_in(tmp_path / "sphere") == [f"s-{index:03}.exr" for index in range(6)]
+    assert not (tmp_path / "unused").exists()
+    names, data = pixels(tmp_path / "sphere" / "s-004.exr")
+    assert data.shape[:2] == (30, 40) and "Z" in names and any(name.startswith("planar") for name in names), names
+
+
 def test_the_kubernetes_indexed_job_runs_as_its_pods_would(whole_run, tmp_path):
     with open(os.path.join(SOURCE, "docs", "kubernetes-views-job.yaml")) as text:
         job = yaml.safe_load(text)
@@ -339,7 +355,7 @@ def test_the_kubernetes_indexed_job_runs_as_its_pods_would(whole_run, tmp_path):
     assert spec["completionMode"] == "Indexed"
     assert spec["template"]["spec"]["restartPolicy"] in ("Never", "OnFailure")
     (container,) = spec["template"]["spec"]["containers"]
-    command = container["command"]
+    command = container["command"] + container["args"]  # what a pod runs: the command, then its arguments
     assert command[:2] == ["vkray", "render"]
     assert command[command.index("--shard") + 1] == "auto"
     assert int(command[command.index("--shard-count") + 1]) == spec["completions"]
@@ -348,7 +364,8 @@ def test_the_kubernetes_indexed_job_runs_as_its_pods_would(whole_run, tmp_path):
     assert output.startswith(mount + "/") and "{index:05}" in output
     # Each pod's command, with the test's model, size, views and folder in place of the Job's.
     local = command[2:]
-    local[0] = ""  # the built-in scene for the model
+    assert container["args"][0].startswith(mount + "/")  # the model, first of the render's own options
+    local[len(container["command"]) - 2] = ""  # the built-in scene for the model
     for option, value in (("--width", "64"), ("--height", "48"), ("--orbit", "12"), ("-o", str(tmp_path / "view-{index:05}.exr"))):
         local[local.index(option) + 1] = value
     for index in range(spec["completions"]):
