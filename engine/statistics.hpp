@@ -26,15 +26,21 @@ inline double median(std::vector<double> values) {
   return n % 2 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
 }
 
-// Median and minimum of repeated timings.
+// Median and spread (minimum to maximum) of repeated timings.
 struct TimeStats {
   double median_ms = 0.0;
   double min_ms = 0.0;
+  double max_ms = 0.0;
+
+  // Faster than `other` beyond the noise: its slowest run beat the other's fastest. Where the two
+  // spreads overlap, neither is faster (a busy machine moved one variant by 1.5x between runs).
+  bool clearly_faster_than(const TimeStats& other) const { return max_ms < other.min_ms; }
 };
 
 inline TimeStats time_stats(const std::vector<double>& times_ms) {
   if (times_ms.empty()) return {};
-  return {median(times_ms), *std::min_element(times_ms.begin(), times_ms.end())};
+  const auto [fastest, slowest] = std::minmax_element(times_ms.begin(), times_ms.end());
+  return {median(times_ms), *fastest, *slowest};
 }
 
 }  // namespace vkray

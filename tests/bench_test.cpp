@@ -108,10 +108,12 @@ TEST(BenchErrorMetrics, NormalRotatedByKnownAngle) {
   EXPECT_EQ(error.depth_max, 0.0);
 }
 
-BenchRow row(const char* variant, double ms, size_t flips, double depth_p99, double normal_p99) {
+// A row whose frames all took `ms`, or spread from `fastest` to `slowest` about it.
+BenchRow row(const char* variant, double ms, size_t flips, double depth_p99, double normal_p99, double fastest = 0.0,
+             double slowest = 0.0) {
   BenchRow result;
   result.variant = variant;
-  result.gpu = {ms, ms};
+  result.gpu = {ms, fastest > 0.0 ? fastest : ms, slowest > 0.0 ? slowest : ms};
   result.error.hit_mismatches = flips;
   result.error.depth_p99 = depth_p99;
   result.error.normal_deg_p99 = normal_p99;
@@ -131,6 +133,30 @@ TEST(BenchParetoFront, KeepsExactlyTheUndominatedRows) {
   mark_pareto_front(rows);
   const std::vector<bool> expected = {true, true, false, false, true, true, true};
   for (size_t k = 0; k < rows.size(); ++k) EXPECT_EQ(rows[k].pareto, expected[k]) << rows[k].variant;
+}
+
+// Under load one variant's frames spread widely: a median that looks faster is no win where the
+// spreads overlap (issue 33: "+position", more work than default, showed 0.67x the time and took
+// default's place on the front).
+TEST(BenchParetoFront, OverlappingSpreadsAreATieNotAWin) {
+  std::vector<BenchRow> rows = {
+      row("default", 12, 0, 1e-7, 1e-4, 8, 15),
+      row("+position", 8, 0, 1e-7, 1e-4, 7.5, 13),  // overlaps default: neither is faster
+      row("clearly-slower", 30, 0, 1e-7, 1e-4, 25, 35),  // its fastest frame is slower than their slowest
+  };
+  mark_pareto_front(rows);
+  EXPECT_TRUE(rows[0].pareto);
+  EXPECT_TRUE(rows[1].pareto);
+  EXPECT_FALSE(rows[2].pareto);
+  BenchSceneResult scene;
+  scene.name = "built-in";
+  scene.rows = rows;
+  const std::string text = bench_table_rows(scene, false);
+  const size_t position = text.find("+position          0.67x the time");
+  ASSERT_NE(position, std::string::npos) << text;
+  EXPECT_EQ(text.find("(spreads overlap: alike)", position), text.find('\n', position) - 24) << text;  // on its line
+  EXPECT_EQ(text.find("(spreads overlap"), text.rfind("(spreads overlap")) << text;  // and only there
+  EXPECT_NE(text.find(" 7.50-13.00 "), std::string::npos) << text;  // the spread, in the table
 }
 
 // A report with every field set to a distinct value.

@@ -1047,7 +1047,7 @@ TEST_F(CliTest, BenchBasicSuiteJsonHasEveryFieldAndSaneFigures) {
   ASSERT_EQ(json.at("scenes").size(), names.size());
   const std::vector<std::string> fixed_fields = {
       "variant", "on_gpu", "device_triangles", "device_geometry_bytes", "bvh_nodes", "bvh_depth", "loop_budget",
-      "upload_ms", "bvh_build_ms", "pipeline_ms", "gpu_median_ms", "gpu_min_ms", "frame_median_ms", "gpu_sustained_ms", "mrays_per_s",
+      "upload_ms", "bvh_build_ms", "pipeline_ms", "gpu_median_ms", "gpu_min_ms", "gpu_max_ms", "frame_median_ms", "gpu_sustained_ms", "mrays_per_s",
       "unfinished_rays", "pixels", "hit_mismatches", "both_hit", "nan_pixels", "depth_rel_p50", "depth_rel_p99", "depth_rel_max",
       "depth_ulp_p50", "depth_ulp_p99", "depth_ulp_max",
       "normal_deg_p50", "normal_deg_p99", "normal_deg_max", "pareto", "outputs_compared"};
@@ -1071,9 +1071,10 @@ TEST_F(CliTest, BenchBasicSuiteJsonHasEveryFieldAndSaneFigures) {
       SCOPED_TRACE(variant);
       for (const auto& field : row_fields) EXPECT_TRUE(row.contains(field)) << field;
       EXPECT_EQ(row.size(), row_fields.size());
-      const double median = row.at("gpu_median_ms"), minimum = row.at("gpu_min_ms");
+      const double median = row.at("gpu_median_ms"), minimum = row.at("gpu_min_ms"), maximum = row.at("gpu_max_ms");
       EXPECT_GT(minimum, 0.0);
       EXPECT_LE(minimum, median);
+      EXPECT_LE(median, maximum);
       EXPECT_EQ(row.at("pixels"), width * height);
       // Mrays/s is the pixels over the median time, to rounding.
       EXPECT_NEAR(row.at("mrays_per_s").get<double>(), width * height / (median * 1e3), 1e-9 * width * height / median);

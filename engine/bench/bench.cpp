@@ -330,15 +330,15 @@ BenchSceneResult bench_scene(GpuDevice& device, const BenchScene& bench, const B
 }
 
 void mark_pareto_front(std::vector<BenchRow>& rows) {
-  auto figures = [](const BenchRow& row) {
-    return std::array<double, 4>{row.gpu.median_ms, static_cast<double>(row.error.hit_mismatches), row.error.depth_p99,
-                                 row.error.normal_deg_p99};
+  auto errors = [](const BenchRow& row) {
+    return std::array<double, 3>{static_cast<double>(row.error.hit_mismatches), row.error.depth_p99, row.error.normal_deg_p99};
   };
   for (auto& row : rows) {
-    const auto mine = figures(row);
+    const auto mine = errors(row);
     row.pareto = std::none_of(rows.begin(), rows.end(), [&](const BenchRow& other) {
-      const auto theirs = figures(other);
-      bool no_worse = true, better = false;
+      // Time by the spreads of the frames: overlapping ones are a tie, not a win for either.
+      bool no_worse = !row.gpu.clearly_faster_than(other.gpu), better = other.gpu.clearly_faster_than(row.gpu);
+      const auto theirs = errors(other);
       for (size_t k = 0; k < mine.size(); ++k) {
         no_worse = no_worse && theirs[k] <= mine[k];
         better = better || theirs[k] < mine[k];

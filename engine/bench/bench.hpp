@@ -133,8 +133,10 @@ class BenchSceneRun {
 // the Pareto front.
 BenchSceneResult bench_scene(GpuDevice& device, const BenchScene& scene, const BenchSettings& settings);
 
-// A row is on the Pareto front of its scene when no other row is at least as good in time (median
-// GPU time) and in every error figure (hit/miss flips, depth p99, normal p99) and better in one.
+// A row is on the Pareto front of its scene when no other row is at least as good in time and in
+// every error figure (hit/miss flips, depth p99, normal p99) and better in one. Time compares the
+// spreads of the frames' GPU times: one row is faster only where its slowest frame beat the other's
+// fastest; overlapping spreads are as good as each other.
 void mark_pareto_front(std::vector<BenchRow>& rows);
 
 }  // namespace vkray
