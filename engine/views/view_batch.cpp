@@ -224,15 +224,30 @@ ViewBatchSummary render_views(Renderer& renderer, const ViewBatch& batch,
       }
     });
   }
+  // A render that fails (the device lost, out of memory) ends the loop like the last view does: the
+  // queue closes, the writers finish the views before it, and only then is the failure passed on.
+  // (Left open, the writers would wait in pop() for ever, and joining them would hang the process.)
+  std::optional<std::pair<uint32_t, std::string>> render_failure;  // the view, and why
   for (uint32_t index : to_render) {
     const auto render_start = Clock::now();
-    Frame frame = renderer.render(batch.cameras[index], batch.width, batch.height, batch.aovs);
+    Frame frame;
+    try {
+      if (batch.before_render) batch.before_render(index);
+      frame = renderer.render(batch.cameras[index], batch.width, batch.height, batch.aovs);
+    } catch (const std::exception& error) {
+      render_failure.emplace(index, error.what());
+      break;
+    }
     summary.render_seconds += seconds_since(render_start);
     if (!queue.push({index, std::move(frame)}, summary.queue_wait_seconds)) break;
   }
   queue.close();
   writers.clear();  // joins
   if (const std::exception_ptr failure = queue.failure()) std::rethrow_exception(failure);
+  if (render_failure) {
+    throw std::runtime_error("view " + std::to_string(render_failure->first) + " could not be rendered: " + render_failure->second +
+                             " (" + std::to_string(done.done) + " views of this run written and recorded before it; run again to go on)");
+  }
   summary.rendered = done.done;
   summary.seconds = seconds_since(start);
   return summary;

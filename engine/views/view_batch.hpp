@@ -37,6 +37,9 @@ struct ViewBatch {
   Shard shard;
   bool overwrite = false;  // render views whose files exist too (and start the manifest afresh)
   unsigned writers = 2;    // threads writing files; the queue holds one frame more
+  // Called with each view's index before it renders; what it throws stops the batch as a failed
+  // render does. The tests inject faults here (a device lost at view k).
+  std::function<void(uint32_t)> before_render;
 };
 
 struct ViewBatchProgress {

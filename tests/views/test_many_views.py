@@ -161,6 +161,25 @@ def test_a_killed_run_started_again_completes_the_set(tmp_path):
         assert same_pixels(tmp_path / name, whole / name), name
 
 
+def test_a_device_lost_mid_batch_ends_the_run_and_keeps_the_views_before_it(tmp_path):
+    """A failed render used to leave the writers waiting on an open queue: the process never exited.
+    Now it exits 1 with one line naming the view, the views before it written and recorded, no
+    temporary file left; run again, it completes the set."""
+    out = str(tmp_path / "v-{index:02}.exr")
+    env = dict(os.environ, VKRAY_TEST_LOSE_DEVICE_AT_VIEW="7")
+    result = subprocess.run([VKRAY, "render", *SIZE, "--orbit", "20", "-o", out], capture_output=True, text=True, env=env,
+                            timeout=120)
+    assert result.returncode == 1, result.stderr
+    errors = [line for line in result.stderr.splitlines() if not line.startswith("vkray: note: ")]  # lavapipe's note
+    assert len(errors) == 1 and errors[0].startswith("vkray: view 7 could not be rendered: the device was lost"), result.stderr
+    assert views_in(tmp_path) == [f"v-{index:02}.exr" for index in range(7)]
+    assert [record["index"] for record in manifest_records(tmp_path / "manifest.jsonl")] == list(range(7))
+    assert not [name for name in os.listdir(tmp_path) if name.startswith(".")]
+    vkray("render", *SIZE, "--orbit", "20", "-o", out)
+    assert views_in(tmp_path) == [f"v-{index:02}.exr" for index in range(20)]
+    assert [record["index"] for record in manifest_records(tmp_path / "manifest.jsonl")] == list(range(20))
+
+
 def test_overwrite_renders_all_again_and_starts_the_manifest_afresh(tmp_path):
     arguments = ["render", *SIZE, "--orbit", "3", "-o", str(tmp_path / "v{index}.exr")]
     vkray(*arguments)
