@@ -129,6 +129,7 @@ int run_render_views(const RenderOptions& options, const AovSet& aovs) {
   if (!options.views.views_file) batch.cameras = batch_cameras(options.views, scene.camera);
   batch.width = scene.width;
   batch.height = scene.height;
+  batch.scene = geometry_hash(scene);
   if (batch.cameras.size() > 1 && (!batch.exr.has_index() || (batch.png && !batch.png->has_index()))) {
     throw InputError(std::string(batch.exr.has_index() ? "--preview" : "-o") + ": '" +
                      (batch.exr.has_index() ? batch.png->text() : batch.exr.text()) + "' has no {index}, so the " +

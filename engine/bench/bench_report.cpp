@@ -197,17 +197,7 @@ std::string scene_hash(const Scene& scene) {
   Fnv1a fnv;
   fnv.add(scene.camera.from), fnv.add(scene.camera.to), fnv.add(scene.camera.up), fnv.add(scene.camera.fovy_degrees);
   fnv.add(uint64_t{scene.width}), fnv.add(uint64_t{scene.height});
-  fnv.add(uint64_t{scene.spheres.size()});
-  for (const auto& sphere : scene.spheres) fnv.add(sphere.center), fnv.add(sphere.radius);
-  fnv.add(uint64_t{scene.planes.size()});
-  for (const auto& plane : scene.planes) fnv.add(plane.point), fnv.add(plane.normal);
-  fnv.add(uint64_t{scene.meshes.size()});
-  for (const auto& mesh : scene.meshes) {
-    fnv.add(uint64_t{mesh.positions.size()});
-    for (const auto& position : mesh.positions) fnv.add(position);
-    fnv.add(uint64_t{mesh.triangles.size()});
-    fnv.add_bytes(mesh.triangles.data(), mesh.triangles.size() * sizeof(mesh.triangles[0]));
-  }
+  add_geometry(fnv, scene);
   return format("%016" PRIx64, fnv.hash);
 }
 

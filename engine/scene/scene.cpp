@@ -1,5 +1,6 @@
 #include "engine/scene/scene.hpp"
 
+#include "engine/fnv1a.hpp"
 #include "engine/parallel.hpp"
 #include "engine/unit_vector.hpp"
 
@@ -8,6 +9,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <cstdio>
 #include <string>
 
 namespace vkray {
@@ -176,6 +178,28 @@ double scene_radius(const Scene& scene, const glm::dvec3& anchor) {
     for (const auto& position : mesh.positions) radius = std::max(radius, glm::length(position - anchor));
   }
   return radius;
+}
+
+void add_geometry(Fnv1a& fnv, const Scene& scene) {
+  fnv.add(uint64_t{scene.spheres.size()});
+  for (const auto& sphere : scene.spheres) fnv.add(sphere.center), fnv.add(sphere.radius);
+  fnv.add(uint64_t{scene.planes.size()});
+  for (const auto& plane : scene.planes) fnv.add(plane.point), fnv.add(plane.normal);
+  fnv.add(uint64_t{scene.meshes.size()});
+  for (const auto& mesh : scene.meshes) {
+    fnv.add(uint64_t{mesh.positions.size()});
+    for (const auto& position : mesh.positions) fnv.add(position);
+    fnv.add(uint64_t{mesh.triangles.size()});
+    fnv.add_bytes(mesh.triangles.data(), mesh.triangles.size() * sizeof(mesh.triangles[0]));
+  }
+}
+
+std::string geometry_hash(const Scene& scene) {
+  Fnv1a fnv;
+  add_geometry(fnv, scene);
+  char hex[17];
+  std::snprintf(hex, sizeof(hex), "%016llx", static_cast<unsigned long long>(fnv.hash));
+  return hex;
 }
 
 }  // namespace vkray

@@ -81,6 +81,16 @@ struct Scene {
   size_t zero_area_triangle_count() const;
 };
 
+struct Fnv1a;
+
+// Adds the scene's geometry (spheres, planes, meshes' positions and triangles; not the camera or the
+// size) to `fnv`: the bench's scene_hash and a many-view run's record of its scene.
+void add_geometry(Fnv1a& fnv, const Scene& scene);
+
+// The geometry's FNV-1a hash in 16 hex digits: a manifest's "scene", so a run resumed on a changed
+// scene is caught.
+std::string geometry_hash(const Scene& scene);
+
 // What a ray hit, as the outputs number it. `object` counts the meshes, then the spheres, then the
 // planes, each in scene order; `primitive` is a triangle's index within its mesh (the order of the
 // file after triangulation, zero-area triangles counted though never hit), or a sphere's or a

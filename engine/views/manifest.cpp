@@ -44,6 +44,8 @@ std::string manifest_line(const ViewRecord& record, const std::filesystem::path&
   if (record.png) line["png"] = relative_name(*record.png, folder);
   line["width"] = record.width;
   line["height"] = record.height;
+  line["outputs"] = record.outputs;
+  line["scene"] = record.scene;
   const nlohmann::ordered_json camera = camera_description(record.camera, record.width, record.height);
   for (auto key = camera.begin(); key != camera.end(); ++key) line[key.key()] = key.value();
   return line.dump();
@@ -87,7 +89,7 @@ ManifestWriter::ManifestWriter(const std::filesystem::path& path, bool fresh) : 
       const std::string line = text.substr(start, end - start);
       start = end + 1;
       if (const auto index = manifest_line_index(line)) {
-        recorded_.insert(*index);
+        recorded_[*index] = line;
         kept += line + '\n';
       } else {
         dropped = dropped || !line.empty();
@@ -112,7 +114,31 @@ void ManifestWriter::append(const ViewRecord& record) {
     throw std::runtime_error(path_.string() + ": cannot append to the manifest: " +
                              (written < 0 ? std::strerror(errno) : "short write"));
   }
-  recorded_.insert(record.index);
+  recorded_[record.index] = line.substr(0, line.size() - 1);
+}
+
+std::string record_changes(const std::string& recorded, const std::string& now) {
+  const nlohmann::json before = nlohmann::json::parse(recorded), after = nlohmann::json::parse(now);
+  using Keys = std::vector<const char*>;
+  const auto shown = [](const nlohmann::json& record, const Keys& keys) {
+    std::string text;
+    for (const char* key : keys) {
+      if (record.contains(key)) text += (text.empty() ? "" : "x") + (record[key].is_string() ? record[key].get<std::string>() : record[key].dump());
+    }
+    return text;
+  };
+  std::string changes;
+  const std::pair<const char*, Keys> parts[] = {
+      {"the size", {"width", "height"}}, {"the outputs", {"outputs"}}, {"the scene", {"scene"}},
+      {"the camera", {"camera", "world_to_camera"}}};  // intrinsics follow from the camera and the size
+  for (const auto& [what, keys] : parts) {
+    bool compared = true;
+    for (const char* key : keys) compared = compared && before.contains(key);
+    if (!compared || shown(before, keys) == shown(after, keys)) continue;
+    changes += (changes.empty() ? "" : "; ") + std::string(what);
+    if (std::string(what) != "the camera") changes += ": " + shown(before, keys) + " then, " + shown(after, keys) + " now";
+  }
+  return changes;
 }
 
 namespace {

@@ -2,12 +2,13 @@
 // are in place, so that it is valid after any interruption. Every record is one line:
 //
 //   {"index": 42, "exr": "view-00042.exr", "png": "view-00042.png", "width": 1920, "height": 1080,
-//    "camera": {"from": [...], "to": [...], "up": [...], "fovy": 40},
+//    "outputs": "depth,normal", "scene": "3f2a...", "camera": {"from": [...], "to": [...], "up": [...], "fovy": 40},
 //    "intrinsics": {"fx": ..., "fy": ..., "cx": ..., "cy": ...},
 //    "world_to_camera": [[...], [...], [...], [0, 0, 0, 1]]}
 //
-// "png" only where previews are written; file names relative to the manifest's folder; the camera's
-// keys as engine/scene/camera_description.hpp describes them (README "Many views").
+// "png" only where previews are written; file names relative to the manifest's folder; "scene" the
+// geometry's hash (geometry_hash); the camera's keys as engine/scene/camera_description.hpp
+// describes them (README "Many views").
 #pragma once
 
 #include "engine/scene/camera.hpp"
@@ -16,7 +17,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <optional>
-#include <set>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -28,6 +29,8 @@ struct ViewRecord {
   std::optional<std::filesystem::path> png;
   Camera camera;
   uint32_t width = 0, height = 0;
+  std::string outputs;  // AovSet::names(): "depth,normal"
+  std::string scene;    // geometry_hash of the scene: a resumed run on another scene is refused
 };
 
 // One line, without its newline; file names relative to `folder`.
@@ -51,14 +54,25 @@ class ManifestWriter {
   ManifestWriter& operator=(const ManifestWriter&) = delete;
 
   bool has(uint32_t index) const { return recorded_.contains(index); }
+  // The record of view `index` as the manifest holds it, or null.
+  const std::string* recorded(uint32_t index) const {
+    const auto found = recorded_.find(index);
+    return found == recorded_.end() ? nullptr : &found->second;
+  }
   void append(const ViewRecord& record);
   const std::filesystem::path& path() const { return path_; }
 
  private:
   std::filesystem::path path_;
   int descriptor_ = -1;
-  std::set<uint32_t> recorded_;
+  std::map<uint32_t, std::string> recorded_;  // index -> its line
 };
+
+// What differs between a view's record from an earlier run and the record this run would write:
+// "" where they agree, else each change ("the size: 64x48 then, 128x96 now"). The size, the outputs,
+// the scene and the camera count; the file names do not (the same pattern gives the same ones). A key
+// an older vkray did not write is not compared.
+std::string record_changes(const std::string& recorded, const std::string& now);
 
 // The parts' records in index order, each index once (identical copies of a record merge; two
 // different records of one index are an error), as the text of the manifest `output`: file names

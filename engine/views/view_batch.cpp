@@ -98,6 +98,8 @@ ViewRecord record_of(const ViewBatch& batch, uint32_t index) {
   record.camera = batch.cameras[index];
   record.width = batch.width;
   record.height = batch.height;
+  record.outputs = batch.aovs.names();
+  record.scene = batch.scene;
   return record;
 }
 
@@ -185,8 +187,16 @@ ViewBatchSummary render_views(Renderer& renderer, const ViewBatch& batch,
   for (uint32_t index : shard_views) {
     if (!to_be_rendered(batch, index)) {
       ++summary.skipped;
-      // Its files were in place before an interruption could record them.
-      if (!manifest.has(index)) manifest.append(record_of(batch, index));
+      // A view complete from an earlier run counts only if that run asked what this one asks.
+      if (const std::string* recorded = manifest.recorded(index)) {
+        const std::string changes = record_changes(*recorded, manifest_line(record_of(batch, index), batch.manifest.parent_path()));
+        if (!changes.empty()) {
+          throw InputError(batch.manifest.string() + ": view " + std::to_string(index) + " was rendered with other settings (" +
+                           changes + "): --overwrite renders every view again, or write to another folder");
+        }
+      } else {
+        manifest.append(record_of(batch, index));  // its files were in place before an interruption could record them
+      }
       continue;
     }
     to_write.push_back(batch.exr.path(index));

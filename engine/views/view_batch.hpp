@@ -35,6 +35,7 @@ struct ViewBatch {
   ExrSettings exr_settings;
   std::filesystem::path manifest;
   Shard shard;
+  std::string scene;       // geometry_hash of the scene, recorded with each view
   bool overwrite = false;  // render views whose files exist too (and start the manifest afresh)
   unsigned writers = 2;    // threads writing files; the queue holds one frame more
   // Called with each view's index before it renders; what it throws stops the batch as a failed

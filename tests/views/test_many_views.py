@@ -180,6 +180,25 @@ def test_a_device_lost_mid_batch_ends_the_run_and_keeps_the_views_before_it(tmp_
     assert [record["index"] for record in manifest_records(tmp_path / "manifest.jsonl")] == list(range(20))
 
 
+def test_a_run_resumed_with_other_settings_is_refused_unless_it_overwrites(tmp_path):
+    """Files from a run at another size (or with other outputs) are not this run's views: the same
+    command again says what changed and exits 2; --overwrite renders every view anew."""
+    out = str(tmp_path / "v-{index}.exr")
+    vkray("render", *SIZE, "--orbit", "4", "-o", out)
+    for options, change in [(["--width", "80", "--height", "48"], "the size: 64x48 then, 80x48 now"),
+                            ([*SIZE, "--aov", "depth"], "the outputs: depth,normal then, depth now")]:
+        result = vkray("render", *options, "--orbit", "4", "-o", out, check=False)
+        assert result.returncode == 2, result.stderr
+        assert f"view 0 was rendered with other settings ({change}): --overwrite renders every view again" in result.stderr
+        assert "the camera" not in result.stderr, result.stderr
+    vkray("render", "--width", "80", "--height", "48", "--orbit", "4", "-o", out, "--overwrite")
+    records = manifest_records(tmp_path / "manifest.jsonl")
+    assert [(record["index"], record["width"]) for record in records] == [(index, 80) for index in range(4)]
+    names, data = pixels(tmp_path / "v-3.exr")
+    assert data.shape[:2] == (48, 80)
+    vkray("render", "--width", "80", "--height", "48", "--orbit", "4", "-o", out)  # the same again: nothing to do
+
+
 def test_overwrite_renders_all_again_and_starts_the_manifest_afresh(tmp_path):
     arguments = ["render", *SIZE, "--orbit", "3", "-o", str(tmp_path / "v{index}.exr")]
     vkray(*arguments)
