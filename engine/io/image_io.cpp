@@ -62,6 +62,16 @@ std::string partial_name_prefix(const std::filesystem::path& target) {
 }
 
 
+// fsync of a file or a folder; throws where the data could not be written.
+void sync_to_disk(const std::filesystem::path& path) {
+  const int descriptor = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (descriptor < 0) throw std::runtime_error(path.string() + ": cannot write: " + std::strerror(errno));
+  const bool synced = ::fsync(descriptor) == 0 || errno == EINVAL || errno == EROFS;
+  const int saved_errno = errno;
+  ::close(descriptor);
+  if (!synced) throw std::runtime_error(path.string() + ": cannot write: " + std::strerror(saved_errno));
+}
+
 // A file written under a temporary name beside `target`, renamed onto it by commit() and removed
 // if never committed.
 class PartialFile {
@@ -89,12 +99,18 @@ class PartialFile {
   PartialFile& operator=(const PartialFile&) = delete;
 
   const std::filesystem::path& path() const { return temp_; }
+  // The file's data reach the disk before its name does, and the name before the view is recorded:
+  // after a node's crash a complete name never holds a zero-length or partial file (rename alone
+  // orders nothing on ext4 or XFS). A file system without fsync (EINVAL) is taken as it is.
   void commit() {
     refuse_to_replace(target_);
+    sync_to_disk(temp_);
     std::error_code error;
     std::filesystem::rename(temp_, target_, error);
     if (error) throw std::runtime_error(target_.string() + ": cannot write: " + error.message());
     committed_ = true;
+    const std::filesystem::path folder = target_.parent_path();
+    sync_to_disk(folder.empty() ? std::filesystem::path(".") : folder);
   }
 
  private:
