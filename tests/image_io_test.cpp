@@ -5,6 +5,8 @@
 
 #include <gtest/gtest.h>
 
+#include <fcntl.h>
+#include <sys/file.h>
 #include <unistd.h>
 
 #include <fstream>
@@ -73,7 +75,8 @@ TEST_F(ImageIoTest, ALongLegalNameIsWritten) {
 }
 
 // A resumed many-view run removes what killed writers left beside the files it will write, in one
-// read of each folder: not another target's, not a live process's.
+// read of each folder: not another target's, not one a live writer holds locked (whatever the
+// process id in the names: the lock decides).
 TEST_F(ImageIoTest, StaleTemporaryFilesOfTheTargetsGoInOneCall) {
   const std::string dead = "4194305";  // above Linux's largest pid_max (2^22): no process has it
   const std::string live = std::to_string(getpid());
@@ -84,10 +87,16 @@ TEST_F(ImageIoTest, StaleTemporaryFilesOfTheTargetsGoInOneCall) {
   const auto stale_long = write("." + long_stem.substr(0, 222) + ".vkray-" + dead + "-3.exr", "half");
   const auto other_target = write(".b.vkray-" + dead + "-1.exr", "half");
   const auto other_kind = write(".a.vkray-" + dead + "-2.png", "half");
-  const auto in_progress = write(".a.vkray-" + live + "-4.exr", "half");
+  const auto in_progress = write(".a.vkray-" + dead + "-4.exr", "half");
+  const auto left_by_a_reused_pid = write(".a.vkray-" + live + "-5.exr", "half");
+  const int writer = ::open(in_progress.c_str(), O_RDONLY | O_CLOEXEC);
+  ASSERT_GE(writer, 0);
+  ASSERT_EQ(::flock(writer, LOCK_EX), 0);
   remove_stale_partial_files({dir_ / "a.exr", dir_ / (long_stem + ".exr")});
+  ::close(writer);
   EXPECT_FALSE(std::filesystem::exists(stale_a));
   EXPECT_FALSE(std::filesystem::exists(stale_long));
+  EXPECT_FALSE(std::filesystem::exists(left_by_a_reused_pid));
   for (const auto& kept : {other_target, other_kind, in_progress}) EXPECT_TRUE(std::filesystem::exists(kept)) << kept;
 }
 

@@ -14,7 +14,7 @@
 #include <png.h>
 
 #include <fcntl.h>
-#include <signal.h>
+#include <sys/file.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -73,13 +73,26 @@ void sync_to_disk(const std::filesystem::path& path) {
 }
 
 // A file written under a temporary name beside `target`, renamed onto it by commit() and removed
-// if never committed.
+// if never committed. It is created here and held under an exclusive flock until then: the lock,
+// not the process id in its name, is what tells a live writer's file from one a killed writer left
+// (a process id means nothing on another node of a shared file system, and a restarted container
+// reuses its predecessor's). Linux's NFS client passes flock to the server's lock manager.
 class PartialFile {
  public:
   explicit PartialFile(const std::filesystem::path& target) : target_(target) {
-    // The extension stays last, so the temporary file is still recognised by its kind.
-    temp_ = target.parent_path() / (partial_name_prefix(target) + std::to_string(getpid()) + "-" +
-                                    std::to_string(partial_counter++) + target.extension().string());
+    // The extension stays last, so the temporary file is still recognised by its kind. Another node
+    // may have the same process id and counter: then the next counter.
+    for (int attempt = 0; attempt < 64; ++attempt) {
+      temp_ = target.parent_path() / (partial_name_prefix(target) + std::to_string(getpid()) + "-" +
+                                      std::to_string(partial_counter++) + target.extension().string());
+      lock_ = ::open(temp_.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
+      if (lock_ >= 0 || errno != EEXIST) break;
+    }
+    if (lock_ < 0) {
+      creation_errno_ = errno;
+    } else {
+      ::flock(lock_, LOCK_EX);
+    }
     const std::string text = temp_.string();
     if (text.size() >= max_partial_path) return;  // not removed on a signal; still never a truncated target
     for (size_t k = 0; k < max_partial_files; ++k) {
@@ -93,12 +106,15 @@ class PartialFile {
   }
   ~PartialFile() {
     if (!committed_) std::remove(temp_.c_str());
+    if (lock_ >= 0) ::close(lock_);  // releases the lock, after the file is gone or in place
     if (slot_ < max_partial_files) partial_states[slot_].store(slot_free);
   }
   PartialFile(const PartialFile&) = delete;
   PartialFile& operator=(const PartialFile&) = delete;
 
   const std::filesystem::path& path() const { return temp_; }
+  // Why the temporary file could not be created (errno), or 0: the folder refuses new files.
+  int creation_errno() const { return creation_errno_; }
   // The file's data reach the disk before its name does, and the name before the view is recorded:
   // after a node's crash a complete name never holds a zero-length or partial file (rename alone
   // orders nothing on ext4 or XFS). A file system without fsync (EINVAL) is taken as it is.
@@ -115,6 +131,8 @@ class PartialFile {
 
  private:
   std::filesystem::path target_, temp_;
+  int lock_ = -1;
+  int creation_errno_ = 0;
   size_t slot_ = max_partial_files;
   bool committed_ = false;
 };
@@ -208,11 +226,9 @@ void check_output_path(const std::filesystem::path& path) {
   // Creating the temporary file is the one check that sees everything that can stop the write
   // (permissions, which root bypasses, a read-only file system, quotas on the folder).
   const PartialFile probe(path);
-  const int descriptor = open(probe.path().c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
-  if (descriptor < 0) {
-    throw std::runtime_error(path.string() + ": cannot write in folder '" + folder.string() + "': " + std::strerror(errno));
+  if (probe.creation_errno() != 0) {
+    throw std::runtime_error(path.string() + ": cannot write in folder '" + folder.string() + "': " + std::strerror(probe.creation_errno()));
   }
-  close(descriptor);
 }
 
 void write_text_file(const std::filesystem::path& path, std::string_view text) {
@@ -401,8 +417,11 @@ void remove_stale_partial_files(const std::vector<std::filesystem::path>& target
       if (marked == std::string::npos) continue;
       const size_t prefix_end = marked + marker.size();
       if (!prefixes.contains({name.substr(0, prefix_end), entry.path().extension().string()})) continue;
-      const pid_t writer = static_cast<pid_t>(std::strtol(name.c_str() + prefix_end, nullptr, 10));
-      if (writer > 0 && writer != getpid() && kill(writer, 0) != 0 && errno == ESRCH) std::filesystem::remove(entry.path(), error);
+      // Stale when no writer holds its lock (PartialFile); removed while this process holds it.
+      const int descriptor = ::open(entry.path().c_str(), O_RDONLY | O_CLOEXEC | O_NOFOLLOW | O_NONBLOCK);
+      if (descriptor < 0) continue;
+      if (::flock(descriptor, LOCK_EX | LOCK_NB) == 0) std::filesystem::remove(entry.path(), error);
+      ::close(descriptor);
     }
   }
 }

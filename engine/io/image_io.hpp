@@ -29,9 +29,9 @@ struct ExrSettings {
   float miss = INFINITY;
 };
 
-// Every file is written to a temporary file beside its target (".NAME.vkray-PID-N.EXT") and renamed
-// into place once complete, so a failed or interrupted write never leaves a truncated file where a
-// good one was.
+// Every file is written to a temporary file beside its target (".NAME.vkray-PID-N.EXT"), which its
+// writer holds under an exclusive flock, and renamed into place once complete, so a failed or
+// interrupted write never leaves a truncated file where a good one was.
 
 // The longest file name (one path component) Linux file systems take: NAME_MAX.
 inline constexpr size_t max_file_name_bytes = 255;
@@ -53,9 +53,9 @@ void write_text_file(const std::filesystem::path& path, std::string_view text);
 // then end the process (see cli/main.cpp).
 void remove_partial_outputs() noexcept;
 
-// Removes the temporary files beside each of `targets` that a vkray process no longer running left
-// when it was killed (SIGKILL leaves no chance to clean up): a resumed many-view run starts clean.
-// Each folder is read once.
+// Removes the temporary files beside each of `targets` that no writer holds locked: those a killed
+// vkray left (SIGKILL leaves no chance to clean up), whatever process now has its process id, on
+// this node or another. A resumed many-view run starts clean. Each folder is read once.
 void remove_stale_partial_files(const std::vector<std::filesystem::path>& targets);
 
 // Threads OpenEXR compresses one file on: by default one a core, for one file at a time; 0 compresses

@@ -161,6 +161,30 @@ def test_a_killed_run_started_again_completes_the_set(tmp_path):
         assert same_pixels(tmp_path / name, whole / name), name
 
 
+def test_a_temporary_file_is_stale_by_its_lock_not_its_process_id(tmp_path):
+    """A writer on another node of a shared file system, or a restarted container, can have the process
+    id of a live process here: a temporary file no one holds locked is stale whatever its name says,
+    and one a live writer holds locked is left alone."""
+    import fcntl
+    out = str(tmp_path / "v-{index}.exr")
+    vkray("render", *SIZE, "--orbit", "4", "-o", out)
+    for index in (1, 2):
+        (tmp_path / f"v-{index}.exr").unlink()
+    # Named with a live process's id (this test's): left by a writer that is gone all the same.
+    left = tmp_path / f".v-1.vkray-{os.getpid()}-0.exr"
+    left.write_bytes(b"half an EXR")
+    # Held locked, as a live writer holds its file, under the id of a process that does not exist here.
+    held = tmp_path / ".v-2.vkray-999999999-0.exr"
+    held.write_bytes(b"being written")
+    with open(held, "rb") as writer:
+        fcntl.flock(writer, fcntl.LOCK_EX)
+        result = vkray("render", *SIZE, "--orbit", "4", "-o", out)
+        assert "2 views written, 2 complete already" in result.stdout
+        assert not left.exists()
+        assert held.read_bytes() == b"being written"
+    assert views_in(tmp_path) == ["v-0.exr", "v-1.exr", "v-2.exr", "v-3.exr"]
+
+
 def test_a_device_lost_mid_batch_ends_the_run_and_keeps_the_views_before_it(tmp_path):
     """A failed render used to leave the writers waiting on an open queue: the process never exited.
     Now it exits 1 with one line naming the view, the views before it written and recorded, no
