@@ -89,6 +89,13 @@ Shard parse_shard(const ViewsOptions& options) {
     const auto count = environment_number("SLURM_ARRAY_TASK_COUNT");
     if (!count) throw InputError("--shard auto: SLURM_ARRAY_TASK_ID is set but SLURM_ARRAY_TASK_COUNT is not");
     const uint32_t first = environment_number("SLURM_ARRAY_TASK_MIN").value_or(0);
+    // `sbatch --array=2` to redo task 2 makes an array of one task: shard 0 of 1, every view, beside
+    // the shards still running. Such an array says nothing of the run's count.
+    if (*count == 1 && first > 0) {
+      throw InputError("--shard auto: the Slurm array holds task " + std::to_string(*task) +
+                       " alone (SLURM_ARRAY_TASK_COUNT=1), as when one task of a larger array is run again: give --shard " +
+                       std::to_string(*task) + "/N, N the run's task count");
+    }
     const uint32_t step = environment_number("SLURM_ARRAY_TASK_STEP").value_or(1);
     if (step == 0) throw InputError("--shard auto: SLURM_ARRAY_TASK_STEP=0 is no array's step (1 or more)");
     if (*task < first || (*task - first) % step != 0) {

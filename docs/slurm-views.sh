@@ -11,7 +11,9 @@
 #
 #   sbatch docs/slurm-views.sh -- --sphere 200 --aov depth,planar-depth --width 1024 --height 1024
 #
-# A task that is requeued or run again renders only the views it has not finished. The settings
+# Each task renders shard SLURM_ARRAY_TASK_ID of SHARDS (4, as --array=0-3 below: change both
+# together), so one task run again alone (sbatch --array=2 docs/slurm-views.sh) renders its own shard,
+# not every view. A task that is requeued or run again renders only the views it has not finished. The settings
 # below may also be given in the environment (sbatch --export). VKRAY is the relocatable bundle's
 # bin/vkray unpacked on the shared file system (README, "Installing on a GPU server"), e.g.
 # VKRAY=$HOME/vkray-0.1.0-linux-x86_64/bin/vkray; add #SBATCH --gpus=1 on GPU partitions.
@@ -24,6 +26,7 @@ VKRAY="${VKRAY:-vkray}"
 MODEL="${MODEL-models/stanford-bunny.obj}"
 OUT="${OUT:-views}"
 VIEWS="${VIEWS:-100}"
+SHARDS="${SHARDS:-4}"
 WIDTH="${WIDTH:-1920}"
 HEIGHT="${HEIGHT:-1080}"
 if [ "${1-}" = "--" ]; then shift; fi
@@ -42,4 +45,4 @@ given --orbit --sphere --views || defaults+=(--orbit "$VIEWS")
 given --width || defaults+=(--width "$WIDTH")
 given --height || defaults+=(--height "$HEIGHT")
 given -o --output || defaults+=(-o "$OUT/view-{index:05}.exr")
-exec "$VKRAY" render "$MODEL" "${defaults[@]}" "${options[@]}" --shard auto
+exec "$VKRAY" render "$MODEL" "${defaults[@]}" "${options[@]}" --shard "$SLURM_ARRAY_TASK_ID/$SHARDS"

@@ -40,6 +40,7 @@ std::string read_file(const std::filesystem::path& path) {
 std::string manifest_line(const ViewRecord& record, const std::filesystem::path& folder) {
   nlohmann::ordered_json line;  // keys in this order, the index first
   line["index"] = record.index;
+  line["views"] = record.views;
   line["exr"] = relative_name(record.exr, folder);
   if (record.png) line["png"] = relative_name(*record.png, folder);
   line["width"] = record.width;
@@ -161,6 +162,39 @@ std::string with_names_moved(const std::string& line, const std::filesystem::pat
 
 }  // namespace
 
+namespace {
+
+// Throws InputError where the records are not every view of one run: parts of runs with other view
+// counts, or views missing (a shard that failed, a part not given, --shard-count unlike the Job's
+// completions), named. Records of a vkray that wrote no "views" are not checked.
+void refuse_a_short_set(const std::map<uint32_t, std::pair<std::string, std::string>>& records) {
+  std::optional<std::pair<uint64_t, std::string>> views;  // the run's count, and where it was read
+  for (const auto& [index, record] : records) {
+    const nlohmann::json parsed = nlohmann::json::parse(record.first);
+    if (!parsed.contains("views") || !parsed["views"].is_number_unsigned()) continue;
+    const uint64_t count = parsed["views"].get<uint64_t>();
+    if (!views) views.emplace(count, record.second);
+    if (count != views->first) {
+      throw InputError(record.second + ": a record of a run of " + std::to_string(count) + " views, where " + views->second +
+                       " is of a run of " + std::to_string(views->first) + ": parts of different runs (an older part left in the folder?)");
+    }
+  }
+  if (!views) return;
+  std::string missing;
+  uint64_t missing_count = 0;
+  for (uint64_t index = 0; index < views->first; ++index) {
+    if (records.contains(static_cast<uint32_t>(index))) continue;
+    if (++missing_count <= 10) missing += (missing.empty() ? "" : ", ") + std::to_string(index);
+  }
+  if (missing_count > 10) missing += ", ...";
+  if (missing_count > 0) {
+    throw InputError("the parts hold " + std::to_string(views->first - missing_count) + " of the run's " + std::to_string(views->first) +
+                     " views; missing: " + missing + " (a shard that failed or was not given: render it, then merge again)");
+  }
+}
+
+}  // namespace
+
 std::string merge_manifests(const std::vector<std::filesystem::path>& parts, const std::filesystem::path& output) {
   std::map<uint32_t, std::pair<std::string, std::string>> records;  // index -> line, where it came from
   for (const auto& part : parts) {
@@ -185,6 +219,7 @@ std::string merge_manifests(const std::vector<std::filesystem::path>& parts, con
       }
     }
   }
+  refuse_a_short_set(records);
   std::string merged;
   for (const auto& [index, record] : records) merged += record.first + '\n';
   return merged;

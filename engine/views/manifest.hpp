@@ -1,7 +1,7 @@
 // The manifest of a many-view render: JSON Lines, one record a view, appended as each view's files
 // are in place, so that it is valid after any interruption. Every record is one line:
 //
-//   {"index": 42, "exr": "view-00042.exr", "png": "view-00042.png", "width": 1920, "height": 1080,
+//   {"index": 42, "views": 100, "exr": "view-00042.exr", "png": "view-00042.png", "width": 1920, "height": 1080,
 //    "outputs": "depth,normal", "scene": "3f2a...", "camera": {"from": [...], "to": [...], "up": [...], "fovy": 40},
 //    "intrinsics": {"fx": ..., "fy": ..., "cx": ..., "cy": ...},
 //    "world_to_camera": [[...], [...], [...], [0, 0, 0, 1]]}
@@ -25,6 +25,7 @@ namespace vkray {
 
 struct ViewRecord {
   uint32_t index = 0;
+  uint32_t views = 0;  // in the whole run, every shard's: what a merge checks its parts against
   std::filesystem::path exr;
   std::optional<std::filesystem::path> png;
   Camera camera;

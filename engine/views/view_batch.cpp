@@ -93,6 +93,7 @@ bool to_be_rendered(const ViewBatch& batch, uint32_t index) {
 ViewRecord record_of(const ViewBatch& batch, uint32_t index) {
   ViewRecord record;
   record.index = index;
+  record.views = static_cast<uint32_t>(batch.cameras.size());
   record.exr = batch.exr.path(index);
   if (batch.png) record.png = batch.png->path(index);
   record.camera = batch.cameras[index];

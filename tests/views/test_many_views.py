@@ -131,8 +131,9 @@ def test_a_manifest_merged_into_another_folder_names_files_that_open(tmp_path):
             for key in ("exr", "png"):
                 assert (merged.parent / record[key]).resolve() == (renders / f"v-{record['index']}.{key}").resolve()
                 assert (merged.parent / record[key]).is_file()
-    result = vkray("manifest", "merge", parts[0], "-o", str(tmp_path / "one.jsonl"))
-    assert result.stdout.endswith("holds 2 views from 1 part\n")
+    vkray("render", *SIZE, "--orbit", "1", "-o", str(tmp_path / "single" / "v-{index}.exr"))
+    result = vkray("manifest", "merge", str(tmp_path / "single" / "manifest.jsonl"), "-o", str(tmp_path / "one.jsonl"))
+    assert result.stdout.endswith("holds 1 view from 1 part\n")
 
 
 def test_a_killed_run_started_again_completes_the_set(tmp_path):
@@ -399,7 +400,7 @@ def test_the_slurm_script_passes_render_options_to_every_task(tmp_path):
     script = os.path.join(SOURCE, "docs", "slurm-views.sh")
     out = tmp_path / "sphere" / "s-{index:03}.exr"
     for task in range(3):
-        env = dict(os.environ, VKRAY=VKRAY, MODEL="", OUT=str(tmp_path / "unused"),
+        env = dict(os.environ, VKRAY=VKRAY, MODEL="", OUT=str(tmp_path / "unused"), SHARDS="3",
                    SLURM_ARRAY_TASK_ID=str(task), SLURM_ARRAY_TASK_MIN="0", SLURM_ARRAY_TASK_COUNT="3")
         subprocess.run(["bash", script, "--", "--sphere", "6", "--aov", "depth,planar-depth", "--width", "40", "--height=30",
                         "-o", str(out)], check=True, capture_output=True, env=env)
@@ -407,6 +408,39 @@ def test_the_slurm_script_passes_render_options_to_every_task(tmp_path):
     assert not (tmp_path / "unused").exists()
     names, data = pixels(tmp_path / "sphere" / "s-004.exr")
     assert data.shape[:2] == (30, 40) and "Z" in names and any(name.startswith("planar") for name in names), names
+
+
+def test_one_slurm_task_run_again_alone_renders_its_own_shard(tmp_path):
+    """Shards 0-3 of 8 views, task 2 failing after its first view; the merge names the view missing;
+    task 2 submitted again alone (sbatch --array=2: an array of that one task) renders its shard, not
+    every view; the merge is then the unsharded run, file for file."""
+    script = os.path.join(SOURCE, "docs", "slurm-views.sh")
+    whole = tmp_path / "whole"
+    vkray("render", *SIZE, "--orbit", "8", "-o", str(whole / "view-{index:05}.exr"))
+    out = tmp_path / "sharded"
+    base = dict(os.environ, VKRAY=VKRAY, MODEL="", OUT=str(out), VIEWS="8", WIDTH="64", HEIGHT="48")
+    for task in range(4):
+        env = dict(base, SLURM_ARRAY_TASK_ID=str(task), SLURM_ARRAY_TASK_MIN="0", SLURM_ARRAY_TASK_MAX="3",
+                   SLURM_ARRAY_TASK_COUNT="4")
+        if task == 2:
+            env["VKRAY_TEST_LOSE_DEVICE_AT_VIEW"] = "6"  # its second view
+        result = subprocess.run(["bash", script], capture_output=True, text=True, env=env)
+        assert result.returncode == (1 if task == 2 else 0), result.stderr
+    parts = [str(out / f"manifest-shard-{task}-of-4.jsonl") for task in range(4)]
+    result = vkray("manifest", "merge", *parts, "-o", str(out / "manifest.jsonl"), check=False)
+    assert result.returncode == 2 and "the parts hold 7 of the run's 8 views; missing: 6" in result.stderr, result.stderr
+    result = vkray("manifest", "merge", *parts[:3], "-o", str(out / "manifest.jsonl"), check=False)
+    assert result.returncode == 2 and "missing: 3, 6, 7" in result.stderr, result.stderr
+    assert not (out / "manifest.jsonl").exists()
+    again = dict(base, SLURM_ARRAY_TASK_ID="2", SLURM_ARRAY_TASK_MIN="2", SLURM_ARRAY_TASK_MAX="2", SLURM_ARRAY_TASK_COUNT="1")
+    result = subprocess.run(["bash", script], capture_output=True, text=True, env=again)
+    assert result.returncode == 0, result.stderr
+    assert "1 views written, 1 complete already (shard 2 of 4" in result.stdout, result.stdout
+    check_sharded_views(whole, out, 4)
+    # --shard auto itself cannot tell such an array from a run of one task: it asks.
+    result = vkray("render", *SIZE, "--orbit", "8", "-o", str(out / "view-{index:05}.exr"), "--shard", "auto",
+                   env={**again, "VKRAY_TEST_LOSE_DEVICE_AT_VIEW": ""}, check=False)
+    assert result.returncode == 2 and "give --shard 2/N" in result.stderr, result.stderr
 
 
 def test_the_kubernetes_indexed_job_runs_as_its_pods_would(whole_run, tmp_path):
