@@ -6,6 +6,7 @@
 #include "engine/views/manifest_record.hpp"
 
 #include <fcntl.h>
+#include <sys/file.h>
 #include <unistd.h>
 
 #include <nlohmann/json.hpp>
@@ -75,9 +76,22 @@ void check_is_a_manifest(const std::filesystem::path& path) {
 
 ManifestWriter::ManifestWriter(const std::filesystem::path& path, bool fresh) : path_(path) {
   check_is_a_manifest(path);
-  std::error_code error;
-  if (!fresh && std::filesystem::exists(path, error)) {
-    // Keep the whole records; a line an interruption cut off (no newline, or no record) goes.
+  descriptor_ = ::open(path.c_str(), O_RDWR | O_CREAT | O_APPEND | O_CLOEXEC, 0644);
+  if (descriptor_ < 0) throw std::runtime_error(path.string() + ": cannot open the manifest: " + std::strerror(errno));
+  // One writer a manifest, held for the run: shards given one --manifest would otherwise write over
+  // each other's records. Changes below are made in place, under the lock (a rename would hand the
+  // next writer a new, unlocked file while this one appends to the old).
+  if (::flock(descriptor_, LOCK_EX | LOCK_NB) != 0) {
+    ::close(descriptor_);
+    descriptor_ = -1;
+    throw InputError(path.string() + ": another vkray is writing this manifest (each shard writes its own: leave out "
+                     "--manifest, or give each shard one)");
+  }
+  if (fresh) {
+    rewrite("");
+  } else {
+    // Keep the whole records; a line an interruption cut off (no newline, or no record) goes. A
+    // crash while rewriting loses records, not views: their files are found and recorded again.
     const std::string text = read_file(path);
     std::string kept;
     bool dropped = false;
@@ -96,12 +110,18 @@ ManifestWriter::ManifestWriter(const std::filesystem::path& path, bool fresh) : 
         dropped = dropped || !line.empty();
       }
     }
-    if (dropped) write_text_file(path, kept);
-  } else {
-    write_text_file(path, "");
+    if (dropped) rewrite(kept);
   }
-  descriptor_ = ::open(path.c_str(), O_WRONLY | O_APPEND | O_CLOEXEC);
-  if (descriptor_ < 0) throw std::runtime_error(path.string() + ": cannot open the manifest: " + std::strerror(errno));
+}
+
+void ManifestWriter::rewrite(const std::string& text) {
+  if (::ftruncate(descriptor_, 0) != 0) {
+    throw std::runtime_error(path_.string() + ": cannot write the manifest: " + std::strerror(errno));
+  }
+  const ssize_t written = ::write(descriptor_, text.data(), text.size());
+  if (written != static_cast<ssize_t>(text.size())) {
+    throw std::runtime_error(path_.string() + ": cannot write the manifest: " + (written < 0 ? std::strerror(errno) : "short write"));
+  }
 }
 
 ManifestWriter::~ManifestWriter() {
@@ -110,6 +130,8 @@ ManifestWriter::~ManifestWriter() {
 
 void ManifestWriter::append(const ViewRecord& record) {
   const std::string line = manifest_line(record, path_.parent_path()) + '\n';
+  // A view rendered again after its files vanished has its record already: one record an index.
+  if (const std::string* recorded = this->recorded(record.index); recorded && *recorded + '\n' == line) return;
   const ssize_t written = ::write(descriptor_, line.data(), line.size());
   if (written != static_cast<ssize_t>(line.size())) {
     throw std::runtime_error(path_.string() + ": cannot append to the manifest: " +
@@ -211,6 +233,9 @@ std::string merge_manifests(const std::vector<std::filesystem::path>& parts, con
       if (line.empty()) continue;
       const std::string where = part.string() + ":" + std::to_string(line_number);
       const auto index = manifest_line_index(line);
+      // A last line without its newline is one an interruption cut off, as resuming takes it: its
+      // view counts as missing.
+      if (!index && end == text.size()) continue;
       if (!index) throw InputError(where + ": not a view record");
       const std::string moved = with_names_moved(line, part.parent_path(), output.parent_path());
       const auto [found, inserted] = records.emplace(*index, std::pair{moved, where});

@@ -44,7 +44,9 @@ std::string manifest_line(const ViewRecord& record, const std::filesystem::path&
 void check_is_a_manifest(const std::filesystem::path& path);
 
 // A manifest being written: opened, it keeps the complete records already there (a line cut off by
-// an interruption is dropped) unless `fresh`, which starts it empty. Each append writes one whole
+// an interruption is dropped) unless `fresh`, which starts it empty. It is held under an exclusive
+// flock while open: a second writer of the same file (two shards given one --manifest) gets
+// InputError. Each append writes one whole
 // line with a single write(). Throws InputError as check_is_a_manifest does, std::runtime_error
 // naming the file where it cannot be read or written.
 class ManifestWriter {
@@ -64,6 +66,8 @@ class ManifestWriter {
   const std::filesystem::path& path() const { return path_; }
 
  private:
+  void rewrite(const std::string& text);  // the whole manifest, in place
+
   std::filesystem::path path_;
   int descriptor_ = -1;
   std::map<uint32_t, std::string> recorded_;  // index -> its line

@@ -186,18 +186,19 @@ ViewBatchSummary render_views(Renderer& renderer, const ViewBatch& batch,
   std::vector<uint32_t> to_render;
   std::vector<std::filesystem::path> to_write;
   for (uint32_t index : shard_views) {
+    // A view an earlier run recorded counts only if that run asked what this one asks; else its
+    // files, or its record beside this run's, would stand for views they are not.
+    const std::string* recorded = manifest.recorded(index);
+    if (recorded) {
+      const std::string changes = record_changes(*recorded, manifest_line(record_of(batch, index), batch.manifest.parent_path()));
+      if (!changes.empty()) {
+        throw InputError(batch.manifest.string() + ": view " + std::to_string(index) + " was rendered with other settings (" +
+                         changes + "): --overwrite renders every view again, or write to another folder");
+      }
+    }
     if (!to_be_rendered(batch, index)) {
       ++summary.skipped;
-      // A view complete from an earlier run counts only if that run asked what this one asks.
-      if (const std::string* recorded = manifest.recorded(index)) {
-        const std::string changes = record_changes(*recorded, manifest_line(record_of(batch, index), batch.manifest.parent_path()));
-        if (!changes.empty()) {
-          throw InputError(batch.manifest.string() + ": view " + std::to_string(index) + " was rendered with other settings (" +
-                           changes + "): --overwrite renders every view again, or write to another folder");
-        }
-      } else {
-        manifest.append(record_of(batch, index));  // its files were in place before an interruption could record them
-      }
+      if (!recorded) manifest.append(record_of(batch, index));  // its files were in place before an interruption could record them
       continue;
     }
     to_write.push_back(batch.exr.path(index));

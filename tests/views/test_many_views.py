@@ -186,6 +186,27 @@ def test_a_temporary_file_is_stale_by_its_lock_not_its_process_id(tmp_path):
     assert views_in(tmp_path) == ["v-0.exr", "v-1.exr", "v-2.exr", "v-3.exr"]
 
 
+def test_the_manifest_keeps_one_record_a_view_and_one_writer(tmp_path):
+    """A view rendered again after its file vanished is not recorded twice; a manifest another vkray
+    holds (two shards given one --manifest) is refused; a merge takes a part's cut-off last line as
+    resuming does, as a view missing, not as a broken file."""
+    import fcntl
+    out = str(tmp_path / "v-{index}.exr")
+    vkray("render", *SIZE, "--orbit", "4", "-o", out)
+    (tmp_path / "v-2.exr").unlink()
+    assert "1 views written, 3 complete already" in vkray("render", *SIZE, "--orbit", "4", "-o", out).stdout
+    assert [record["index"] for record in manifest_records(tmp_path / "manifest.jsonl")] == [0, 1, 2, 3]
+    with open(tmp_path / "manifest.jsonl", "rb") as other_writer:
+        fcntl.flock(other_writer, fcntl.LOCK_EX)
+        result = vkray("render", *SIZE, "--orbit", "4", "-o", out, check=False)
+        assert result.returncode == 2 and "another vkray is writing this manifest" in result.stderr, result.stderr
+    lines = (tmp_path / "manifest.jsonl").read_text().splitlines()
+    (tmp_path / "cut.jsonl").write_text("\n".join(lines[:3]) + "\n" + lines[3][:40])  # killed mid-line
+    result = vkray("manifest", "merge", str(tmp_path / "cut.jsonl"), "-o", str(tmp_path / "all.jsonl"), check=False)
+    missing = json.loads(lines[3])["index"]
+    assert result.returncode == 2 and f"missing: {missing} " in result.stderr, result.stderr
+
+
 def test_a_device_lost_mid_batch_ends_the_run_and_keeps_the_views_before_it(tmp_path):
     """A failed render used to leave the writers waiting on an open queue: the process never exited.
     Now it exits 1 with one line naming the view, the views before it written and recorded, no
