@@ -36,10 +36,15 @@ PrimitiveHit nearest_primitive_ray_query(RayFrame frame, Origin origin, vec3 dir
     // The instance carries its structure's first slot (engine/vulkan/acceleration_structures.hpp).
     uint slot = uint(rayQueryGetIntersectionInstanceCustomIndexEXT(query, false)) +
                 uint(rayQueryGetIntersectionPrimitiveIndexEXT(query, false));
-    float before = hit.t;
-    test_primitive(frame, origin, dir, slot, hit);
+    const float before = hit.t;
+    // vkray's own test of the candidate, against the whole ray: "it misses" and "it hits, but not
+    // nearer" must not look alike, or with crossing or coplanar triangles the device's float32
+    // ordering would bring its distance and another triangle's normal.
+    SlotHit own = SlotHit(t_max, no_primitive);
+    test_primitive(frame, origin, dir, slot, own);
+    if (own.slot != no_primitive && own.t < hit.t) hit = own;
     const bool triangle = rayQueryGetIntersectionTypeEXT(query, false) == gl_RayQueryCandidateIntersectionTriangleEXT;
-    if (triangle && hit.t == before) {
+    if (triangle && own.slot == no_primitive) {
       // The device's triangle test hit what vkray's rejects: the ray passes within rounding of an
       // edge. At an edge shared with a triangle vkray's test would take, the device may never
       // propose that one (its own tie-break, or none: lavapipe's is not watertight), so the
