@@ -179,14 +179,14 @@ TEST_F(ManifestTest, ACutOffLastLineIsDroppedAndWritingGoesOn) {
   std::ofstream(path, std::ios::app) << manifest_line(record(2, dir_), dir_).substr(0, 30);  // killed mid-line
   {
     ManifestWriter manifest(path, false);
-    EXPECT_TRUE(manifest.has(0) && manifest.has(1));
-    EXPECT_FALSE(manifest.has(2));
+    EXPECT_TRUE(manifest.recorded(0) && manifest.recorded(1));
+    EXPECT_FALSE(manifest.recorded(2));
     manifest.append(record(2, dir_));
   }
   EXPECT_EQ(read(path), whole + manifest_line(record(2, dir_), dir_) + "\n");
   EXPECT_NE(read(path).find("\"exr\":\"v2.exr\""), std::string::npos);  // relative to the manifest's folder
   ManifestWriter fresh(path, true);
-  EXPECT_FALSE(fresh.has(0));
+  EXPECT_FALSE(fresh.recorded(0));
   EXPECT_EQ(read(path), "");
 }
 
@@ -209,7 +209,7 @@ TEST_F(ManifestTest, AFileThatIsNotAManifestIsRefusedAndLeftAlone) {
   expect_error(error_of([&] { ManifestWriter manifest(fifo, true); }), fifo.string() + ": ", "not a regular file");
   // A first record cut off by a kill is a manifest still: the cut line goes, the run goes on.
   const auto cut = write("cut.jsonl", manifest_line(record(0, dir_), dir_).substr(0, 30));
-  EXPECT_FALSE(ManifestWriter(cut, false).has(0));
+  EXPECT_FALSE(ManifestWriter(cut, false).recorded(0));
   EXPECT_EQ(read(cut), "");
 }
 

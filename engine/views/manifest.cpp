@@ -182,10 +182,6 @@ std::string with_names_moved(const std::string& line, const std::filesystem::pat
   return record.dump();
 }
 
-}  // namespace
-
-namespace {
-
 // Throws InputError where the records are not every view of one run: parts of runs with other view
 // counts, or views missing (a shard that failed, a part not given, --shard-count unlike the Job's
 // completions), named. Records of a vkray that wrote no "views" are not checked.

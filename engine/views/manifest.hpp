@@ -56,7 +56,6 @@ class ManifestWriter {
   ManifestWriter(const ManifestWriter&) = delete;
   ManifestWriter& operator=(const ManifestWriter&) = delete;
 
-  bool has(uint32_t index) const { return recorded_.contains(index); }
   // The record of view `index` as the manifest holds it, or null.
   const std::string* recorded(uint32_t index) const {
     const auto found = recorded_.find(index);
