@@ -199,9 +199,10 @@ TEST(GpuRenderer, TilingGivesIdenticalImages) {
 }
 
 // Dispatches sized by their measured time: a budget far below what a row takes leaves one
-// workgroup's rows a dispatch after the first (8 per ray, 32 for the packet walk), and the
-// pixels are those of one dispatch; none is longer than the longest measured, and a generous budget
-// gives one dispatch after the first, and the next render one in all.
+// workgroup's rows a dispatch after the first (8 per ray, 32 for the packet walk), and the pixels
+// are those of one dispatch. Under the default budget the count depends on the times measured (a
+// loaded machine takes more): the first dispatch holds 64 of the 160 rows, so at least two, and the
+// images are the same; dispatch_sizer_test.cpp checks the sizes for given times.
 TEST(GpuRenderer, DispatchesSizedByTimeGiveIdenticalImages) {
   const Scene scene = sized(default_scene(), 1024, 160);  // the first dispatch: 65536 pixels, 64 rows
   const AovSet all{Aov::depth, Aov::normal, Aov::uv};
@@ -229,11 +230,14 @@ TEST(GpuRenderer, DispatchesSizedByTimeGiveIdenticalImages) {
     RendererOptions generous_options;  // the default budget, 200 ms
     generous_options.scene.search = search;
     Renderer generous(device(), scene, generous_options);
-    generous.render(scene.camera, 1024, 160, all);
-    EXPECT_EQ(generous.timings().tiles, 2u);  // 64 rows, then the other 96 (at most sixteen times as many)
-    // Once it has measured the scene's pixels, a quarter of the budget holds the frame.
-    generous.render(scene.camera, 1024, 160, all);
-    EXPECT_EQ(generous.timings().tiles, 1u);
+    for (int render = 0; render < 2; ++render) {  // the second with the scene's cost known
+      const Frame again = generous.render(scene.camera, 1024, 160, all);
+      if (render == 0) {
+        EXPECT_GE(generous.timings().tiles, 2u);
+      }
+      EXPECT_EQ(0, std::memcmp(again.depth.data(), reference.depth.data(), again.depth.size() * sizeof(float)));
+      EXPECT_EQ(0, std::memcmp(again.normal.data(), reference.normal.data(), again.normal.size() * sizeof(float)));
+    }
   }
 }
 
