@@ -9,6 +9,11 @@
 namespace vkray {
 namespace {
 
+InputError line_too_long(const std::string& name, size_t number) {
+  return InputError(name + ":" + std::to_string(number) + ": a line longer than " + std::to_string(max_line_bytes >> 20) +
+                    " MiB: no input of vkray has one");
+}
+
 // Hands on the complete lines at the start of `data` (and, `at_end`, the unterminated rest); returns
 // how many bytes they took.
 size_t handle_lines(std::string_view data, bool at_end, const std::string& name, size_t& number, const LineHandler& handle) {
@@ -18,17 +23,11 @@ size_t handle_lines(std::string_view data, bool at_end, const std::string& name,
     if (newline == std::string_view::npos && !at_end) break;
     const size_t end = newline == std::string_view::npos ? data.size() : newline;
     ++number;
-    if (end - start > max_line_bytes) {
-      throw InputError(name + ":" + std::to_string(number) + ": a line longer than " + std::to_string(max_line_bytes >> 20) +
-                       " MiB: no input of vkray has one");
-    }
+    if (end - start > max_line_bytes) throw line_too_long(name, number);
     handle({data.substr(start, end - start), number, newline != std::string_view::npos});
     start = end + 1;
   }
-  if (!at_end && data.size() - start > max_line_bytes) {
-    throw InputError(name + ":" + std::to_string(number + 1) + ": a line longer than " + std::to_string(max_line_bytes >> 20) +
-                     " MiB: no input of vkray has one");
-  }
+  if (!at_end && data.size() - start > max_line_bytes) throw line_too_long(name, number + 1);
   return std::min(start, data.size());
 }
 
