@@ -17,6 +17,25 @@
 
 layout(binding = VKRAY_BINDING_TOP_STRUCTURE) uniform accelerationStructureEXT top_structure;
 
+// Whether the query has another candidate, within the walk's LOOP_BUDGET (over both queries).
+bool next_candidate(rayQueryEXT query, inout uint iterations, inout bool unfinished) {
+  if (!rayQueryProceedEXT(query)) return false;
+  if (LOOP_BUDGET > 0 && iterations == LOOP_BUDGET) {
+    unfinished = true;
+    rayQueryTerminateEXT(query);
+    return false;
+  }
+  ++iterations;
+  return true;
+}
+
+// The candidate's slot: the instance carries its structure's first slot
+// (engine/vulkan/acceleration_structures.hpp).
+uint candidate_slot(rayQueryEXT query) {
+  return uint(rayQueryGetIntersectionInstanceCustomIndexEXT(query, false)) +
+         uint(rayQueryGetIntersectionPrimitiveIndexEXT(query, false));
+}
+
 PrimitiveHit nearest_primitive_ray_query(RayFrame frame, Origin origin, vec3 dir, float t_max) {
   SlotHit hit = SlotHit(t_max, no_primitive);
   bool unfinished = false;
@@ -26,16 +45,8 @@ PrimitiveHit nearest_primitive_ray_query(RayFrame frame, Origin origin, vec3 dir
   rayQueryInitializeEXT(query, top_structure, gl_RayFlagsNoneEXT, 0xffu, origin.hi + origin.lo, 0.0, dir,
                         min(t_max, 3.4e38));
   uint iterations = 0;
-  while (rayQueryProceedEXT(query)) {
-    if (LOOP_BUDGET > 0 && iterations == LOOP_BUDGET) {
-      unfinished = true;
-      rayQueryTerminateEXT(query);
-      break;
-    }
-    ++iterations;
-    // The instance carries its structure's first slot (engine/vulkan/acceleration_structures.hpp).
-    uint slot = uint(rayQueryGetIntersectionInstanceCustomIndexEXT(query, false)) +
-                uint(rayQueryGetIntersectionPrimitiveIndexEXT(query, false));
+  while (next_candidate(query, iterations, unfinished)) {
+    const uint slot = candidate_slot(query);
     const float before = hit.t;
     // vkray's own test of the candidate, against the whole ray: "it misses" and "it hits, but not
     // nearer" must not look alike, or with crossing or coplanar triangles the device's float32
@@ -62,6 +73,24 @@ PrimitiveHit nearest_primitive_ray_query(RayFrame frame, Origin origin, vec3 dir
         rayQueryGenerateIntersectionEXT(query, hit.t);
       }
     }
+  }
+  if (hit.slot != no_primitive && !unfinished) {
+    // Once a triangle is committed, the device culls every other at its own float32 distance, so a
+    // triangle that vkray's test finds nearer by less than the two distances' disagreement (two
+    // overlapping coplanar triangles, or one crossing the winner at the hit) may never have been
+    // proposed. A second query over a short window around the winner commits nothing, so the
+    // device culls nothing inside it, and vkray's test picks among all it proposes.
+    // The window: the device sees each point rounded to float32 relative to the anchor (an error
+    // of 2^-24 of the hit point's distance from it, P), and a plane moved by e moves a ray's hit
+    // by e / cos of the ray's angle to its normal; a half-width of 2^-12 P holds the disagreement
+    // of a few such roundings for every ray meeting the planes at more than about 2^-10 rad
+    // (0.06 degrees). The query starts at the window, not at the origin with t_min there: a device
+    // that culls boxes by the far end alone (lavapipe) would walk every node up to the hit again.
+    const float window = exp2(-12.0) * (length(origin.hi) / length(dir) + hit.t);
+    const float start = max(hit.t - window, 0.0);
+    rayQueryInitializeEXT(query, top_structure, gl_RayFlagsNoneEXT, 0xffu, origin.hi + origin.lo + start * dir,
+                          0.0, dir, min(hit.t + window, 3.4e38) - start);
+    while (next_candidate(query, iterations, unfinished)) test_primitive(frame, origin, dir, candidate_slot(query), hit);
   }
   PrimitiveHit result = PrimitiveHit(hit.t, vec3(0.0), unfinished, hit.slot);
   if (hit.slot != no_primitive) result.normal = primitive_normal(hit.slot, origin, dir);

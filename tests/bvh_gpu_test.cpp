@@ -124,38 +124,49 @@ TEST(BvhGpu, SpheresAndTrianglesInOneTree) {
   expect_searches_match(scene, cameras, all_searches());
 }
 
-// Crossing triangles: the device's float32 ordering of candidates is not vkray's. Where vkray's own
-// test hits a candidate, its distance and normal are vkray's whatever the device's: ray queries
-// must give the per-ray walk's depth and normal on every pixel both hit.
-TEST(BvhGpu, RayQueriesKeepVkraysNearestHitOnCrossingTriangles) {
+// Crossing and coplanar overlapping triangles: the device's float32 ordering of candidates is not
+// vkray's, and once one is committed it culls the other at its own distance. Where vkray's test hits
+// a candidate, distance and normal are vkray's whatever the device's: ray queries must give the
+// per-ray walk's depth and normal on every pixel both hit.
+TEST(BvhGpu, RayQueriesKeepVkraysNearestHitOnCrossingAndCoplanarTriangles) {
   if (runnable({PrimitiveSearch::ray_query}).empty()) GTEST_SKIP() << "this device has no ray queries";
   // Two large triangles crossing along the line x = 0: one in z = 0, one tilted through it.
   Mesh crossing;
   crossing.positions = {{-2, -2, 0}, {2, -2, 0}, {0, 2, 0}, {-2, -2, -0.3}, {2, -2, 0.3}, {0, 2, 0.1}};
   crossing.triangles = {{0, 1, 2}, {3, 4, 5}};
-  Scene scene = sized(mesh_scene(crossing), 96, 96);
-  scene.camera = {{0.3, 0.2, 6}, {0, 0, 0}, {0, 1, 0}, 60};
-  auto frame_of = [&](PrimitiveSearch search) {
-    RendererOptions options;
-    options.scene.search = search;
-    Renderer renderer(device(), scene, options);
-    return renderer.render(scene.camera, scene.width, scene.height, {Aov::depth, Aov::normal});
-  };
-  const Frame walk = frame_of(PrimitiveSearch::bvh_per_ray), queries = frame_of(PrimitiveSearch::ray_query);
-  size_t compared = 0, differing = 0;
-  std::string first;
-  for (size_t p = 0; p < walk.pixel_count(); ++p) {
-    if (!walk.hit(p) || !queries.hit(p)) continue;
-    ++compared;
-    bool same = walk.depth[p] == queries.depth[p];
-    for (size_t c = 0; c < 3; ++c) same = same && walk.normal[c * walk.pixel_count() + p] == queries.normal[c * walk.pixel_count() + p];
-    if (!same && differing++ < 5) {
-      first += " (" + std::to_string(p % walk.width) + ", " + std::to_string(p / walk.width) + "): " +
-               std::to_string(walk.depth[p]) + " against " + std::to_string(queries.depth[p]);
-    }
+  // Two overlapping triangles in the tilted plane z = x / 4 + y / 8 (exactly: dyadic coordinates),
+  // whose float32 distances along a ray differ by a rounding or two.
+  Mesh coplanar;
+  for (glm::dvec2 p : {glm::dvec2{-2, -2}, {2, -2}, {0, 2}, {-1.5, -1.75}, {2.25, -1}, {-0.5, 2.125}}) {
+    coplanar.positions.push_back({p.x, p.y, p.x / 4 + p.y / 8});
   }
-  EXPECT_GT(compared, walk.pixel_count() / 8);  // the camera sees the triangles
-  EXPECT_EQ(differing, 0u) << differing << " of " << compared << " pixels:" << first;
+  coplanar.triangles = {{0, 1, 2}, {3, 4, 5}};
+  for (const auto& [name, mesh] : {std::pair{"crossing", crossing}, std::pair{"coplanar", coplanar}}) {
+    SCOPED_TRACE(name);
+    Scene scene = sized(mesh_scene(mesh), 96, 96);
+    scene.camera = {{0.3, 0.2, 6}, {0, 0, 0}, {0, 1, 0}, 60};
+    auto frame_of = [&](PrimitiveSearch search) {
+      RendererOptions options;
+      options.scene.search = search;
+      Renderer renderer(device(), scene, options);
+      return renderer.render(scene.camera, scene.width, scene.height, {Aov::depth, Aov::normal});
+    };
+    const Frame walk = frame_of(PrimitiveSearch::bvh_per_ray), queries = frame_of(PrimitiveSearch::ray_query);
+    size_t compared = 0, differing = 0;
+    std::string first;
+    for (size_t p = 0; p < walk.pixel_count(); ++p) {
+      if (!walk.hit(p) || !queries.hit(p)) continue;
+      ++compared;
+      bool same = walk.depth[p] == queries.depth[p];
+      for (size_t c = 0; c < 3; ++c) same = same && walk.normal[c * walk.pixel_count() + p] == queries.normal[c * walk.pixel_count() + p];
+      if (!same && differing++ < 5) {
+        first += " (" + std::to_string(p % walk.width) + ", " + std::to_string(p / walk.width) + "): " +
+                 std::to_string(walk.depth[p]) + " against " + std::to_string(queries.depth[p]);
+      }
+    }
+    EXPECT_GT(compared, walk.pixel_count() / 8);  // the camera sees the triangles
+    EXPECT_EQ(differing, 0u) << differing << " of " << compared << " pixels:" << first;
+  }
 }
 
 // Image sizes that leave workgroups and subgroups partly outside the image: the packet walk's
