@@ -556,7 +556,7 @@ PYBIND11_MODULE(vkray, m) {
       .def("cast_rays", &PyRenderer::cast_rays, py::arg("rays"),
            "rays: N x 6 (origin, direction). A dict of arrays: t (distance along the normalized direction, inf on "
            "a miss), normal N x 3, primitive_id and mesh_id (uint32, NO_HIT on a miss).")
-      .def_property_readonly("device_name", &PyRenderer::device_name)
+      .def_property_readonly("device_name", &PyRenderer::device_name, "The name of the device it opened (`vkray info`).")
       .def_property_readonly("timings", &PyRenderer::timings, "Where the last call's time went, in milliseconds.");
 
   py::class_<PyReference>(m, "Reference", "The double-precision CPU reference, with the Renderer's methods (float64).")

@@ -2,6 +2,7 @@
 with pytest: tests/CMakeLists.txt sets VKRAY_CLI, VKRAY_MODELS_DIR and PYTHONPATH)."""
 import math
 import os
+import pathlib
 import subprocess
 import threading
 import time
@@ -529,6 +530,19 @@ def test_every_output_is_the_command_lines_exr_channel(tmp_path, model):
         assert np.mean(np.any(arrays["texcoord"][hit] != 0, axis=-1)) > 0.5
     else:
         assert np.mean(np.linalg.norm(arrays["shading_normal"][hit] - arrays["normal"][hit], axis=-1) > 1e-3) > 0.5
+
+
+def test_the_help_names_every_output_and_argument():
+    """help(vkray.Renderer.render) lists every output of vkray.outputs by its key, and the
+    constructor's help its every argument, as the README's API lines show them."""
+    render_help = vkray.Renderer.render.__doc__
+    missing = [o["name"] for o in vkray.outputs if f" {o['name']} (" not in render_help]
+    assert not missing, missing
+    for argument in ("device", "precision", "traversal"):
+        assert f"{argument}:" in vkray.Renderer.__init__.__doc__, argument
+    assert "device it opened" in vkray.Renderer.device_name.__doc__
+    readme = (pathlib.Path(__file__).parents[2] / "README.md").read_text()
+    assert 'vkray.Renderer(scene, device=None, precision="float", traversal="auto")' in readme
 
 
 def test_planar_depth_reprojects_to_the_position_channel_with_the_headers_camera(tmp_path):
