@@ -81,9 +81,10 @@ int run_bench(const BenchOptions& options) {
   GpuDevice device(options.device_options.device, options.device_options.transfer_mode());
   print_cpu_device_note(device.info());
   BenchReport report = new_bench_report(device.info(), options.suite, options.frames);
-  std::printf("vkray bench on %s\ndriver %s\ntransfer %s\n%ux%u, %u frame%s after a warm-up\n%s%s",
-              device.info().name.c_str(), device.info().driver.c_str(), device.transfer_description().c_str(), width,
-              height, options.frames, options.frames == 1 ? "" : "s",
+  // The count first: a suite of dozens of scenes at a full size runs for minutes.
+  std::printf("vkray bench on %s\ndriver %s\ntransfer %s\n%zu scene%s at %ux%u, %u frame%s after a warm-up\n%s%s",
+              device.info().name.c_str(), device.info().driver.c_str(), device.transfer_description().c_str(),
+              scenes.size(), scenes.size() == 1 ? "" : "s", width, height, options.frames, options.frames == 1 ? "" : "s",
               bench_table_legend(options.wide).c_str(), bench_table_header(options.wide).c_str());
   std::fflush(stdout);
   for (const auto& scene : scenes) {

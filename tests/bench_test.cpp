@@ -380,6 +380,22 @@ TEST(AccuracyMarkdown, JudgesTheGoalsOnTopOfTheFloat32RayAndNamesTheCommand) {
   EXPECT_NE(text.find("adds no more than the goal on top.\n\n| case |"), std::string::npos) << text;
 }
 
+// Without the models folder the accuracy suite says that it leaves the bunny out (it used to drop
+// it silently); the README states the stiff suite's size as the code has it.
+TEST(BenchScenes, AccuracySuiteNamesTheMissingBunnyAndTheReadmeCountsTheStiffCases) {
+  std::vector<std::string> skipped;
+  const auto accuracy = bench_suite("accuracy", 8, 8, "/nonexistent/vkray-models", &skipped);
+  const size_t stiff = bench_suite("stiff", 8, 8, "").size(), basic = bench_suite("basic", 8, 8, "").size();
+  EXPECT_EQ(accuracy.size(), stiff + basic);
+  ASSERT_EQ(skipped.size(), 1u);
+  EXPECT_NE(skipped[0].find("stanford-bunny.obj: not in the models folder '/nonexistent/vkray-models'"),
+            std::string::npos)
+      << skipped[0];
+  std::ifstream readme(std::filesystem::path(__FILE__).parent_path().parent_path() / "README.md");
+  const std::string text{std::istreambuf_iterator<char>(readme), {}};
+  EXPECT_NE(text.find("`stiff` (" + std::to_string(stiff) + " numerically hard cases"), std::string::npos);
+}
+
 TEST(BenchScenes, UnknownSuiteOrAbsentModelsFolder) {
   EXPECT_THROW(bench_suite("fast", 64, 48, ""), InputError);
   EXPECT_TRUE(bench_suite("models", 64, 48, "/nonexistent/vkray-models").empty());

@@ -109,6 +109,9 @@ std::vector<BenchScene> bench_suite(const std::string& suite, uint32_t width, ui
       scene.width = width;
       scene.height = height;
       scenes.push_back(framed(accuracy_model, std::move(scene)));
+    } else if (skipped) {
+      skipped->push_back(std::string(accuracy_model) + ": not in the models folder '" + models_dir.string() +
+                         "' (name it with --models)");
     }
     return scenes;
   }

@@ -26,7 +26,7 @@ inline constexpr const char* accuracy_model = "stanford-bunny.obj";
 // - stiff: the numerically hard cases of engine/bench/stiff_cases.hpp (cases about image sizes keep
 //   theirs);
 // - accuracy: the stiff cases, then the basic suite and the Stanford bunny (accuracy_model, when
-//   `models_dir` has it): what docs/accuracy.md tabulates;
+//   `models_dir` has it, or a line in `skipped` saying it is not): what docs/accuracy.md tabulates;
 // - models: every .obj file in `models_dir`, framed to fill the image (none when the folder is
 //   absent; the caller says so). A file that does not load is left out, its error added to
 //   `skipped` when given.
