@@ -308,11 +308,15 @@ int run_render(const RenderOptions& options) {
     run.scene_stats = renderer.scene_stats();
   }
 
-  std::optional<FrameError> error;
+  std::optional<FrameError> error, float32_ray_error;
   if (options.check) {
     const std::vector<ReferenceHit>& hits = reference();
     Stopwatch measure_watch;
     error = measure_error(frame, hits);
+    // Beside it, what the float32 rays cost on their own: flips there are the ray's, not the search's.
+    if (options.precision != "double") {
+      float32_ray_error = measure_error(float32_ray_frame(*reference_scene, scene.camera, scene.width, scene.height), hits);
+    }
     run.measure_ms = measure_watch.lap_ms();
   }
   stopwatch.lap_ms();
@@ -329,6 +333,11 @@ int run_render(const RenderOptions& options) {
   // A model is framed by vkray: say from where, ready to paste (to render it again, or a neighbour).
   if (lower_extension(options.scene_path) == ".obj" || options.view) std::printf("camera: %s\n", camera_option(scene.camera).c_str());
   if (error) std::printf("error vs. double-precision reference: %s\n", error->summary().c_str());
+  if (float32_ray_error) {
+    std::printf("float32 rays alone (the exact scene along the shader's float32 ray directions, the "
+                "floor of every float32 search; --precision double has none): %s\n",
+                float32_ray_error->summary().c_str());
+  }
   if (options.timings) print_render_timings(run, options.no_preview);
   return 0;
 }

@@ -864,6 +864,28 @@ TEST_F(CliTest, CheckPrintsErrorAgainstReference) {
   EXPECT_EQ(exr.width, 32);
 }
 
+// A sphere of radius 1e-6 seen obliquely through a 1e-4 degree field of view: the float32 rays
+// alone are too coarse for its silhouette (adjacent pixels' directions differ by ~4e-8, a float32
+// step of the direction). --check prints that floor beside the error, so flips there read as the
+// ray's; the float64 shader has no such floor and no flips.
+TEST_F(CliTest, CheckPrintsTheFloat32RaysOwnErrorBesideTheError) {
+  write("tiny.json", R"({"image": {"width": 64, "height": 48},
+    "camera": {"from": [0, 0, 0], "to": [1, 1, 1], "up": [0, 1, 0], "fovy": 1e-4},
+    "spheres": [{"center": [1, 1, 1], "radius": 1e-6}]})");
+  const std::regex mismatches(R"(hit/miss mismatches ([0-9]+) of 3072 )");
+  const RunResult run = vkray({"render", "tiny.json", "--check", "-o", "out.exr", "--no-preview"});
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  std::smatch match;
+  ASSERT_TRUE(std::regex_search(run.out, match, std::regex(R"(\nfloat32 rays alone \([^)]*\): hit/miss mismatches ([0-9]+) of 3072 )")))
+      << run.out;
+  EXPECT_GT(std::stoi(match[1].str()), 0) << run.out;
+  const RunResult exact = vkray({"render", "tiny.json", "--check", "--precision", "double", "-o", "out.exr", "--no-preview"});
+  ASSERT_EQ(exact.exit_code, 0) << exact.err;
+  EXPECT_EQ(exact.out.find("float32 rays alone"), std::string::npos) << exact.out;
+  ASSERT_TRUE(std::regex_search(exact.out, match, mismatches)) << exact.out;
+  EXPECT_EQ(match[1].str(), "0") << exact.out;
+}
+
 // A UV sphere of radius 1 around (2, 3, -1) as OBJ text: 64 segments around, 32 from pole to pole.
 // Its silhouette from any direction lies between radius cos(pi / 32) > 0.995 and 1.
 std::string uv_sphere_obj() {

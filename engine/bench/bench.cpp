@@ -269,19 +269,7 @@ BenchSceneRun::BenchSceneRun(const BenchScene& bench, const BenchSettings& setti
   reference_ = render_reference_hits(reference_scene_, scene.camera, scene.width, scene.height, settings.reference_progress);
   result_.reference_ms = elapsed_ms(reference_start);
   if (settings.float32_ray_error) {
-    // Straight into a float frame, not through a second hit per pixel: at 7680x4320 the hits
-    // would be another 1.6 GB beside the reference's.
-    const CameraBasis camera = make_camera_basis(scene.camera, scene.width, scene.height);
-    Frame rounded_rays(scene.width, scene.height, AovSet{Aov::depth, Aov::normal});
-    rounded_rays.allocate();
-    parallel_for_strided(scene.height, [&](size_t row, size_t) {
-      const auto j = static_cast<uint32_t>(row);
-      for (uint32_t i = 0; i < scene.width; ++i) {
-        store_reference_hit(rounded_rays, size_t{j} * scene.width + i,
-                            reference_scene_.trace(camera.origin, float32_ray_direction(camera, i, j, scene.width, scene.height)));
-      }
-    });
-    result_.float32_ray = measure_error(rounded_rays, reference_);
+    result_.float32_ray = measure_error(float32_ray_frame(reference_scene_, scene.camera, scene.width, scene.height), reference_);
   }
 }
 

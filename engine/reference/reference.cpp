@@ -267,6 +267,22 @@ std::vector<ReferenceHit> render_reference_hits(const ReferenceScene& scene, con
   return hits;
 }
 
+Frame float32_ray_frame(const ReferenceScene& scene, const Camera& camera, uint32_t width, uint32_t height) {
+  // Straight into a float frame, not through a second hit per pixel: at 7680x4320 the hits would
+  // be another 1.6 GB beside the reference's.
+  const CameraBasis basis = make_camera_basis(camera, width, height);
+  Frame frame(width, height, AovSet{Aov::depth, Aov::normal});
+  frame.allocate();
+  parallel_for_strided(height, [&](size_t row, size_t) {
+    const auto j = static_cast<uint32_t>(row);
+    for (uint32_t i = 0; i < width; ++i) {
+      store_reference_hit(frame, size_t{j} * width + i,
+                          scene.trace(basis.origin, float32_ray_direction(basis, i, j, width, height)));
+    }
+  });
+  return frame;
+}
+
 std::vector<ReferenceHit> trace_reference_rays(const ReferenceScene& scene, std::span<const GivenRay> rays) {
   check_given_rays(rays);
   std::vector<ReferenceHit> hits(rays.size());
