@@ -25,6 +25,7 @@ struct BenchOptions {
   std::string suite;
   std::string size = "1920x1080";
   uint32_t frames = 5;
+  uint32_t rounds = 2;
   std::string variants;
   DeviceOptions device_options;
   std::string models = "../shared/models";
@@ -38,7 +39,8 @@ std::string command_line(const BenchOptions& options) {
   std::string line = "vkray bench";
   for (const auto& scene : options.scenes) line += " " + scene;
   if (!options.suite.empty()) line += " --suite " + options.suite;
-  line += " --size " + options.size + " --frames " + std::to_string(options.frames);
+  line += " --size " + options.size + " --frames " + std::to_string(options.frames) + " --rounds " +
+          std::to_string(options.rounds);
   if (!options.variants.empty()) line += " --variants " + options.variants;
   if (!options.markdown.empty()) line += " --markdown " + options.markdown;
   return line;
@@ -56,6 +58,7 @@ int run_bench(const BenchOptions& options) {
   const auto [width, height] = parse_size(options.size);
   BenchSettings settings;
   settings.frames = options.frames;
+  settings.rounds = options.rounds;
   settings.variants = split_list(options.variants);
   for (const auto& name : settings.variants) find_bench_variant(name);  // unknown names fail before any work
   settings.float32_ray_error = !options.markdown.empty();
@@ -82,10 +85,10 @@ int run_bench(const BenchOptions& options) {
   print_cpu_device_note(device.info());
   BenchReport report = new_bench_report(device.info(), options.suite, options.frames);
   // The count first: a suite of dozens of scenes at a full size runs for minutes.
-  std::printf("vkray bench on %s\ndriver %s\ntransfer %s\n%zu scene%s at %ux%u, %u frame%s after a warm-up\n%s%s",
+  std::printf("vkray bench on %s\ndriver %s\ntransfer %s\n%zu scene%s at %ux%u, %u frame%s after a warm-up, in %u round%s\n%s%s",
               device.info().name.c_str(), device.info().driver.c_str(), device.transfer_description().c_str(),
               scenes.size(), scenes.size() == 1 ? "" : "s", width, height, options.frames, options.frames == 1 ? "" : "s",
-              bench_table_legend(options.wide).c_str(), bench_table_header(options.wide).c_str());
+              options.rounds, options.rounds == 1 ? "" : "s", bench_table_legend(options.wide).c_str(), bench_table_header(options.wide).c_str());
   std::fflush(stdout);
   for (const auto& scene : scenes) {
     ProgressLine progress("reference for " + scene.name);
@@ -126,6 +129,11 @@ Action add_bench_command(CLI::App& app) {
   measuring.push_back(command->add_option("--frames", options->frames, "Timed frames per variant, after one warm-up")
                           ->capture_default_str()
                           ->check(CLI::Range(1u, 100000u)));
+  measuring.push_back(command->add_option("--rounds", options->rounds,
+                                          "Rounds over the variants, every other one in reverse order; each row's frames "
+                                          "pooled over them (its spread too), so noise spreads over every row")
+                          ->capture_default_str()
+                          ->check(CLI::Range(1u, 1000u)));
   std::string variant_names;
   for (const auto& variant : bench_variants()) variant_names += "\n  " + variant.name + ": " + variant.description;
   measuring.push_back(command->add_option("--variants", options->variants,

@@ -26,11 +26,13 @@ inline double median(std::vector<double> values) {
   return n % 2 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
 }
 
-// Median and spread (minimum to maximum) of repeated timings.
+// Median and spread (minimum to maximum) of repeated timings, and the timings themselves (so that
+// runs made apart can be pooled: pooled_time_stats).
 struct TimeStats {
   double median_ms = 0.0;
   double min_ms = 0.0;
   double max_ms = 0.0;
+  std::vector<double> samples_ms;
 
   // Faster than `other` beyond the noise: its slowest run beat the other's fastest. Where the two
   // spreads overlap, neither is faster (a busy machine moved one variant by 1.5x between runs).
@@ -40,7 +42,14 @@ struct TimeStats {
 inline TimeStats time_stats(const std::vector<double>& times_ms) {
   if (times_ms.empty()) return {};
   const auto [fastest, slowest] = std::minmax_element(times_ms.begin(), times_ms.end());
-  return {median(times_ms), *fastest, *slowest};
+  return {median(times_ms), *fastest, *slowest, times_ms};
+}
+
+// The statistics of both runs' timings together.
+inline TimeStats pooled_time_stats(const TimeStats& a, const TimeStats& b) {
+  std::vector<double> both = a.samples_ms;
+  both.insert(both.end(), b.samples_ms.begin(), b.samples_ms.end());
+  return time_stats(both);
 }
 
 }  // namespace vkray

@@ -113,7 +113,7 @@ BenchRow row(const char* variant, double ms, size_t flips, double depth_p99, dou
              double slowest = 0.0) {
   BenchRow result;
   result.variant = variant;
-  result.gpu = {ms, fastest > 0.0 ? fastest : ms, slowest > 0.0 ? slowest : ms};
+  result.gpu = time_stats({ms, fastest > 0.0 ? fastest : ms, slowest > 0.0 ? slowest : ms});
   result.error.hit_mismatches = flips;
   result.error.depth_p99 = depth_p99;
   result.error.normal_deg_p99 = normal_p99;
@@ -138,6 +138,17 @@ TEST(BenchParetoFront, KeepsExactlyTheUndominatedRows) {
 // Under load one variant's frames spread widely: a median that looks faster is no win where the
 // spreads overlap (issue 33: "+position", more work than default, showed 0.67x the time and took
 // default's place on the front).
+// Rounds pool a row's frames: the median, minimum and maximum of all of them, not of one round.
+TEST(BenchStatistics, PooledRoundsGiveTheStatisticsOfEveryFrame) {
+  const TimeStats first = time_stats({9.0, 8.0, 30.0}), second = time_stats({7.5, 10.0});
+  const TimeStats both = pooled_time_stats(first, second);
+  EXPECT_EQ(both.min_ms, 7.5);
+  EXPECT_EQ(both.max_ms, 30.0);
+  EXPECT_EQ(both.median_ms, 9.0);
+  EXPECT_EQ(both.samples_ms.size(), 5u);
+  EXPECT_EQ(pooled_time_stats(TimeStats{}, second).median_ms, second.median_ms);
+}
+
 TEST(BenchParetoFront, OverlappingSpreadsAreATieNotAWin) {
   std::vector<BenchRow> rows = {
       row("default", 12, 0, 1e-7, 1e-4, 8, 15),

@@ -767,6 +767,46 @@ std::string project_version() {
   return match[1];
 }
 
+// The README's synopses (its "Command line" block) name every option each command's --help lists,
+// by its long name or its short one: a student reads the synopsis first.
+TEST_F(CliTest, ReadmeSynopsesNameEveryOption) {
+  const std::string readme = read_text(fs::path(__FILE__).parent_path().parent_path() / "README.md");
+  const size_t block = readme.find("```", readme.find("\n## Command line\n"));
+  ASSERT_NE(block, std::string::npos);
+  const std::string synopses = readme.substr(block, readme.find("```", block + 3) - block);
+  for (const std::vector<std::string>& command :
+       {std::vector<std::string>{"render"}, {"bench"}, {"view"}, {"info"}, {"report"}, {"manifest", "merge"}}) {
+    std::string name = "vkray";
+    for (const auto& word : command) name += " " + word;
+    SCOPED_TRACE(name);
+    // The command's lines: from its first to the next command's.
+    std::string lines;
+    std::istringstream in(synopses);
+    bool own = false;
+    for (std::string line; std::getline(in, line);) {
+      if (line.starts_with("vkray ")) own = line.starts_with(name + " ");
+      if (own) lines += line + "\n";
+    }
+    ASSERT_FALSE(lines.empty());
+    std::vector<std::string> arguments = command;
+    arguments.push_back("--help");
+    const RunResult help = vkray(arguments);
+    ASSERT_EQ(help.exit_code, 0) << help.err;
+    const std::regex option(R"(\n +(-[a-zA-Z],)?(--[a-z][a-z0-9-]*))");
+    size_t options = 0;
+    for (auto it = std::sregex_iterator(help.out.begin(), help.out.end(), option); it != std::sregex_iterator(); ++it) {
+      const std::string long_name = (*it)[2], short_name = (*it)[1].str().substr(0, 2);
+      if (long_name == "--help") continue;
+      ++options;
+      auto named = [&](const std::string& flag) {
+        return !flag.empty() && std::regex_search(lines, std::regex("[\\[ |]" + flag + "[\\] ]"));
+      };
+      EXPECT_TRUE(named(long_name) || named(short_name)) << long_name << " is not in the README's synopsis";
+    }
+    EXPECT_GT(options, 0u);
+  }
+}
+
 TEST_F(CliTest, HelpAndVersionPrintToStdout) {
   RunResult run = vkray({"--help"});
   EXPECT_EQ(run.exit_code, 0);
@@ -1069,7 +1109,7 @@ TEST_F(CliTest, BenchBasicSuiteJsonHasEveryFieldAndSaneFigures) {
   ASSERT_EQ(json.at("scenes").size(), names.size());
   const std::vector<std::string> fixed_fields = {
       "variant", "on_gpu", "device_triangles", "device_geometry_bytes", "bvh_nodes", "bvh_depth", "loop_budget",
-      "upload_ms", "bvh_build_ms", "pipeline_ms", "gpu_median_ms", "gpu_min_ms", "gpu_max_ms", "frame_median_ms", "gpu_sustained_ms", "mrays_per_s",
+      "upload_ms", "bvh_build_ms", "pipeline_ms", "gpu_median_ms", "gpu_min_ms", "gpu_max_ms", "gpu_frames", "frame_median_ms", "gpu_sustained_ms", "mrays_per_s",
       "unfinished_rays", "pixels", "hit_mismatches", "both_hit", "nan_pixels", "depth_rel_p50", "depth_rel_p99", "depth_rel_max",
       "depth_ulp_p50", "depth_ulp_p99", "depth_ulp_max",
       "normal_deg_p50", "normal_deg_p99", "normal_deg_max", "pareto", "outputs_compared"};
@@ -1095,6 +1135,7 @@ TEST_F(CliTest, BenchBasicSuiteJsonHasEveryFieldAndSaneFigures) {
       EXPECT_EQ(row.size(), row_fields.size());
       const double median = row.at("gpu_median_ms"), minimum = row.at("gpu_min_ms"), maximum = row.at("gpu_max_ms");
       EXPECT_GT(minimum, 0.0);
+      EXPECT_EQ(row.at("gpu_frames"), 4) << "2 frames in each of the default 2 rounds, pooled";
       EXPECT_LE(minimum, median);
       EXPECT_LE(median, maximum);
       EXPECT_EQ(row.at("pixels"), width * height);

@@ -54,6 +54,7 @@ struct BenchRow {
   double bvh_build_ms = 0.0;        // of which the BVH build (ray queries: the device's structures; CPU rows: Embree's scene build)
   double pipeline_ms = 0.0;         // pipeline creation, never in frame times
   TimeStats gpu;                    // GPU time per frame, from timestamps (CPU rows: wall time of the trace)
+  uint64_t gpu_frames = 0;          // the timed frames behind `gpu`, over every round
   double frame_median_ms = 0.0;     // host wall time per frame, readback included (GPU rows)
   // GPU time a frame in passes back to back (Renderer::sustained_dispatch_ms), the fastest of three
   // bursts; 0 where not measured (BenchSettings::sustained_ms).
@@ -94,7 +95,11 @@ struct BenchTiming {
 std::vector<double> timed_runs(const BenchTiming& timing, const std::function<double()>& frame);
 
 struct BenchSettings {
-  uint32_t frames = 5;                       // timed frames per variant, after one warm-up
+  uint32_t frames = 5;                       // timed frames per variant and round, after one warm-up
+  // Rounds over the scene's variants, in order and then in reverse, each row's frames pooled over
+  // them: a machine busy for a while slows every variant a little rather than one a lot (on two
+  // shared cores one variant moved 1.5x between runs, more than variants differ).
+  uint32_t rounds = 2;
   // The report's rows: warm-up and timing by wall time (BenchTiming) on top of `frames`, and
   // BenchRow::sustained_ms from bursts of about this many ms each (0: not measured).
   double warm_up_ms = 0.0, min_timed_ms = 0.0, sustained_burst_ms = 0.0;
@@ -119,6 +124,8 @@ class BenchSceneRun {
   BenchRow row(GpuDevice& device, const BenchVariant& variant);
   // The scene's figures, without rows: the caller collects those.
   BenchSceneResult& result() { return result_; }
+  // Embree is traced again for the next round's rows, so its rows too are timed in every round.
+  void next_round() { embree_.reset(); }
 
  private:
   const Scene& scene_;
@@ -129,8 +136,8 @@ class BenchSceneRun {
   BenchSceneResult result_;
 };
 
-// Renders the scene with each variant and Embree, measures each against the reference, and marks
-// the Pareto front.
+// Renders the scene with each variant and Embree in BenchSettings::rounds rounds, measures each
+// against the reference, and marks the Pareto front.
 BenchSceneResult bench_scene(GpuDevice& device, const BenchScene& scene, const BenchSettings& settings);
 
 // A row is on the Pareto front of its scene when no other row is at least as good in time and in

@@ -43,6 +43,7 @@ const RowField fixed_row_fields[] = {
     {"gpu_median_ms", [](BenchRow& r) -> FieldRef { return &r.gpu.median_ms; }},
     {"gpu_min_ms", [](BenchRow& r) -> FieldRef { return &r.gpu.min_ms; }},
     {"gpu_max_ms", [](BenchRow& r) -> FieldRef { return &r.gpu.max_ms; }},
+    {"gpu_frames", [](BenchRow& r) -> FieldRef { return &r.gpu_frames; }},
     {"frame_median_ms", [](BenchRow& r) -> FieldRef { return &r.frame_median_ms; }},
     {"gpu_sustained_ms", [](BenchRow& r) -> FieldRef { return &r.sustained_ms; }},
     {"mrays_per_s", [](BenchRow& r) -> FieldRef { return &r.mrays_per_s; }},
