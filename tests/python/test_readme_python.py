@@ -2,6 +2,7 @@
 nowhere: MPLBACKEND=Agg)."""
 import os
 import pathlib
+import re
 import subprocess
 import sys
 
@@ -49,3 +50,29 @@ def test_the_one_line_import_in_the_readme_runs():
         result = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True, env=os.environ)
         assert result.returncode == 0, f"{line}\n{result.stderr}"
         assert result.stdout.strip() == "(600, 800)", result.stdout
+
+
+def github_anchor(title):
+    return re.sub(r"[^\w\- ]", "", title.strip().lower()).replace(" ", "-")
+
+
+def test_the_readme_opens_with_contents_that_list_every_heading():
+    """The first heading is the contents; its entries are the README's ## and ### headings, in
+    order, with the anchors GitHub gives them; the quick start, a ```python block the test above
+    runs, comes early."""
+    lines = (ROOT / "README.md").read_text().splitlines()
+    headings = [(i, line) for i, line in enumerate(lines) if re.match(r"^##+ ", line)]
+    assert headings[0][1] == "## Contents"
+    start = headings[0][0]
+    end = headings[1][0]
+    entries = [line for line in lines[start + 1:end] if line.strip()]
+    expected = []
+    for _, line in headings[1:]:
+        level, title = line.split(" ", 1)
+        if level in ("##", "###"):
+            expected.append(("  " if level == "###" else "") + f"- [{title}](#{github_anchor(title)})")
+    assert entries == expected
+    titles = [line for _, line in headings]
+    assert [title for title in titles if title.startswith("## ")][:3] == ["## Contents", "## Two commands", "## Quick start"]
+    quick = "\n".join(lines[headings[titles.index("## Quick start")][0]:headings[titles.index("## Quick start") + 1][0]])
+    assert "```python" in quick and "vkray.Renderer" in quick
