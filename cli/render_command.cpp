@@ -6,6 +6,7 @@
 #include "engine/reference/compare.hpp"
 #include "engine/host_memory.hpp"
 #include "engine/io/image_io.hpp"
+#include "engine/io/preview.hpp"
 #include "engine/typed_names.hpp"
 #include "engine/reference/reference.hpp"
 #include "engine/render/renderer.hpp"
@@ -330,6 +331,9 @@ int run_render(const RenderOptions& options) {
 
   std::printf("vkray: wrote %s (%ux%u, %s) on %s\n", written.c_str(), scene.width, scene.height,
               aovs.names().c_str(), device_name.c_str());
+  if (!options.no_preview && std::ranges::count(preview_panels(frame), Aov::depth) > 0) {
+    std::printf("preview: %s\n", depth_legend(finite_depth_range(frame)).c_str());
+  }
   // A model is framed by vkray: say from where, ready to paste (to render it again, or a neighbour).
   if (lower_extension(options.scene_path) == ".obj" || options.view) std::printf("camera: %s\n", camera_option(scene.camera).c_str());
   if (error) std::printf("error vs. double-precision reference: %s\n", error->summary().c_str());

@@ -904,6 +904,29 @@ TEST_F(CliTest, CheckPrintsErrorAgainstReference) {
   EXPECT_EQ(exr.width, 32);
 }
 
+// The preview's depth panel has a legend: the depth of its white and of its darkest grey, the
+// nearest and farthest finite depth of the EXR, printed and stored as the PNG's Comment.
+TEST_F(CliTest, ThePreviewsDepthLegendGivesTheNearestAndFarthestDepth) {
+  const RunResult run = vkray({"render", "--width", "64", "--height", "48", "--aov", "depth,normal", "-o", "out.exr"});
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  Image exr;
+  ASSERT_NO_FATAL_FAILURE(read_image(path("out.exr"), exr, true));
+  float nearest = INFINITY, farthest = 0.0f;
+  for (float z : exr.channels.at("Z")) {
+    if (std::isfinite(z)) nearest = std::min(nearest, z), farthest = std::max(farthest, z);
+  }
+  char legend[120];
+  std::snprintf(legend, sizeof legend, "depth %.5g white .. %.5g dark grey (grey ~ 1/depth)", nearest, farthest);
+  EXPECT_TRUE(has_line_starting_with(run.out, std::string("preview: ") + legend)) << run.out << legend;
+  auto png = OIIO::ImageInput::open(path("out.png").string());
+  ASSERT_TRUE(png);
+  EXPECT_EQ(png->spec().get_string_attribute("Comment"), legend);
+  // No depth panel, no legend.
+  const RunResult normals = vkray({"render", "--width", "64", "--height", "48", "--aov", "normal", "-o", "n.exr"});
+  ASSERT_EQ(normals.exit_code, 0) << normals.err;
+  EXPECT_EQ(normals.out.find("preview: depth"), std::string::npos) << normals.out;
+}
+
 // A sphere of radius 1e-6 seen obliquely through a 1e-4 degree field of view: the float32 rays
 // alone are too coarse for its silhouette (adjacent pixels' directions differ by ~4e-8, a float32
 // step of the direction). --check prints that floor beside the error, so flips there read as the

@@ -139,8 +139,9 @@ class ViewerTest : public TempDirTest {
       // Above the standard descriptors, which ctest may have left closed for the pipe to take.
       const std::string fd = std::to_string(fcntl(fds[1], F_DUPFD, 10));
       std::freopen("/dev/null", "w", stderr);
+      // -fbdir: the screen's memory is an XWD file in the test's folder (screen_of reads it).
       execl("/usr/bin/Xvfb", "Xvfb", "-displayfd", fd.c_str(), "-screen", "0", "1280x1024x24", "-nolisten", "tcp",
-            static_cast<char*>(nullptr));
+            "-fbdir", dir_.c_str(), static_cast<char*>(nullptr));
       _exit(127);
     }
     close(fds[1]);
@@ -224,6 +225,45 @@ class ViewerTest : public TempDirTest {
     return id;
   }
 
+  // What the virtual screen shows now where `window` is: Xvfb draws into its XWD file (-fbdir), a
+  // big-endian header of 25 32-bit fields, a colour map of 12 bytes an entry, then the pixels.
+  Picture screen_of(const std::string& window) {
+    const std::string geometry = xdotool("getwindowgeometry --shell " + window);
+    auto field = [&](const char* name) {
+      std::smatch match;
+      EXPECT_TRUE(std::regex_search(geometry, match, std::regex(std::string("\\b") + name + "=([0-9]+)"))) << geometry;
+      return match.empty() ? 0 : std::stoi(match[1]);
+    };
+    const int x = field("X"), y = field("Y");
+    Picture picture;
+    picture.width = field("WIDTH"), picture.height = field("HEIGHT");
+    const std::string xwd = read_text(dir_ / "Xvfb_screen0");
+    auto word = [&](size_t index) {
+      const auto* bytes = reinterpret_cast<const unsigned char*>(xwd.data() + 4 * index);
+      return uint32_t{bytes[0]} << 24 | uint32_t{bytes[1]} << 16 | uint32_t{bytes[2]} << 8 | bytes[3];
+    };
+    if (xwd.size() < 100 || word(11) != 32) {
+      ADD_FAILURE() << "the screen's XWD file is missing or not 32 bits a pixel";
+      return picture;
+    }
+    const size_t header = word(0), colours = word(19), bytes_per_line = word(12);
+    const bool lsb_first = word(7) == 0;
+    const size_t pixels = header + 12 * colours;
+    picture.rgb.resize(size_t(picture.width) * picture.height * 3);
+    for (int row = 0; row < picture.height; ++row) {
+      for (int column = 0; column < picture.width; ++column) {
+        const size_t at = pixels + size_t(y + row) * bytes_per_line + 4 * size_t(x + column);
+        if (at + 4 > xwd.size()) return ADD_FAILURE() << "the window lies outside the screen", picture;
+        const auto* p = reinterpret_cast<const unsigned char*>(xwd.data() + at);
+        const uint32_t value = lsb_first ? uint32_t{p[0]} | uint32_t{p[1]} << 8 | uint32_t{p[2]} << 16
+                                         : uint32_t{p[3]} | uint32_t{p[2]} << 8 | uint32_t{p[1]} << 16;
+        unsigned char* rgb = &picture.rgb[(size_t(row) * picture.width + column) * 3];
+        rgb[0] = value >> 16 & 0xff, rgb[1] = value >> 8 & 0xff, rgb[2] = value & 0xff;
+      }
+    }
+    return picture;
+  }
+
   // vkray render's preview of one output at width x height, with `extra` options.
   Picture render_preview(const std::string& output, int width, int height, const std::string& extra = "") {
     const fs::path exr = dir_ / ("render-" + std::to_string(runs_) + ".exr");
@@ -287,6 +327,11 @@ TEST_F(ViewerTest, AnIdleViewerDoesNotDispatchAgain) {
   xdotool("key Escape");
   ASSERT_EQ(viewer.wait(start_timeout), 0) << viewer.stderr_text();
   EXPECT_NE(viewer.stdout_text().find(" 1 renders dispatched"), std::string::npos) << viewer.stdout_text();
+  // --stats leaves the idle second out of its frame times.
+  const std::string out = viewer.stdout_text();
+  std::smatch mean;
+  ASSERT_TRUE(std::regex_search(out, mean, std::regex(R"(mean frame ([0-9.]+) ms)"))) << out;
+  EXPECT_LT(std::stod(mean[1]), 1000.0) << out;
 }
 
 TEST_F(ViewerTest, KeyTwoSwitchesToNormals) {
@@ -350,6 +395,49 @@ TEST_F(ViewerTest, AfterAResizeTheDiskStillTouchesTheShorterBorders) {
   EXPECT_EQ(blue(50, 0), outside);
   EXPECT_EQ(blue(50, 179), outside);
   EXPECT_EQ(differing_pixels(picture, render_preview("uv", 100, 180)), 0);
+}
+
+// An idle viewer draws nothing more, so its first frame and the frame with an error must show the
+// overlay whole at once (an auto-sized ImGui window took its size a frame late: no overlay on the
+// first frame, an error cut short). On screen while it waits: the overlay over the picture on the
+// first frame, and with the error exactly what its screenshot at exit (drawn again) shows.
+TEST_F(ViewerTest, TheOverlayIsWholeOnTheFirstFrameAndWithAnError) {
+  const std::string scene = R"({"camera": {"from": [0, 0, 5], "to": [0, 0, 0], "fovy": 40},
+                               "spheres": [{"center": [0, 0, 0], "radius": RADIUS}]})";
+  auto with_radius = [&](const char* radius) { return std::regex_replace(scene, std::regex("RADIUS"), radius); };
+  write("scene.json", with_radius("1"));
+  const fs::path shot = dir_ / "shot.png";
+  Process viewer = start_vkray("view scene.json --size 480x360 --screenshot " + shell_quote(shot.string()));
+  ASSERT_TRUE(wait_for_output(viewer, "vkray view: showing"));
+  const std::string window = viewer_window();
+  xdotool("mousemove 1270 1010");  // out of the window: Xvfb draws the pointer into its screen
+  std::this_thread::sleep_for(1s);  // idle
+  const Picture first = screen_of(window);
+  write("scene.json", with_radius("-2"));
+  const auto end = std::chrono::steady_clock::now() + start_timeout;
+  while (viewer.stderr_text().find("radius") == std::string::npos && std::chrono::steady_clock::now() < end) {
+    std::this_thread::sleep_for(50ms);
+  }
+  std::this_thread::sleep_for(1s);  // idle again, the error shown
+  const Picture with_error = screen_of(window);
+  viewer_window();  // the pointer back over it, for the key
+  xdotool("key Escape");
+  ASSERT_EQ(viewer.wait(start_timeout), 0) << viewer.stderr_text();
+  EXPECT_EQ(differing_pixels(with_error, read_png(shot)), 0) << "the error's overlay was not whole on screen";
+  // The first frame: the picture, with the overlay's box (five lines of text and more) over its top left.
+  write("good.json", with_radius("1"));
+  const Picture picture = render_preview("depth", 480, 360, "good.json");
+  ASSERT_EQ(differing_pixels(first, picture) >= 0, true);
+  long overlaid = 0, elsewhere = 0;
+  for (int row = 0; row < first.height; ++row) {
+    for (int column = 0; column < first.width; ++column) {
+      const size_t p = (size_t(row) * first.width + column) * 3;
+      const bool differs = !std::equal(&first.rgb[p], &first.rgb[p] + 3, &picture.rgb[p]);
+      (row < first.height / 2 ? overlaid : elsewhere) += differs;
+    }
+  }
+  EXPECT_GT(overlaid, 480 * 30) << "no overlay on the first frame";
+  EXPECT_EQ(elsewhere, 0);
 }
 
 TEST_F(ViewerTest, TheSceneFileIsReloadedAndABrokenOneKeepsTheLastGoodScene) {

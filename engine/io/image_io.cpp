@@ -151,7 +151,7 @@ void on_png_error(png_structp png, png_const_charp message) {
 
 void on_png_warning(png_structp, png_const_charp) {}
 
-bool write_png_rows(std::FILE* file, const uint8_t* rgb, uint32_t width, uint32_t height,
+bool write_png_rows(std::FILE* file, const uint8_t* rgb, uint32_t width, uint32_t height, const std::string& comment,
                     std::array<char, 256>& error) {
   png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, &error, on_png_error, on_png_warning);
   if (!png) return false;
@@ -163,6 +163,15 @@ bool write_png_rows(std::FILE* file, const uint8_t* rgb, uint32_t width, uint32_
   png_init_io(png, file);
   png_set_IHDR(png, info, width, height, 8, PNG_COLOR_TYPE_RGB, PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT,
                PNG_FILTER_TYPE_DEFAULT);
+  std::string comment_text = comment;  // libpng takes non-const pointers
+  char comment_key[] = "Comment";
+  png_text text{};
+  if (!comment.empty()) {
+    text.compression = PNG_TEXT_COMPRESSION_NONE;
+    text.key = comment_key;
+    text.text = comment_text.data();
+    png_set_text(png, info, &text, 1);
+  }
   png_set_compression_level(png, 1);
   png_set_filter(png, PNG_FILTER_TYPE_BASE, PNG_FILTER_UP);
   png_write_info(png, info);
@@ -172,15 +181,16 @@ bool write_png_rows(std::FILE* file, const uint8_t* rgb, uint32_t width, uint32_
   return true;
 }
 
+// `comment`, when given, goes into the PNG's "Comment" text chunk.
 void write_png(const std::filesystem::path& path, size_t width, size_t height, const uint8_t* rgb,
-               const std::filesystem::path& shown_path) {
+               const std::filesystem::path& shown_path, const std::string& comment = {}) {
   if (width > PNG_UINT_31_MAX || height > PNG_UINT_31_MAX) {
     throw std::runtime_error(shown_path.string() + ": cannot write: too large for PNG");
   }
   std::FILE* file = std::fopen(path.c_str(), "wb");
   if (!file) throw std::runtime_error(shown_path.string() + ": cannot write: " + std::strerror(errno));
   std::array<char, 256> error{"libpng failed"};
-  const bool written = write_png_rows(file, rgb, static_cast<uint32_t>(width), static_cast<uint32_t>(height), error);
+  const bool written = write_png_rows(file, rgb, static_cast<uint32_t>(width), static_cast<uint32_t>(height), comment, error);
   const bool flushed = std::fflush(file) == 0 && !std::ferror(file);
   const int saved_errno = errno;
   std::fclose(file);
@@ -376,12 +386,7 @@ void write_exr_to(const PartialFile& file, const std::filesystem::path& path, co
 }
 
 void write_preview_png_to(const PartialFile& file, const std::filesystem::path& path, const Frame& frame) {
-  std::vector<Aov> shown;
-  for (Aov aov : {Aov::depth, Aov::normal, Aov::uv}) {
-    if (frame.aovs.has(aov)) shown.push_back(aov);
-  }
-  // Camera outputs or ids alone: the depth they come with stands for them.
-  if (shown.empty() && !frame.depth.empty()) shown.push_back(Aov::depth);
+  const std::vector<Aov> shown = preview_panels(frame);
   if (shown.empty()) throw std::runtime_error(path.string() + ": no outputs to preview");
   const size_t width = frame.width, height = frame.height, row_width = width * shown.size();
   std::vector<uint8_t> rgb(row_width * height * 3);
@@ -392,10 +397,22 @@ void write_preview_png_to(const PartialFile& file, const std::filesystem::path& 
     }
   }
 
-  write_png(file.path(), row_width, height, rgb.data(), path);
+  // The depth panel's scale, for whoever reads a value off it.
+  const bool depth_shown = std::find(shown.begin(), shown.end(), Aov::depth) != shown.end();
+  write_png(file.path(), row_width, height, rgb.data(), path, depth_shown ? depth_legend(finite_depth_range(frame)) : "");
 }
 
 }  // namespace
+
+std::vector<Aov> preview_panels(const Frame& frame) {
+  std::vector<Aov> shown;
+  for (Aov aov : {Aov::depth, Aov::normal, Aov::uv}) {
+    if (frame.aovs.has(aov)) shown.push_back(aov);
+  }
+  // Camera outputs or ids alone: the depth they come with stands for them.
+  if (shown.empty() && !frame.depth.empty()) shown.push_back(Aov::depth);
+  return shown;
+}
 
 void use_exr_threads(unsigned count) { start_exr_threads(count); }
 

@@ -72,6 +72,11 @@ void use_exr_threads(unsigned count);
 // (engine/scene/camera_description.hpp). Throws std::runtime_error naming the file.
 void write_exr(const std::filesystem::path& path, const Frame& frame, const ExrSettings& settings = {});
 
+// The panels of `frame`'s preview, left to right: depth, normal and uv where the frame has them, or
+// depth alone for a frame of camera outputs or ids. A depth panel's PNG carries depth_legend
+// (engine/io/preview.hpp) as its "Comment".
+std::vector<Aov> preview_panels(const Frame& frame);
+
 // 8-bit RGB pixels, 3 bytes a pixel, rows from the top, as PNG (the viewer's screenshots).
 void write_rgb_png(const std::filesystem::path& path, uint32_t width, uint32_t height, const std::vector<uint8_t>& rgb);
 

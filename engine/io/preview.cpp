@@ -1,5 +1,7 @@
 #include "engine/io/preview.hpp"
 
+#include <cstdio>
+
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
@@ -28,6 +30,13 @@ uint8_t PreviewRamp::byte(float v) const {
     if (thresholds[level + step] <= v) level += step;
   }
   return static_cast<uint8_t>(level);
+}
+
+std::string depth_legend(DepthRange depths) {
+  if (!(depths.near <= depths.far)) return "depth: no hit (black)";
+  char text[120];  // short enough for the overlay of a small window
+  std::snprintf(text, sizeof text, "depth %.5g white .. %.5g dark grey (grey ~ 1/depth)", depths.near, depths.far);
+  return text;
 }
 
 std::array<PreviewRamp, 2> preview_ramps(Aov aov, DepthRange depths) {

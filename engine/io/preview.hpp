@@ -9,6 +9,7 @@
 
 #include <array>
 #include <cstdint>
+#include <string>
 #include <vector>
 
 namespace vkray {
@@ -25,6 +26,10 @@ struct PreviewRamp {
 // (N+1)/2 through [0]; uv as (u+1)/2, (v+1)/2 and 1/2 through [0] inside the unit disk and [1],
 // 0.3 as bright, outside it. Misses are black.
 std::array<PreviewRamp, 2> preview_ramps(Aov aov, DepthRange depths);
+
+// How to read a depth picture mapped with `depths` (preview_ramps), in one line: the depth of its
+// white and of its darkest grey. The viewer's overlay, `render`'s output and the PNG's comment.
+std::string depth_legend(DepthRange depths);
 
 // Whether the centre of pixel (i, j) lies in the unit disk of uv: decided on the integer numerators
 // of uv (see pixel_uv), exactly, so every device draws the same disk.

@@ -55,21 +55,27 @@ Overlay::~Overlay() {
 void Overlay::set_min_image_count(uint32_t min_images) { ImGui_ImplVulkan_SetMinImageCount(min_images); }
 
 void Overlay::draw(const std::vector<std::string>& lines, const std::string& error, vk::CommandBuffer commands) {
-  ImGui_ImplVulkan_NewFrame();
-  ImGui_ImplGlfw_NewFrame();
-  ImGui::NewFrame();
-  ImGui::SetNextWindowPos(ImVec2(overlay_margin, overlay_margin));
-  ImGui::SetNextWindowBgAlpha(overlay_background_alpha);
-  ImGui::Begin("vkray", nullptr,
-               ImGuiWindowFlags_NoDecoration | ImGuiWindowFlags_AlwaysAutoResize | ImGuiWindowFlags_NoInputs |
-                   ImGuiWindowFlags_NoSavedSettings | ImGuiWindowFlags_NoFocusOnAppearing | ImGuiWindowFlags_NoNav);
-  for (const std::string& line : lines) ImGui::TextUnformatted(line.c_str());
-  if (!error.empty()) {
-    ImGui::PushTextWrapPos(ImGui::GetFontSize() * 40.0f);
-    ImGui::TextColored(ImVec4(1.0f, 0.4f, 0.4f, 1.0f), "%s", error.c_str());
-    ImGui::PopTextWrapPos();
+  // Laid out twice, drawn once: an auto-resized ImGui window takes its size from the frame before
+  // (a new one is hidden on its first frame), and a viewer that waits for input draws no next
+  // frame, so with one pass the first frame had no overlay and a new error line stayed clipped.
+  for (int pass = 0; pass < 2; ++pass) {
+    ImGui_ImplVulkan_NewFrame();
+    ImGui_ImplGlfw_NewFrame();
+    ImGui::NewFrame();
+    ImGui::SetNextWindowPos(ImVec2(overlay_margin, overlay_margin));
+    ImGui::SetNextWindowBgAlpha(overlay_background_alpha);
+    ImGui::Begin("vkray", nullptr,
+                 ImGuiWindowFlags_NoDecoration | ImGuiWindowFlags_AlwaysAutoResize | ImGuiWindowFlags_NoInputs |
+                     ImGuiWindowFlags_NoSavedSettings | ImGuiWindowFlags_NoFocusOnAppearing | ImGuiWindowFlags_NoNav);
+    for (const std::string& line : lines) ImGui::TextUnformatted(line.c_str());
+    if (!error.empty()) {
+      ImGui::PushTextWrapPos(ImGui::GetFontSize() * 40.0f);
+      ImGui::TextColored(ImVec4(1.0f, 0.4f, 0.4f, 1.0f), "%s", error.c_str());
+      ImGui::PopTextWrapPos();
+    }
+    ImGui::End();
+    if (pass == 0) ImGui::EndFrame();
   }
-  ImGui::End();
   ImGui::Render();
   ImGui_ImplVulkan_RenderDrawData(ImGui::GetDrawData(), commands);
 }

@@ -1,6 +1,7 @@
 #include "engine/viewer/viewer.hpp"
 
 #include "engine/io/image_io.hpp"
+#include "engine/io/preview.hpp"
 #include "engine/render/renderer.hpp"
 #include "engine/vulkan/preview_pass.hpp"
 #include "engine/viewer/camera_controller.hpp"
@@ -101,11 +102,20 @@ class Viewer {
   // decides it).
   vk::Extent2D sized_for_;
   uint64_t renders_ = 0, presents_ = 0;
-  std::vector<double> frame_ms_;  // of every render and present, for the overlay
-  std::vector<double> present_intervals_ms_;  // between one present and the next, for --stats
-  double gpu_ms_ = 0.0;
-  // What the overlay shows, refreshed every overlay_refresh_s.
-  double shown_frame_ms_ = 0.0, shown_gpu_ms_ = 0.0;
+  // Between one present and the next, for --stats; an interval with an idle wait in it is not a
+  // frame's and is left out.
+  std::vector<double> present_intervals_ms_;
+  bool waited_ = false;  // the viewer waited for input since the last present
+  double gpu_ms_ = 0.0;  // of the last render
+  DepthRange depths_;    // of the last render of depth: the overlay's legend
+  // One rendered frame's figures, both of the same frame: the last one's, and those the overlay
+  // shows (refreshed every overlay_refresh_s, and before the viewer goes idle).
+  struct FrameFigures {
+    double frame_ms = 0.0, gpu_ms = 0.0;
+    bool operator==(const FrameFigures&) const = default;
+  };
+  FrameFigures last_frame_, shown_;
+  bool refresh_figures_ = false;
   Clock::time_point shown_at_{};
   Clock::time_point last_present_{};
 };
@@ -146,6 +156,7 @@ void Viewer::run() {
     } else {
       // Idle: sleep until an event, waking only to look at the scene file.
       window_.wait(watch_ ? watch_interval_s : -1.0);
+      waited_ = true;
     }
     const double dt = std::min(seconds_since(last_tick), max_fly_step_s);
     last_tick = Clock::now();
@@ -159,10 +170,15 @@ void Viewer::run() {
     if (stale_ || window_.framebuffer_size() != sized_for_) resize();
     if (display_.extent().width == 0) continue;  // minimized: nothing to show
     const auto frame_start = Clock::now();
-    if (dirty_) render();
+    const bool rendering = dirty_;
+    if (rendering) render();
     if (damaged_) {
       if (!present(nullptr)) continue;
-      frame_ms_.push_back(seconds_since(frame_start) * 1e3);
+      if (rendering) {
+        last_frame_ = {seconds_since(frame_start) * 1e3, gpu_ms_};
+        // About to wait for input with older figures shown: present once more to show this frame's.
+        if (!continuous && !flying && !dirty_ && shown_ != last_frame_) refresh_figures_ = damaged_ = true;
+      }
       if (!announced) {
         std::printf("vkray view: showing %s at %ux%u on %s\n", options_.title.c_str(), display_.extent().width,
                     display_.extent().height, device_.info().name.c_str());
@@ -196,7 +212,7 @@ void Viewer::run() {
     for (double ms : sorted) sum_ms += ms;
     const double mean = sorted.empty() ? 0.0 : sum_ms / static_cast<double>(sorted.size());
     std::printf("vkray view: %llu frames presented, %llu renders dispatched; %.1f frames/s (mean frame %.2f ms, "
-                "median %.2f ms, from present to present), last GPU time %.1f ms\n",
+                "median %.2f ms, from present to present, idle waits left out), last GPU time %.1f ms\n",
                 static_cast<unsigned long long>(presents_), static_cast<unsigned long long>(renders_),
                 mean > 0.0 ? 1000.0 / mean : 0.0, mean, median, gpu_ms_);
   }
@@ -307,6 +323,7 @@ void Viewer::render() {
     target_ = std::make_unique<ImageTarget>(device_, extent.width, extent.height);
   }
   const DepthRange depths = renderer_->render(controller_.camera(), output_, *target_);
+  if (output_ == Aov::depth) depths_ = depths;
   preview_.run(*target_, output_, depths, display_.bgra());
   gpu_ms_ = renderer_->timings().dispatch_gpu_ms;
   ++renders_;
@@ -315,10 +332,10 @@ void Viewer::render() {
 }
 
 bool Viewer::present(std::vector<uint8_t>* capture) {
-  if (!frame_ms_.empty() && seconds_since(shown_at_) >= overlay_refresh_s) {
-    shown_frame_ms_ = frame_ms_.back();
-    shown_gpu_ms_ = gpu_ms_;
+  if (refresh_figures_ || seconds_since(shown_at_) >= overlay_refresh_s) {
+    shown_ = last_frame_;
     shown_at_ = Clock::now();
+    refresh_figures_ = false;
   }
   bool shown = false;
   if (overlay_) {
@@ -331,9 +348,12 @@ bool Viewer::present(std::vector<uint8_t>* capture) {
   damaged_ = !shown;
   if (shown && !capture) {  // the screenshot's present shows the last frame again: not a frame
     const Clock::time_point now = Clock::now();
-    if (presents_ > 0) present_intervals_ms_.push_back(std::chrono::duration<double, std::milli>(now - last_present_).count());
+    if (presents_ > 0 && !waited_) {
+      present_intervals_ms_.push_back(std::chrono::duration<double, std::milli>(now - last_present_).count());
+    }
     ++presents_;
     last_present_ = now;
+    waited_ = false;
   } else if (!shown) {
     stale_ = true;
   }
@@ -345,11 +365,12 @@ std::vector<std::string> Viewer::overlay_lines() const {
   const double pixels = double(extent.width) * extent.height;
   const Camera& camera = controller_.camera();
   std::vector<std::string> lines;
-  lines.push_back(format("frame %.1f ms   GPU %.1f ms   %.1f Mrays/s", shown_frame_ms_, shown_gpu_ms_,
-                         shown_gpu_ms_ > 0.0 ? pixels / (shown_gpu_ms_ * 1e3) : 0.0));
+  lines.push_back(format("frame %.1f ms   GPU %.1f ms   %.1f Mrays/s", shown_.frame_ms, shown_.gpu_ms,
+                         shown_.gpu_ms > 0.0 ? pixels / (shown_.gpu_ms * 1e3) : 0.0));
   lines.push_back(format("%s   %ux%u   %s", aov_name(output_), extent.width, extent.height, device_.info().name.c_str()));
   lines.push_back("from " + vector_text(camera.from) + "   to " + vector_text(camera.to));
   lines.push_back(format("fovy %.4g   (1 depth, 2 normal, 3 uv, R reset, C print)", camera.fovy_degrees));
+  if (output_ == Aov::depth) lines.push_back(depth_legend(depths_));
   return lines;
 }
 
