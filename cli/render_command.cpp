@@ -316,7 +316,8 @@ int run_render(const RenderOptions& options) {
     error = measure_error(frame, hits);
     // Beside it, what the float32 rays cost on their own: flips there are the ray's, not the search's.
     if (options.precision != "double") {
-      float32_ray_error = measure_error(float32_ray_frame(*reference_scene, scene.camera, scene.width, scene.height), hits);
+      float32_ray_error =
+          measure_error(float32_ray_frame(*reference_scene, scene.camera, scene.width, scene.height, frame.aovs), hits);
     }
     run.measure_ms = measure_watch.lap_ms();
   }

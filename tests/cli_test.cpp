@@ -296,7 +296,8 @@ TEST_F(CliTest, DefaultSceneWritesContractChannels) {
   const RunResult run = vkray({"render", "--width", "64", "--height", "48", "-o", "out.exr"});
   ASSERT_EQ(run.exit_code, 0) << run.err;
   EXPECT_TRUE(starts_with(run.out, "vkray: wrote out.exr and out.png (64x48, depth,normal) on ")) << run.out;
-  EXPECT_EQ(count_lines(run.out), 1u) << run.out;
+  EXPECT_EQ(count_lines(run.out), 2u) << run.out;  // and the preview's depth legend
+  EXPECT_TRUE(has_line_starting_with(run.out, "preview: depth ")) << run.out;
 
   Image exr;
   ASSERT_NO_FATAL_FAILURE(read_image(path("out.exr"), exr, true));

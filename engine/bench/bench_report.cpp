@@ -142,11 +142,12 @@ std::string pareto_summary(const BenchSceneResult& scene) {
   std::string text = format("%s: Pareto front, fastest first; time against %s, then the error it comes with:\n",
                             short_name(scene.name, 24).c_str(), baseline->variant.c_str());
   for (const BenchRow* row : front) {
-    // A ratio whose spreads overlap the baseline's is noise: said, not claimed.
+    // A ratio whose spreads overlap the baseline's is noise: said ("alike"), not claimed. Within
+    // 100 columns.
     const bool apart = row == baseline || row->gpu.clearly_faster_than(baseline->gpu) || baseline->gpu.clearly_faster_than(row->gpu);
-    text += format("  %-16s %6.2fx the time  %7zu flips  depth p99 %8.2e  normal p99 %8.2e deg%s\n",
-                   row->variant.c_str(), row->gpu.median_ms / baseline->gpu.median_ms, row->error.hit_mismatches,
-                   row->error.depth_p99, row->error.normal_deg_p99, apart ? "" : "  (spreads overlap: alike)");
+    text += format("  %-16s %6.2fx time %-5s %7zu flips  depth p99 %8.2e  normal p99 %8.2e deg\n",
+                   row->variant.c_str(), row->gpu.median_ms / baseline->gpu.median_ms, apart ? "" : "alike",
+                   row->error.hit_mismatches, row->error.depth_p99, row->error.normal_deg_p99);
   }
   return text;
 }

@@ -267,11 +267,16 @@ std::vector<ReferenceHit> render_reference_hits(const ReferenceScene& scene, con
   return hits;
 }
 
-Frame float32_ray_frame(const ReferenceScene& scene, const Camera& camera, uint32_t width, uint32_t height) {
+Frame float32_ray_frame(const ReferenceScene& scene, const Camera& camera, uint32_t width, uint32_t height,
+                        AovSet aovs) {
   // Straight into a float frame, not through a second hit per pixel: at 7680x4320 the hits would
   // be another 1.6 GB beside the reference's.
   const CameraBasis basis = make_camera_basis(camera, width, height);
-  Frame frame(width, height, AovSet{Aov::depth, Aov::normal});
+  AovSet traced;
+  for (Aov aov : {Aov::depth, Aov::normal}) {
+    if (aovs.has(aov)) traced.add(aov);
+  }
+  Frame frame(width, height, traced);
   frame.allocate();
   parallel_for_strided(height, [&](size_t row, size_t) {
     const auto j = static_cast<uint32_t>(row);

@@ -83,7 +83,9 @@ std::vector<ReferenceHit> render_reference_hits(const ReferenceScene& scene, con
 // Depth and normal of the exact scene along the float32 shader's ray directions
 // (float32_ray_direction), on all cores: against the reference it is the error of the float32 ray
 // alone, the floor that no float32 arithmetic after the ray can go below.
-Frame float32_ray_frame(const ReferenceScene& scene, const Camera& camera, uint32_t width, uint32_t height);
+// `aovs`: which of depth and normal to compute.
+Frame float32_ray_frame(const ReferenceScene& scene, const Camera& camera, uint32_t width, uint32_t height,
+                        AovSet aovs = AovSet{Aov::depth, Aov::normal});
 
 // The hit of each given ray (checked first: check_given_rays), its direction normalized, on all
 // cores.
