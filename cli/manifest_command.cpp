@@ -1,6 +1,7 @@
 #include "cli/commands.hpp"
 #include "engine/io/image_io.hpp"
 #include "engine/views/manifest.hpp"
+#include "engine/views/manifest_export.hpp"
 
 #include <cstdio>
 #include <memory>
@@ -19,7 +20,23 @@ Action add_manifest_command(CLI::App& app) {
   merge->add_option("parts", *parts, "The shards' manifest parts (manifest-shard-*.jsonl)")->required();
   merge->add_option("-o,--output", *output, "The merged manifest, in any folder: its file names are made relative to it")
       ->required();
-  return [parts, output] {
+  CLI::App* to_format = command->add_subcommand(
+      "export", "Write a manifest's cameras as NeRF's transforms.json or COLMAP's text model (README: Many views).");
+  auto manifest = std::make_shared<std::string>();
+  auto format = std::make_shared<std::string>();
+  auto folder = std::make_shared<std::string>();
+  to_format->add_option("manifest", *manifest, "The manifest of a whole run (manifest.jsonl, or a merged one)")->required();
+  to_format->add_option("--format", *format, "nerf (transforms.json) or colmap (cameras.txt, images.txt, points3D.txt)")
+      ->required();
+  to_format->add_option("-o,--output", *folder, "The folder to write them into (made if missing)")->required();
+  return [merge, parts, output, manifest, format, folder] {
+    if (!merge->parsed()) {
+      const auto files = export_manifest(*manifest, manifest_format_from_name(*format), *folder);
+      std::filesystem::create_directories(*folder);
+      for (const auto& [name, text] : files) write_text_file(std::filesystem::path(*folder) / name, text);
+      std::printf("vkray: wrote %zu file%s into %s\n", files.size(), files.size() == 1 ? "" : "s", folder->c_str());
+      return 0;
+    }
     const std::vector<std::filesystem::path> paths(parts->begin(), parts->end());
     const std::string merged = merge_manifests(paths, *output);
     write_text_file(*output, merged);

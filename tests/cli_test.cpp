@@ -776,7 +776,7 @@ TEST_F(CliTest, ReadmeSynopsesNameEveryOption) {
   ASSERT_NE(block, std::string::npos);
   const std::string synopses = readme.substr(block, readme.find("```", block + 3) - block);
   for (const std::vector<std::string>& command :
-       {std::vector<std::string>{"render"}, {"bench"}, {"view"}, {"info"}, {"report"}, {"manifest", "merge"}}) {
+       {std::vector<std::string>{"render"}, {"bench"}, {"view"}, {"info"}, {"report"}, {"manifest", "merge"}, {"manifest", "export"}}) {
     std::string name = "vkray";
     for (const auto& word : command) name += " " + word;
     SCOPED_TRACE(name);

@@ -100,6 +100,95 @@ def test_the_manifest_reprojects_each_views_depth(whole_run):
     assert np.max(np.abs(u - i)) < 1e-3 and np.max(np.abs(v - j)) < 1e-3
 
 
+def quaternion_matrix(w, x, y, z):
+    """The rotation of a unit quaternion (Hamilton's convention, as COLMAP writes it)."""
+    return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+                     [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+                     [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]])
+
+
+def hit_points(path):
+    """A view's planar depth and world hit points (P) where it hits, and those pixels' (i, j)."""
+    names, data = pixels(path)
+    planar = data[:, :, names.index("planar.Z")]
+    j, i = np.nonzero(np.isfinite(planar))
+    points = np.stack([data[j, i, names.index(f"P.{axis}")] for axis in "XYZ"], axis=-1).astype(np.float64)
+    return i, j, planar[j, i].astype(np.float64), points
+
+
+def test_nerf_and_colmap_exports_reproject_each_views_planar_depth(tmp_path):
+    """`manifest export` read back with each format's published conventions: NeRF's
+    transform_matrix is camera-to-world in OpenGL axes (x right, y up, looking down -z) and its
+    intrinsics put pixel centres at +0.5; COLMAP's images.txt holds world-to-camera as a quaternion
+    and translation in OpenCV axes, its PINHOLE camera the same +0.5 centres. Each view's planar
+    depth, back-projected through NeRF's camera, lands on the view's hit points (P), and each hit
+    point, projected through COLMAP's camera, lands on its own pixel's centre at its planar depth.
+    P and planar.Z come from one double hit point rounded to float32 once each: a few roundings,
+    2^-21 of the distances involved."""
+    run = tmp_path / "run"
+    vkray("render", *SIZE, "--orbit", "6", "--aov", "planar-depth,position", "-o", str(run / "view-{index}.exr"))
+    vkray("manifest", "export", str(run / "manifest.jsonl"), "--format", "nerf", "-o", str(tmp_path / "nerf"))
+    vkray("manifest", "export", str(run / "manifest.jsonl"), "--format", "colmap", "-o", str(tmp_path / "colmap"))
+    rounding = 2.0 ** -21
+
+    transforms = json.loads((tmp_path / "nerf" / "transforms.json").read_text())
+    assert len(transforms["frames"]) == 6
+    for frame in transforms["frames"]:
+        camera = {key: frame.get(key, transforms.get(key)) for key in ("fl_x", "fl_y", "cx", "cy", "w", "h")}
+        assert (camera["w"], camera["h"]) == (64, 48)
+        c2w = np.array(frame["transform_matrix"])
+        i, j, depth, points = hit_points(tmp_path / "nerf" / frame["file_path"])
+        assert len(i) > 100
+        x, y = i + 0.5, j + 0.5
+        in_camera = np.stack([(x - camera["cx"]) / camera["fl_x"] * depth, -(y - camera["cy"]) / camera["fl_y"] * depth,
+                              -depth], axis=-1)
+        world = in_camera @ c2w[:3, :3].T + c2w[:3, 3]
+        scale = np.linalg.norm(points, axis=-1) + np.linalg.norm(c2w[:3, 3])
+        assert np.all(np.linalg.norm(world - points, axis=-1) <= rounding * scale), frame["file_path"]
+
+    cameras = {}
+    for line in (tmp_path / "colmap" / "cameras.txt").read_text().splitlines():
+        if line and not line.startswith("#"):
+            fields = line.split()
+            assert fields[1] == "PINHOLE"
+            cameras[fields[0]] = [float(value) for value in fields[2:]]
+    lines = [line for line in (tmp_path / "colmap" / "images.txt").read_text().split("\n") if not line.startswith("#")]
+    images = [line.split() for line in lines[0::2] if line]
+    assert len(images) == 6 and all(line == "" for line in lines[1::2])
+    assert (tmp_path / "colmap" / "points3D.txt").exists()
+    for image in images:
+        w, x, y, z, tx, ty, tz = (float(value) for value in image[1:8])
+        width, height, fx, fy, cx, cy = cameras[image[8]]
+        rotation, translation = quaternion_matrix(w, x, y, z), np.array([tx, ty, tz])
+        i, j, depth, points = hit_points(tmp_path / "colmap" / image[9])
+        in_camera = points @ rotation.T + translation
+        u = fx * in_camera[:, 0] / in_camera[:, 2] + cx
+        v = fy * in_camera[:, 1] / in_camera[:, 2] + cy
+        scale = np.linalg.norm(points, axis=-1) + np.linalg.norm(translation)
+        assert np.all(np.abs(in_camera[:, 2] - depth) <= rounding * scale), image[9]
+        # A hit point off by `rounding * scale` moves its projection by that times f / depth pixels.
+        pixel_tolerance = rounding * scale * max(fx, fy) / depth
+        assert np.all(np.abs(u - (i + 0.5)) <= pixel_tolerance) and np.all(np.abs(v - (j + 0.5)) <= pixel_tolerance)
+
+
+def test_manifest_export_refuses_a_short_set_and_views_without_a_pinhole(tmp_path):
+    vkray("render", *SIZE, "--orbit", "4", "--shard", "0/2", "-o", str(tmp_path / "short" / "view-{index}.exr"))
+    part = next((tmp_path / "short").glob("manifest-shard-*.jsonl"))
+    result = vkray("manifest", "export", str(part), "--format", "nerf", "-o", str(tmp_path / "out"), check=False)
+    assert result.returncode == 2 and "view" in result.stderr and len(result.stderr.splitlines()) == 1, result.stderr
+    assert not (tmp_path / "out" / "transforms.json").exists()
+    panorama = tmp_path / "panorama.json"
+    panorama.write_text(json.dumps({"camera": {"from": [0, 0, 0], "to": [0, 0, -1], "projection": "equirectangular"},
+                                    "spheres": [{"center": [0, 0, -3], "radius": 1}]}))
+    vkray("render", str(panorama), *SIZE, "--orbit", "2", "-o", str(tmp_path / "pano" / "view-{index}.exr"))
+    result = vkray("manifest", "export", str(tmp_path / "pano" / "manifest.jsonl"), "--format", "colmap", "-o",
+                   str(tmp_path / "out"), check=False)
+    assert result.returncode == 2 and "no pinhole camera" in result.stderr, result.stderr
+    result = vkray("manifest", "export", str(tmp_path / "pano" / "manifest.jsonl"), "--format", "ply", "-o",
+                   str(tmp_path / "out"), check=False)
+    assert result.returncode == 2 and "nerf, colmap" in result.stderr, result.stderr
+
+
 def test_shards_together_are_the_whole_run(whole_run, tmp_path):
     for shard in range(3):
         vkray("render", *SIZE, "--orbit", "12", "-o", str(tmp_path / "view-{index:05}.exr"), "--shard", f"{shard}/3")
