@@ -1,9 +1,8 @@
 #include "engine/io/preview.hpp"
 
-#include <cstdio>
-
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <stdexcept>
 
 namespace vkray {

@@ -75,7 +75,8 @@ void Renderer::Impl::dispatch_camera_rows(const vk::raii::Pipeline& camera_pipel
     // A pipeline made for this render first runs once over one row of workgroups, untimed:
     // llvmpipe compiles a shader again for the storage image bound to it at its first dispatch
     // (the viewer's first frame took 657 ms of GPU time against 24 ms for the next), which would
-    // pass for a dispatch over the budget and shrink every dispatch after it (13 where 2 do).
+    // pass for a dispatch over the budget and shrink every dispatch after it (13 where 2 do, in
+    // the report that found it).
     // That time is the pipeline's; the rows are rendered again below.
     const auto warm_up_start = Clock::now();
     const RenderTimings before = timings;
