@@ -73,11 +73,12 @@ void Renderer::Impl::dispatch_camera_rows(const vk::raii::Pipeline& camera_pipel
                                           const std::function<void(uint32_t first_row, uint32_t rows)>& tile_done) {
   if (mode == RaycastMode::image_target && timings.pipeline_ms > 0.0) {
     // A pipeline made for this render first runs once over one row of workgroups, untimed:
-    // llvmpipe compiles a shader again for the storage image bound to it at its first dispatch
-    // (the viewer's first frame took 657 ms of GPU time against 24 ms for the next), which would
-    // pass for a dispatch over the budget and shrink every dispatch after it (13 where 2 do, in
-    // the report that found it).
-    // That time is the pipeline's; the rows are rendered again below.
+    // llvmpipe compiles its storage-image code at the first dispatch that writes such an image
+    // (the viewer's first frame took 657 ms of GPU time against 24 ms for the next; later
+    // pipelines and images of the process cost nothing more, so for them this is one small
+    // dispatch). Timed, it would pass for a dispatch over the budget and shrink every dispatch
+    // after it (13 where 2 do, in the report that found it). That time is the pipeline's; the
+    // rows are rendered again below.
     const auto warm_up_start = Clock::now();
     const RenderTimings before = timings;
     dispatch_tile(camera_pipeline, make_ray_gen_params(basis, anchor, precision(), width, height, 0,
