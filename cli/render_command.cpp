@@ -44,6 +44,7 @@ struct RenderOptions {
   bool reference = false;
   std::string compression = default_exr_compression;
   std::string miss = "inf";
+  std::string half;  // outputs stored as half floats
   std::string precision = "float";
   std::string traversal = "auto";
   ViewsOptions views;
@@ -59,6 +60,22 @@ AovSet parse_aov_list(const std::string& list) {
   }
   if (aovs.empty()) throw InputError("--aov: name at least one output (" + output_names() + ")");
   return aovs;
+}
+
+// --half: float outputs among --aov's, as the EXR stores them in half.
+AovSet half_outputs(const std::string& list, const AovSet& aovs) {
+  AovSet half;
+  for (const std::string& name : split_list(list)) {
+    const auto aov = aov_from_name(name);
+    if (!aov) throw InputError("--half: " + unknown_output_message(name));
+    if (!aovs.has(*aov)) throw InputError("--half: '" + name + "' is not among the outputs --aov writes");
+    const bool integers = std::ranges::any_of(outputs(), [&](const OutputInfo& output) {
+      return output.aov == *aov && output.integers != nullptr;
+    });
+    if (integers) throw InputError("--half: '" + name + "' holds integers; half stores floats");
+    half.add(*aov);
+  }
+  return half;
 }
 
 // --miss: inf, -inf, nan or a finite number, as the float written.
@@ -96,6 +113,7 @@ void check_render_options(const RenderOptions& options, const AovSet& aovs) {
                      "; zip and zips also with a deflate level, zip:1 to zip:9)");
   }
   miss_value(options.miss);  // refused here, before any work
+  half_outputs(options.half, aovs);
   if (options.check && !aovs.needs_rays()) {
     throw InputError("--check compares depth and normal with the reference; add one of them to --aov");
   }
@@ -118,7 +136,7 @@ int run_render_views(const RenderOptions& options, const AovSet& aovs) {
   if (options.preview) batch.png = OutputPattern(*options.preview, "--preview");
   batch.shard = parse_shard(options.views);
   batch.manifest = manifest_path(options.views, batch.shard, batch.exr);
-  batch.exr_settings = {options.compression, miss_value(options.miss)};
+  batch.exr_settings = {options.compression, miss_value(options.miss), half_outputs(options.half, aovs)};
   batch.aovs = aovs;
   batch.overwrite = options.views.overwrite;
   if (options.views.views_file) batch.cameras = batch_cameras(options.views, Camera{});
@@ -309,7 +327,7 @@ int run_render(const RenderOptions& options) {
     run.scene_stats = renderer.scene_stats();
   }
 
-  std::optional<FrameError> error, float32_ray_error;
+  std::optional<FrameError> error, float32_ray_error, stored_error;
   if (options.check) {
     const std::vector<ReferenceHit>& hits = reference();
     Stopwatch measure_watch;
@@ -319,13 +337,15 @@ int run_render(const RenderOptions& options) {
       float32_ray_error =
           measure_error(float32_ray_frame(*reference_scene, scene.camera, scene.width, scene.height, frame.aovs), hits);
     }
+    // And what the file holds, where --half rounds outputs further.
+    if (!options.half.empty()) stored_error = measure_error(stored_as_half(frame, half_outputs(options.half, aovs)), hits);
     run.measure_ms = measure_watch.lap_ms();
   }
   stopwatch.lap_ms();
 
   std::string written = options.output;
   write_outputs(options.output, options.no_preview ? nullptr : &preview, frame,
-                {options.compression, miss_value(options.miss)});
+                {options.compression, miss_value(options.miss), half_outputs(options.half, aovs)});
   if (!options.no_preview) written += " and " + preview.string();
   run.write_ms = stopwatch.lap_ms();
   run.total_ms = stopwatch.total_ms();
@@ -338,6 +358,7 @@ int run_render(const RenderOptions& options) {
   // A model is framed by vkray: say from where, ready to paste (to render it again, or a neighbour).
   if (lower_extension(options.scene_path) == ".obj" || options.view) std::printf("camera: %s\n", camera_option(scene.camera).c_str());
   if (error) std::printf("error vs. double-precision reference: %s\n", error->summary().c_str());
+  if (stored_error) std::printf("as stored, with --half %s: %s\n", options.half.c_str(), stored_error->summary().c_str());
   if (float32_ray_error) {
     std::printf("float32 rays alone (the exact scene along the shader's float32 ray directions, the "
                 "floor of every float32 search; --precision double has none): %s\n",
@@ -374,6 +395,9 @@ Action add_render_command(CLI::App& app) {
                       "OpenEXR compression, all lossless: zip, zips, piz, rle, none (fastest, largest); zip and zips "
                       "also with a deflate level from 1 (fastest) to 9, as zip:9")
       ->capture_default_str();
+  command->add_option("--half", options->half,
+                      "Outputs among --aov's stored as half floats (relative rounding up to 2^-11, infinity beyond "
+                      "65504), comma-separated; --check then also gives the error of what the file holds");
   command->add_option("--miss", options->miss,
                       "Depth written where the ray hits nothing (Z and planar.Z; A is 0 there): inf, -inf, nan or a "
                       "number such as 0")

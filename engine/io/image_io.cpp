@@ -11,6 +11,7 @@
 #include <OpenEXR/ImfStandardAttributes.h>
 #include <OpenEXR/ImfStringAttribute.h>
 #include <OpenEXR/ImfThreading.h>
+#include <Imath/half.h>
 #include <png.h>
 
 #include <fcntl.h>
@@ -339,7 +340,7 @@ void write_exr_to(const PartialFile& file, const std::filesystem::path& path, co
   Imf::FrameBuffer slices;
   auto add_channel = [&](const char* name, Imf::PixelType type, const void* plane) {
     header.channels().insert(name, Imf::Channel(type));
-    const size_t bytes = type == Imf::UINT ? sizeof(uint32_t) : sizeof(float);
+    const size_t bytes = type == Imf::UINT ? sizeof(uint32_t) : type == Imf::HALF ? sizeof(Imath::half) : sizeof(float);
     slices.insert(name, Imf::Slice(type, reinterpret_cast<char*>(const_cast<void*>(plane)), bytes, bytes * frame.width));
   };
   const size_t pixels = frame.pixel_count();
@@ -348,6 +349,8 @@ void write_exr_to(const PartialFile& file, const std::filesystem::path& path, co
   const bool miss_replaced = !(std::isinf(settings.miss) && settings.miss > 0.0f);
   std::vector<std::vector<float>> with_misses;
   with_misses.reserve(outputs().size());  // their planes stay where they are while the file is written
+  std::vector<std::vector<Imath::half>> halves;  // the planes of ExrSettings::half, rounded
+  halves.reserve(outputs().size());
   bool has_miss_value = false;
   for (const OutputInfo& output : outputs()) {
     if (!frame.aovs.has(output.aov)) continue;
@@ -366,6 +369,11 @@ void write_exr_to(const PartialFile& file, const std::filesystem::path& path, co
         }
         planes = written.data();
       }
+    }
+    if (settings.half.has(output.aov)) {  // OpenEXR writes a half channel from half planes only
+      std::vector<Imath::half>& rounded = halves.emplace_back(planes, planes + output.components * pixels);
+      for (size_t c = 0; c < output.components; ++c) add_channel(output.channels[c], Imf::HALF, rounded.data() + c * pixels);
+      continue;
     }
     for (size_t c = 0; c < output.components; ++c) add_channel(output.channels[c], Imf::FLOAT, planes + c * pixels);
   }
@@ -403,6 +411,17 @@ void write_preview_png_to(const PartialFile& file, const std::filesystem::path& 
 }
 
 }  // namespace
+
+Frame stored_as_half(const Frame& frame, AovSet half) {
+  Frame stored = frame;
+  for (const OutputInfo& output : outputs()) {
+    if (!half.has(output.aov) || !output.floats || (stored.*output.floats).empty()) continue;
+    for (float& value : stored.*output.floats) value = static_cast<float>(Imath::half(value));
+  }
+  // The float32 planes are what measure_error reads: doubles of the float64 shader round first.
+  stored.depth64.clear(), stored.normal64.clear();
+  return stored;
+}
 
 std::vector<Aov> preview_panels(const Frame& frame) {
   std::vector<Aov> shown;

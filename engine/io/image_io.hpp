@@ -27,7 +27,14 @@ bool is_exr_compression(std::string_view name);
 struct ExrSettings {
   std::string compression = default_exr_compression;
   float miss = INFINITY;
+  // Float outputs whose channels are stored as half (OpenEXR rounds each value to nearest even:
+  // a relative error of at most 2^-11; beyond 65504, infinity).
+  AovSet half;
 };
+
+// `frame` with the float outputs of `half` rounded through half as write_exr stores them: what a
+// reader of the file gets (render --check measures it).
+Frame stored_as_half(const Frame& frame, AovSet half);
 
 // Every file is written to a temporary file beside its target (".NAME.vkray-PID-N.EXT"), which its
 // writer holds under an exclusive flock, and renamed into place once complete, so a failed or

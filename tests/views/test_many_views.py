@@ -189,6 +189,45 @@ def test_manifest_export_refuses_a_short_set_and_views_without_a_pinhole(tmp_pat
     assert result.returncode == 2 and "nerf, colmap" in result.stderr, result.stderr
 
 
+def channel_formats(path):
+    image = oiio.ImageInput.open(str(path))
+    spec = image.spec()
+    formats = dict(zip(spec.channelnames, [str(f) for f in spec.channelformats] or [str(spec.format)] * spec.nchannels))
+    image.close()
+    return formats
+
+
+def test_half_outputs_are_the_float_channels_rounded_to_half(tmp_path):
+    """--half normal stores N.X, N.Y, N.Z as half floats: each value is the float32 file's rounded to
+    the nearest half (numpy's float16 rounds to nearest even, as OpenEXR does), the other channels
+    untouched; in one view and in many. --check then reports the stored error, within 2^-11."""
+    for many in (False, True):
+        where = tmp_path / ("many" if many else "one")
+        where.mkdir()
+        views = ["--orbit", "2"] if many else []
+        names = [where / "float-{index}.exr", where / "half-{index}.exr"] if many else [where / "float.exr", where / "half.exr"]
+        vkray("render", *SIZE, *views, "--aov", "depth,normal", "-o", str(names[0]))
+        vkray("render", *SIZE, *views, "--aov", "depth,normal", "--half", "normal", "-o", str(names[1]))
+        pairs = [(where / f"float-{k}.exr", where / f"half-{k}.exr") for k in range(2)] if many else [tuple(names)]
+        for whole, half in pairs:
+            formats = channel_formats(half)
+            assert [formats[c] for c in ("N.X", "N.Y", "N.Z")] == ["half"] * 3 and formats["Z"] == "float", formats
+            names_whole, data_whole = pixels(whole)
+            names_half, data_half = pixels(half)
+            assert names_whole == names_half
+            for channel, name in enumerate(names_whole):
+                expected = data_whole[..., channel]
+                if name.startswith("N."):
+                    expected = expected.astype(np.float16).astype(np.float32)
+                assert np.array_equal(data_half[..., channel], expected), name
+    checked = vkray("render", *SIZE, "--aov", "depth,normal", "--half", "depth", "--check", "-o", str(tmp_path / "c.exr"))
+    stored = re.search(r"as stored, with --half depth: .*depth rel. error p50 \S+ p99 \S+ max (\S+);", checked.stdout)
+    assert stored, checked.stdout
+    assert float(stored.group(1)) <= 2.0 ** -11 + 2e-6  # half's rounding on top of the depth's own error
+    refused = vkray("render", *SIZE, "--aov", "depth,mesh-id", "--half", "mesh-id", "-o", str(tmp_path / "r.exr"), check=False)
+    assert refused.returncode == 2 and "holds integers" in refused.stderr, refused.stderr
+
+
 def test_shards_together_are_the_whole_run(whole_run, tmp_path):
     for shard in range(3):
         vkray("render", *SIZE, "--orbit", "12", "-o", str(tmp_path / "view-{index:05}.exr"), "--shard", f"{shard}/3")
