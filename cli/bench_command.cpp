@@ -122,7 +122,7 @@ Action add_bench_command(CLI::App& app) {
   auto options = std::make_shared<BenchOptions>();
   std::vector<CLI::Option*> measuring;
   measuring.push_back(command->add_option("scenes", options->scenes,
-                                          "Scene files (.json) or models (.obj, framed automatically); the built-in "
+                                          "Scene files (.json) or models (.obj, .ply, .gltf, .glb, framed automatically); the built-in "
                                           "scene when neither these nor --suite are given"));
   measuring.push_back(command->add_option("--suite", options->suite, std::string("Built-in scenes: ") + bench_suite_names));
   measuring.push_back(command->add_option("--size", options->size, "Image size WIDTHxHEIGHT")->capture_default_str());

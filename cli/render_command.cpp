@@ -149,6 +149,7 @@ int run_render_views(const RenderOptions& options, const AovSet& aovs) {
   batch.width = scene.width;
   batch.height = scene.height;
   batch.scene = geometry_hash(scene);
+  if (aovs.has(Aov::mesh_id)) batch.objects = object_names(scene);
   if (batch.cameras.size() > 1 && (!batch.exr.has_index() || (batch.png && !batch.png->has_index()))) {
     throw InputError(std::string(batch.exr.has_index() ? "--preview" : "-o") + ": '" +
                      (batch.exr.has_index() ? batch.png->text() : batch.exr.text()) + "' has no {index}, so the " +
@@ -374,7 +375,7 @@ Action add_render_command(CLI::App& app) {
   CLI::App* command = app.add_subcommand("render", "Render a scene (or the built-in one) to OpenEXR and a PNG preview.");
   auto options = std::make_shared<RenderOptions>();
   command->add_option("scene", options->scene_path,
-                      "Scene file (.json) or model (.obj, framed automatically); the built-in scene when omitted");
+                      "Scene file (.json) or model (.obj, .ply, .gltf, .glb: seen from a glTF's camera, else framed automatically); the built-in scene when omitted");
   command->add_option("--view", options->view,
                       "Frame the scene (a model, or a scene file's geometry) from a side: front (default for models), "
                       "back, left, right, top, bottom, or the direction X,Y,Z from its centre to the eye");

@@ -73,7 +73,7 @@ Action add_view_command(CLI::App& app) {
       "view", "Show a scene (or the built-in one) in a window, rendered as 'render' does, with a movable camera.");
   auto options = std::make_shared<ViewCommandOptions>();
   command->add_option("scene", options->scene_path,
-                      "Scene file (.json, reloaded when it changes) or model (.obj); the built-in scene when omitted");
+                      "Scene file (.json, reloaded when it changes) or model (.obj, .ply, .gltf, .glb); the built-in scene when omitted");
   command->add_option("--size", options->size, "Window size WIDTHxHEIGHT (default: the scene's image size)");
   command->add_option("--view", options->view,
                       "Frame the scene from a side: front, back, left, right, top, bottom, or the direction X,Y,Z from "

@@ -36,7 +36,7 @@ step "fuzzer build" sh -c "sh cmake/install-deps.sh cmake/debian-packages-fuzz.t
                            cmake --build build-fuzz -j$jobs"
 work="$(mktemp -d)"
 trap 'rm -rf "$work"' EXIT
-for target in scene obj views manifest; do
+for target in scene obj model views manifest; do
   mkdir -p "$work/$target" "$work/findings-$target"
   if ! build-fuzz/tests/fuzz/${target}_fuzzer -max_total_time="$seconds" -timeout=10 -print_final_stats=1 \
       -artifact_prefix="$work/findings-$target/" "$work/$target" "tests/fuzz/corpus/$target"; then

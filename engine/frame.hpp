@@ -123,6 +123,8 @@ struct Frame {
   AovSet aovs;
   // The camera whose primary rays made the frame (none for given rays): the EXR header describes it.
   std::optional<Camera> camera;
+  // What each mesh_id stands for (object_names, engine/scene/scene.hpp), where the frame has mesh_id.
+  std::vector<std::string> object_names;
   std::vector<float> depth;   // distance along the primary ray, +inf on a miss; also for the camera outputs
   std::vector<float> normal;  // 3 planes: unit geometric normal facing the ray, 0 on a miss
   std::vector<float> uv;      // 2 planes: image-plane coordinates of the pixel centre

@@ -538,7 +538,7 @@ PYBIND11_MODULE(vkray, m) {
         return scene;
       },
       py::arg("path"), py::arg("width") = py::none(), py::arg("height") = py::none(), py::arg("view") = py::none(),
-      "A scene file (.json) or a model (.obj, framed as `vkray render MODEL.obj` frames it). view: frame the "
+      "A scene file (.json) or a model (.obj, .ply, .gltf, .glb: seen from a glTF's camera, else framed as `vkray render MODEL` frames it). view: frame the "
       "scene from a side ('front', 'back', 'left', 'right', 'top', 'bottom') or a direction [x, y, z] from its "
       "centre to the eye, as `vkray render --view`.");
 

@@ -1071,9 +1071,9 @@ TEST_F(CliTest, ModelBeyondTheCoordinateLimitExitsTwo) {
 
 TEST_F(CliTest, UnknownSceneKindExitsTwo) {
   {
-    std::ofstream(path("scene.ply")) << "ply\n";
+    std::ofstream(path("scene.stl")) << "solid\n";
   }
-  expect_error(vkray({"render", "scene.ply"}), 2, {"scene.ply", ".json", ".obj"});
+  expect_error(vkray({"render", "scene.stl"}), 2, {"scene.stl", ".json", ".obj, .ply, .gltf or .glb"});
 }
 
 TEST_F(CliTest, CameraOptionOverridesTheScene) {

@@ -1,6 +1,7 @@
 // Every input in the fuzzers' corpus (tests/fuzz/corpus: seeds, and each finding of a fuzz run,
 // added there as a regression test) goes through the loaders in the ordinary suite too: it must be
 // accepted or rejected with InputError, nothing else.
+#include "engine/scene/model_loader.hpp"
 #include "engine/scene/obj_loader.hpp"
 #include "engine/scene/scene_loader.hpp"
 #include "engine/views/manifest_record.hpp"
@@ -45,7 +46,7 @@ size_t for_each_input(const char* kind, const std::function<void(const std::stri
 TEST(FuzzCorpus, SceneInputsAreAcceptedOrRejectedCleanly) {
   const Mesh cube = load_obj_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n", "cube.obj");
   const size_t inputs = for_each_input("scene", [&](const std::string& text, const std::string& name) {
-    parse_scene(text, name, "/nonexistent", [&](const std::filesystem::path&) { return cube; });
+    parse_scene(text, name, "/nonexistent", [&](const std::filesystem::path&) { return std::vector<Mesh>{cube}; });
   });
   EXPECT_GE(inputs, 4u);
 }
@@ -58,6 +59,21 @@ TEST(FuzzCorpus, ObjInputsAreAcceptedOrRejectedCleanly) {
     }
   });
   EXPECT_GE(inputs, 3u);
+}
+
+TEST(FuzzCorpus, ModelInputsAreAcceptedOrRejectedCleanly) {
+  size_t accepted = 0;
+  const size_t inputs = for_each_input("model", [&](const std::string& bytes, const std::string& name) {
+    const Model model = read_model_bytes(bytes, lower_extension(name), name);
+    for (const Mesh& mesh : model.meshes) {
+      for (const auto& triangle : mesh.triangles) {
+        for (uint32_t index : triangle) EXPECT_LT(index, mesh.positions.size());
+      }
+    }
+    ++accepted;
+  });
+  EXPECT_GE(inputs, 5u);
+  EXPECT_GE(accepted, 4u);  // one seed a kind is a good file: each kind's reader reached
 }
 
 TEST(FuzzCorpus, ViewsInputsAreAcceptedOrRejectedCleanly) {

@@ -34,11 +34,15 @@ vkray::Mesh no_obj(const std::filesystem::path& path) {
   throw InputError(path.string() + ": unexpected");
 }
 
-Scene parse(const std::string& json, const vkray::ObjFileLoader& load_obj = no_obj) {
-  return vkray::parse_scene(json, "t.json", "/scenes", load_obj);
+// A model file of one mesh, as an OBJ is.
+using MeshLoader = std::function<vkray::Mesh(const std::filesystem::path&)>;
+
+Scene parse(const std::string& json, const MeshLoader& load_obj = no_obj) {
+  return vkray::parse_scene(json, "t.json", "/scenes",
+                            [&](const std::filesystem::path& path) { return std::vector<vkray::Mesh>{load_obj(path)}; });
 }
 
-std::string parse_error(const std::string& json, const vkray::ObjFileLoader& load_obj = no_obj) {
+std::string parse_error(const std::string& json, const MeshLoader& load_obj = no_obj) {
   return error_of([&] { parse(json, load_obj); });
 }
 
@@ -362,9 +366,18 @@ TEST(SceneJson, TriangleIndexWithNoPositions) {
 
 TEST(SceneJson, ObjAndPositionsBothGiven) {
   expect_error(parse_error(with_camera(R"("meshes": [{"obj": "a.obj", "positions": [[0, 0, 0]], "triangles": [[0, 0, 0]]}])")),
-               "t.json: meshes[0]: ", "give either 'obj' or 'positions' and 'triangles', not both");
+               "t.json: meshes[0]: ", "give either 'model' or 'positions' and 'triangles', not both");
   expect_error(parse_error(with_camera(R"("meshes": [{"obj": "a.obj", "triangles": [[0, 0, 0]]}])")), "t.json: meshes[0]: ",
                "not both");
+}
+
+TEST(SceneJson, ModelAndItsOlderNameObjAreOneKey) {
+  const auto loader = [](const std::filesystem::path&) { return unit_triangle(); };
+  EXPECT_EQ(parse(with_camera(R"("meshes": [{"model": "a.obj"}, {"obj": "b.obj"}])"), loader).meshes.size(), 2u);
+  expect_error(parse_error(with_camera(R"("meshes": [{"model": "a.obj", "obj": "b.obj"}])"), loader), "t.json: meshes[0]: ",
+               "give 'model' ('obj' is its older name), not both");
+  expect_error(parse_error(with_camera(R"("meshes": [{"model": "a.stl"}])"), loader), "t.json: meshes[0].model: ",
+               "unknown kind of model '.stl' (a model is .obj, .ply, .gltf or .glb)");
 }
 
 TEST(SceneJson, ObjLoaderErrorIsWrappedWithJsonPath) {

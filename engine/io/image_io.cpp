@@ -336,6 +336,9 @@ void write_exr_to(const PartialFile& file, const std::filesystem::path& path, co
   if (level > 0) header.zipCompressionLevel() = level;
   header.insert("software", Imf::StringAttribute("vkray"));
   if (frame.camera) describe_camera(header, *frame.camera, frame.width, frame.height);
+  if (!frame.mesh_id.empty() && !frame.object_names.empty()) {
+    header.insert("vkray:objects", Imf::StringAttribute(nlohmann::json(frame.object_names).dump()));
+  }
   // OpenEXR reads each channel from the frame's own planes (a slice with its strides): no copy.
   Imf::FrameBuffer slices;
   auto add_channel = [&](const char* name, Imf::PixelType type, const void* plane) {

@@ -74,7 +74,8 @@ void use_exr_threads(unsigned count);
 // planar.Z; position -> P.X P.Y P.Z; camera-position -> camera.P.X camera.P.Y camera.P.Z; and A (1
 // on a hit, 0 on a miss) whenever an output other than uv is present; barycentric -> barycentric.U
 // barycentric.V; shading-normal -> Ns.X Ns.Y Ns.Z; texcoord -> texcoord.U texcoord.V. mesh-id ->
-// mesh_id and primitive-id -> primitive_id are 32-bit unsigned. A frame with a camera has it in the header:
+// mesh_id and primitive-id -> primitive_id are 32-bit unsigned, and the header's vkray:objects (a JSON
+// array) names what each mesh_id stands for. A frame with a camera has it in the header:
 // OpenEXR's worldToCamera and worldToNDC (engine/scene/camera.hpp) and vkray:camera, JSON
 // (engine/scene/camera_description.hpp). Throws std::runtime_error naming the file.
 void write_exr(const std::filesystem::path& path, const Frame& frame, const ExrSettings& settings = {});

@@ -86,6 +86,7 @@ Frame Renderer::render(const Camera& camera, uint32_t width, uint32_t height, Ao
   }
   Frame frame(width, height, aovs);
   frame.camera = camera;
+  if (aovs.has(Aov::mesh_id)) frame.object_names = object_names(r.host_scene);
   frame.allocate(r.precision() == Precision::float64);
   r.reset_timings();
   if (aovs.empty()) return frame;

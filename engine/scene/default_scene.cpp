@@ -43,7 +43,9 @@ f -5 -1 -4 -8
 
 Scene default_scene() {
   return parse_scene(default_scene_json, "built-in scene", "", [](const std::filesystem::path& path) {
-    return load_obj_text(builtin_cube_obj, "built-in " + path.string());
+    Mesh cube = load_obj_text(builtin_cube_obj, "built-in " + path.string());
+    cube.source = "built-in " + path.string();
+    return std::vector<Mesh>{std::move(cube)};
   });
 }
 

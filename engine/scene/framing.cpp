@@ -1,6 +1,6 @@
 #include "engine/scene/framing.hpp"
 
-#include "engine/scene/obj_loader.hpp"
+#include "engine/scene/model_loader.hpp"
 #include "engine/unit_vector.hpp"
 
 #include <glm/geometric.hpp>
@@ -40,17 +40,7 @@ Camera frame_scene(const Scene& scene, uint32_t width, uint32_t height, const Fr
 
 Scene load_model_file(const std::filesystem::path& path) {
   Scene scene;
-  scene.meshes.push_back(load_obj_file(path));
-  if (scene.meshes[0].triangles.empty()) throw InputError(path.string() + ": no faces to render");
-  // The same bound a scene file's meshes get (engine/scene/scene.hpp, max_coordinate).
-  const auto& positions = scene.meshes[0].positions;
-  for (size_t i = 0; i < positions.size(); ++i) {
-    const glm::dvec3& p = positions[i];
-    if (!(std::max({std::abs(p.x), std::abs(p.y), std::abs(p.z)}) <= max_coordinate)) {
-      throw InputError(path.string() + ": vertex " + std::to_string(i + 1) +
-                       " lies beyond the supported coordinate magnitude 1e15");
-    }
-  }
+  scene.meshes = load_model(path).meshes;
   scene.camera = frame_scene(scene, scene.width, scene.height);
   return scene;
 }

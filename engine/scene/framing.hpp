@@ -33,7 +33,8 @@ inline constexpr const char* framing_view_names = "front, back, left, right, top
 // finite geometry.
 Camera frame_scene(const Scene& scene, uint32_t width, uint32_t height, const FramingView& view = front_view);
 
-// A scene holding the OBJ file's mesh alone, its camera from frame_scene at the default size.
+// A scene holding the model file's meshes alone (model_loader.hpp), its camera from frame_scene at
+// the default size (a glTF's own camera left out: the bench frames every model alike).
 Scene load_model_file(const std::filesystem::path& path);
 
 }  // namespace vkray

@@ -59,16 +59,10 @@ namespace {
 
 std::string item(const char* list, size_t index) { return std::string(list) + "[" + std::to_string(index) + "]"; }
 
-// False for NaN too: each comparison with NaN is false (a std::max over the three would keep a
-// number over a NaN after it).
-bool within_limits(const glm::dvec3& p) {
-  return std::abs(p.x) <= max_coordinate && std::abs(p.y) <= max_coordinate && std::abs(p.z) <= max_coordinate;
-}
-
 }  // namespace
 
 void check_coordinates(const glm::dvec3& p, const std::string& path) {
-  if (!within_limits(p)) {
+  if (!within_coordinate_bound(p)) {
     throw InputError(path + ": every coordinate must be finite and within 1e15, got (" + std::to_string(p.x) + ", " +
                      std::to_string(p.y) + ", " + std::to_string(p.z) + ")");
   }
@@ -78,7 +72,7 @@ void check_scene(Scene& scene) {
   check_coordinates(scene.camera.from, "camera.from");
   check_coordinates(scene.camera.to, "camera.to");
   if (scene.camera.from == scene.camera.to) throw InputError("camera.to: must differ from camera.from");
-  if (!within_limits(scene.camera.up) || scene.camera.up == glm::dvec3(0.0)) {
+  if (!within_coordinate_bound(scene.camera.up) || scene.camera.up == glm::dvec3(0.0)) {
     throw InputError("camera.up: must be finite and non-zero");
   }
   if (!(scene.camera.fovy_degrees > 0.0 && scene.camera.fovy_degrees < 180.0)) {
@@ -95,7 +89,7 @@ void check_scene(Scene& scene) {
   for (size_t k = 0; k < scene.planes.size(); ++k) {
     Plane& plane = scene.planes[k];
     check_coordinates(plane.point, item("planes", k) + ".point");
-    if (!within_limits(plane.normal) || plane.normal == glm::dvec3(0.0)) {
+    if (!within_coordinate_bound(plane.normal) || plane.normal == glm::dvec3(0.0)) {
       throw InputError(item("planes", k) + ".normal: must be finite and non-zero");
     }
     plane.normal = unit_vector(plane.normal);
@@ -192,6 +186,14 @@ void add_geometry(Fnv1a& fnv, const Scene& scene) {
     fnv.add(uint64_t{mesh.triangles.size()});
     fnv.add_bytes(mesh.triangles.data(), mesh.triangles.size() * sizeof(mesh.triangles[0]));
   }
+}
+
+std::vector<std::string> object_names(const Scene& scene) {
+  std::vector<std::string> names;
+  for (const Mesh& mesh : scene.meshes) names.push_back(mesh.source);
+  for (size_t i = 0; i < scene.spheres.size(); ++i) names.push_back("spheres[" + std::to_string(i) + "]");
+  for (size_t i = 0; i < scene.planes.size(); ++i) names.push_back("planes[" + std::to_string(i) + "]");
+  return names;
 }
 
 std::string geometry_hash(const Scene& scene) {

@@ -8,6 +8,7 @@
 #include <glm/vec3.hpp>
 
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <limits>
 #include <span>
@@ -52,6 +53,9 @@ struct Mesh {
   std::vector<glm::dvec2> texcoords;
   std::vector<std::array<uint32_t, 3>> normal_corners;
   std::vector<std::array<uint32_t, 3>> texcoord_corners;
+  // Where the mesh comes from, naming its mesh_id in the outputs: the model file ("bunny.ply"), a
+  // glTF's node ("scene.glb#Wheel"), or a scene file's entry ("scene.json: meshes[2]").
+  std::string source;
 };
 
 // Largest coordinate or radius magnitude accepted. The shader squares distances in float32 (max
@@ -122,6 +126,16 @@ glm::dvec3 scene_anchor(const Scene& scene);
 
 // The largest distance from `anchor` of a sphere's surface or a mesh vertex (0 without either).
 double scene_radius(const Scene& scene, const glm::dvec3& anchor);
+
+// What each mesh_id of the outputs stands for, by id: the meshes' sources (Mesh::source), then
+// "spheres[i]", then "planes[i]", as ObjectPrimitive numbers them.
+std::vector<std::string> object_names(const Scene& scene);
+
+// Whether every coordinate of `point` is finite and within max_coordinate. False for NaN too: each
+// comparison with NaN is false (a std::max over the three would keep a number over a NaN after it).
+inline bool within_coordinate_bound(const glm::dvec3& point) {
+  return std::abs(point.x) <= max_coordinate && std::abs(point.y) <= max_coordinate && std::abs(point.z) <= max_coordinate;
+}
 
 // Throws InputError naming `path` unless every coordinate of `point` is finite and within
 // max_coordinate.

@@ -1,7 +1,7 @@
 #include "engine/scene/scene_loader.hpp"
 
 #include "engine/typed_names.hpp"
-#include "engine/scene/obj_loader.hpp"
+#include "engine/scene/model_loader.hpp"
 #include "engine/unit_vector.hpp"
 
 #include <glm/geometric.hpp>
@@ -62,9 +62,9 @@ class Node {
  public:
   Node(const Json& value, std::string path, const std::string& file) : value_(value), path_(std::move(path)), file_(file) {}
 
-  [[noreturn]] void fail(const std::string& message) const {
-    throw InputError(file_ + ": " + (path_.empty() ? "top level" : path_) + ": " + message);
-  }
+  // "<file>: <JSON path>", the start of its messages.
+  std::string where() const { return file_ + ": " + (path_.empty() ? "top level" : path_); }
+  [[noreturn]] void fail(const std::string& message) const { throw InputError(where() + ": " + message); }
 
   const Json& json() const { return value_; }
   bool has(const char* key) const { return value_.contains(key); }
@@ -205,7 +205,7 @@ Camera parse_camera(const Node& node, const Camera* base = nullptr) {
     if (!fault.empty()) matrix.fail(fault);
     // The camera it places is held to from's limit: the manifest and --camera print it back.
     const glm::dvec3& from = camera.from;
-    if (!(std::max({std::abs(from.x), std::abs(from.y), std::abs(from.z)}) <= max_coordinate)) {  // NaN too
+    if (!within_coordinate_bound(from)) {
       matrix.fail("places the camera beyond the supported coordinate magnitude " + describe(Json(max_coordinate)));
     }
   } else {
@@ -302,21 +302,28 @@ void apply_transform(const Node& node, Mesh& mesh) {
   for (auto& normal : mesh.normals) normal = rotation * (normal / scale);
 }
 
-Mesh parse_mesh(const Node& node, const std::filesystem::path& base_dir, const ObjFileLoader& load_obj) {
-  node.expect_object({"positions", "triangles", "obj", "transform"});
-  Mesh mesh;
-  if (node.has("obj")) {
-    if (node.has("positions") || node.has("triangles")) node.fail("give either 'obj' or 'positions' and 'triangles', not both");
-    const Node obj = node.at("obj");
+// A mesh entry's meshes: its own positions and triangles, or those of the model file it names (a
+// glTF's nodes give several), each through the entry's transform.
+std::vector<Mesh> parse_meshes(const Node& node, const std::filesystem::path& base_dir, const ModelFileLoader& load_model) {
+  node.expect_object({"positions", "triangles", "model", "obj", "transform"});
+  std::vector<Mesh> meshes;
+  if (node.has("model") || node.has("obj")) {
+    if (node.has("model") && node.has("obj")) node.fail("give 'model' ('obj' is its older name), not both");
+    if (node.has("positions") || node.has("triangles")) node.fail("give either 'model' or 'positions' and 'triangles', not both");
+    const Node file = node.at(node.has("model") ? "model" : "obj");
     // The system would read a name only up to a NUL ("cow.obj\u0000junk" as cow.obj).
-    if (obj.string().find('\0') != std::string::npos) obj.fail("a file name cannot hold a NUL character (\\u0000)");
-    const std::filesystem::path path = base_dir / obj.string();
+    if (file.string().find('\0') != std::string::npos) file.fail("a file name cannot hold a NUL character (\\u0000)");
+    const std::filesystem::path path = base_dir / file.string();
+    if (!is_model_extension(lower_extension(path))) {
+      file.fail("unknown kind of model '" + lower_extension(path) + "' (a model is " + model_extension_list() + ")");
+    }
     try {
-      mesh = load_obj(path);
+      meshes = load_model(path);
     } catch (const InputError& error) {
-      obj.fail(error.what());
+      file.fail(error.what());
     }
   } else {
+    Mesh& mesh = meshes.emplace_back();
     for (const Node& position : node.at("positions").elements()) mesh.positions.push_back(position.vec3());
     for (const Node& triangle : node.at("triangles").elements()) {
       const auto corners = triangle.elements();
@@ -326,16 +333,20 @@ Mesh parse_mesh(const Node& node, const std::filesystem::path& base_dir, const O
                                 corners[2].index(mesh.positions.size(), "vertex index")});
     }
     if (mesh.triangles.empty()) node.at("triangles").fail("a mesh needs at least one triangle");
+    mesh.source = node.where();
   }
-  if (node.has("transform")) apply_transform(node.at("transform"), mesh);
-  for (size_t i = 0; i < mesh.positions.size(); ++i) {
-    const glm::dvec3& p = mesh.positions[i];
-    if (!(std::max({std::abs(p.x), std::abs(p.y), std::abs(p.z)}) <= max_coordinate)) {  // NaN too
-      node.fail("vertex " + std::to_string(i) + " lies beyond the supported coordinate magnitude " +
-                describe(Json(max_coordinate)) + (node.has("transform") ? " after the transform" : ""));
+  for (Mesh& mesh : meshes) {
+    if (node.has("transform")) apply_transform(node.at("transform"), mesh);
+    for (size_t i = 0; i < mesh.positions.size(); ++i) {
+      const glm::dvec3& p = mesh.positions[i];
+      if (!within_coordinate_bound(p)) {
+        node.fail("vertex " + std::to_string(i) + (meshes.size() > 1 ? " of " + mesh.source : "") +
+                  " lies beyond the supported coordinate magnitude " + describe(Json(max_coordinate)) +
+                  (node.has("transform") ? " after the transform" : ""));
+      }
     }
   }
-  return mesh;
+  return meshes;
 }
 
 // 1-based line and column of the 0-based byte offset `byte`.
@@ -451,7 +462,7 @@ void refuse_invalid_json(std::string_view text, const std::string& name, size_t 
 }
 
 Scene parse_scene(std::string_view json_text, const std::string& name, const std::filesystem::path& base_dir,
-                  const ObjFileLoader& load_obj) {
+                  const ModelFileLoader& load_model) {
   const Json root = parse_document(json_text, name);
   const Node top(root, "", name);
   top.expect_object({"camera", "image", "spheres", "planes", "meshes"});
@@ -465,7 +476,9 @@ Scene parse_scene(std::string_view json_text, const std::string& name, const std
     for (const Node& plane : top.at("planes").elements()) scene.planes.push_back(parse_plane(plane));
   }
   if (top.has("meshes")) {
-    for (const Node& mesh : top.at("meshes").elements()) scene.meshes.push_back(parse_mesh(mesh, base_dir, load_obj));
+    for (const Node& entry : top.at("meshes").elements()) {
+      for (Mesh& mesh : parse_meshes(entry, base_dir, load_model)) scene.meshes.push_back(std::move(mesh));
+    }
   }
   return scene;
 }
@@ -480,11 +493,15 @@ Camera parse_camera_object(std::string_view json_text, const std::string& name) 
   return parse_camera(Node(root, "", name));
 }
 
-std::string read_input_file(const std::filesystem::path& path, const std::string& what) {
+void check_input_file(const std::filesystem::path& path, const std::string& what) {
   std::error_code error;
   if (!std::filesystem::is_regular_file(path, error)) {
     throw InputError(path.string() + (std::filesystem::exists(path, error) ? ": is not a regular file" : ": no such " + what));
   }
+}
+
+std::string read_input_file(const std::filesystem::path& path, const std::string& what) {
+  check_input_file(path, what);
   std::ifstream file(path, std::ios::binary);
   std::ostringstream contents;
   contents << file.rdbuf();
@@ -493,7 +510,8 @@ std::string read_input_file(const std::filesystem::path& path, const std::string
 }
 
 Scene load_scene_file(const std::filesystem::path& path) {
-  return parse_scene(read_input_file(path, "scene file"), path.string(), path.parent_path(), load_obj_file);
+  return parse_scene(read_input_file(path, "scene file"), path.string(), path.parent_path(),
+                     [](const std::filesystem::path& model) { return load_model(model).meshes; });
 }
 
 }  // namespace vkray

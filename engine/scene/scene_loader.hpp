@@ -9,13 +9,19 @@
 #include <functional>
 #include <string>
 #include <string_view>
+#include <vector>
 
 namespace vkray {
 
-// Loads the mesh an "obj" entry names; the path is already resolved against the scene's folder.
-using ObjFileLoader = std::function<Mesh(const std::filesystem::path&)>;
+// Loads the meshes of the model file a mesh entry names ("model", or "obj", its older name); the path
+// is already resolved against the scene's folder.
+using ModelFileLoader = std::function<std::vector<Mesh>(const std::filesystem::path&)>;
 
 Scene load_scene_file(const std::filesystem::path& path);
+
+// Throws InputError unless `path` is a regular file: "<path>: no such <what>" or "<path>: is not a
+// regular file".
+void check_input_file(const std::filesystem::path& path, const std::string& what);
 
 // The whole of an input file, `what` naming it in messages ("scene file": "a.json: no such scene
 // file"). Throws InputError.
@@ -30,10 +36,10 @@ void refuse_nul_bytes(std::string_view text, const std::string& name, size_t fir
 // byte included), saying so where the reason is a NaN or Infinity, which JSON has not.
 void refuse_invalid_json(std::string_view text, const std::string& name, size_t first_line = 1);
 
-// Parses scene JSON held in memory. `name` stands for the file in messages; relative OBJ paths
-// resolve against `base_dir` and load through `load_obj`.
+// Parses scene JSON held in memory. `name` stands for the file in messages; relative model paths
+// resolve against `base_dir` and load through `load_model`.
 Scene parse_scene(std::string_view json_text, const std::string& name, const std::filesystem::path& base_dir,
-                  const ObjFileLoader& load_obj);
+                  const ModelFileLoader& load_model);
 
 // A camera object in the scene-file form whose keys are all optional ({"from": [0, 1, 5]}): each
 // replaces that part of `base`, checked as the scene file checks it. `name` stands for the source in

@@ -1,34 +1,49 @@
 #include "engine/scene/scene_or_model.hpp"
 
 #include "engine/scene/framing.hpp"
+#include "engine/scene/model_loader.hpp"
 #include "engine/scene/scene_loader.hpp"
 
 #include <algorithm>
-#include <cctype>
+#include <cmath>
+#include <numbers>
 
 namespace vkray {
-
-std::string lower_extension(const std::filesystem::path& path) {
-  std::string extension = path.extension().string();
-  std::transform(extension.begin(), extension.end(), extension.begin(),
-                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  return extension;
-}
 
 Scene load_scene_or_model(const std::filesystem::path& path, std::optional<uint32_t> width, std::optional<uint32_t> height) {
   const std::string extension = lower_extension(path);
   const std::string name = path.string();
   if (!path.empty() && std::filesystem::is_directory(path)) {
-    throw InputError(name + ": is a folder, not a scene file (.json) or a model (.obj)");
+    throw InputError(name + ": is a folder, not a scene file (.json) or a model (" + model_extension_list() + ")");
   }
-  if (!path.empty() && extension != ".json" && extension != ".obj") {
-    throw InputError(name + ": unknown kind of file '" + extension + "' (a scene is .json, a model .obj)");
+  if (!path.empty() && extension != ".json" && !is_model_extension(extension)) {
+    throw InputError(name + ": unknown kind of file '" + extension + "' (a scene is .json, a model " + model_extension_list() + ")");
   }
-  Scene scene = path.empty() ? default_scene() : extension == ".obj" ? load_model_file(path) : load_scene_file(path);
+  if (path.empty() || extension == ".json") {
+    Scene scene = path.empty() ? default_scene() : load_scene_file(path);
+    if (width) scene.width = *width;
+    if (height) scene.height = *height;
+    check_image_size(scene.width, scene.height);
+    return scene;
+  }
+  Model model = load_model(path);
+  Scene scene;
+  scene.meshes = std::move(model.meshes);
   if (width) scene.width = *width;
   if (height) scene.height = *height;
+  // A glTF camera's aspect ratio gives the side not given (the width of the default height).
+  if (model.aspect_ratio && !(width && height)) {
+    const auto side = [](double pixels) { return static_cast<uint32_t>(std::clamp(std::lround(pixels), 1L, long{max_image_side})); };
+    if (width) scene.height = side(*width / *model.aspect_ratio);
+    else scene.width = side(scene.height * *model.aspect_ratio);
+  }
   check_image_size(scene.width, scene.height);
-  if (extension == ".obj") scene.camera = frame_scene(scene, scene.width, scene.height);
+  if (model.camera) {
+    scene.camera = *model.camera;
+    scene.camera.fovy_degrees = fovy_degrees_from_vertical(model.camera->fovy_degrees, scene.width, scene.height);
+  } else {
+    scene.camera = frame_scene(scene, scene.width, scene.height);
+  }
   return scene;
 }
 

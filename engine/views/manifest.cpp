@@ -48,6 +48,7 @@ std::string manifest_line(const ViewRecord& record, const std::filesystem::path&
   line["height"] = record.height;
   line["outputs"] = record.outputs;
   line["scene"] = record.scene;
+  if (!record.objects.empty()) line["objects"] = record.objects;
   const nlohmann::ordered_json camera = camera_description(record.camera, record.width, record.height);
   for (auto key = camera.begin(); key != camera.end(); ++key) line[key.key()] = key.value();
   return line.dump();

@@ -6,7 +6,8 @@
 //    "intrinsics": {"fx": ..., "fy": ..., "cx": ..., "cy": ...},
 //    "world_to_camera": [[...], [...], [...], [0, 0, 0, 1]]}
 //
-// "png" only where previews are written; file names relative to the manifest's folder; "scene" the
+// "png" only where previews are written; "objects" (what each mesh_id stands for: a mesh's file or
+// glTF node, "spheres[i]", "planes[i]") only with the mesh-id output; file names relative to the manifest's folder; "scene" the
 // geometry's hash (geometry_hash); the camera's keys as engine/scene/camera_description.hpp
 // describes them (README "Many views").
 #pragma once
@@ -32,6 +33,7 @@ struct ViewRecord {
   uint32_t width = 0, height = 0;
   std::string outputs;  // AovSet::names(): "depth,normal"
   std::string scene;    // geometry_hash of the scene: a resumed run on another scene is refused
+  std::vector<std::string> objects;  // what each mesh_id stands for (object_names), with that output
 };
 
 // One line, without its newline; file names relative to `folder`.

@@ -101,6 +101,7 @@ ViewRecord record_of(const ViewBatch& batch, uint32_t index) {
   record.height = batch.height;
   record.outputs = batch.aovs.names();
   record.scene = batch.scene;
+  record.objects = batch.objects;
   return record;
 }
 

@@ -36,6 +36,7 @@ struct ViewBatch {
   std::filesystem::path manifest;
   Shard shard;
   std::string scene;       // geometry_hash of the scene, recorded with each view
+  std::vector<std::string> objects;  // object_names of the scene, recorded with each view's mesh_id
   bool overwrite = false;  // render views whose files exist too (and start the manifest afresh)
   unsigned writers = 2;    // threads writing files; the queue holds one frame more
   // Called with each view's index before it renders; what it throws stops the batch as a failed

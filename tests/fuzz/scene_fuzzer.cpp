@@ -22,7 +22,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   try {
     const vkray::Scene scene = vkray::parse_scene(text, "fuzz.json", "/nonexistent",
                                                   [](const std::filesystem::path& path) {
-                                                    return vkray::load_obj_text(cube_obj, path.string());
+                                                    return std::vector<vkray::Mesh>{vkray::load_obj_text(cube_obj, path.string())};
                                                   });
     // What the loader promises about a scene it accepts.
     vkray::check_image_size(scene.width, scene.height);
