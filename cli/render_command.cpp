@@ -45,6 +45,8 @@ struct RenderOptions {
   std::string compression = default_exr_compression;
   std::string miss = "inf";
   std::string half;  // outputs stored as half floats
+  std::string format = "exr";
+  double depth_step = 0.001;
   std::string precision = "float";
   std::string traversal = "auto";
   ViewsOptions views;
@@ -95,6 +97,23 @@ float miss_value(const std::string& text) {
   return value;
 }
 
+// The settings of the written files, each option checked (InputError).
+OutputSettings output_settings(const RenderOptions& options, const AovSet& aovs) {
+  OutputSettings settings;
+  const auto format = file_format_from_name(options.format);
+  if (!format) throw InputError("--format: unknown '" + options.format + "' (choose from " + file_format_names + ")");
+  settings.format = *format;
+  if (settings.format == FileFormat::png16) check_png16_outputs(aovs);
+  if (!(options.depth_step > 0.0 && std::isfinite(options.depth_step))) {
+    throw InputError("--depth-step: must be a positive number, got " + std::to_string(options.depth_step));
+  }
+  settings.depth_step = options.depth_step;
+  settings.compression = options.compression;
+  settings.miss = miss_value(options.miss);
+  settings.half = half_outputs(options.half, aovs);
+  return settings;
+}
+
 // Usage errors that parsing cannot see. The output is always OpenEXR and the preview always PNG,
 // so a name with another extension (x.jpg holding a PNG) would mislead whoever opens it; the two
 // extensions also keep the preview from ever replacing the EXR. --check on uv alone would count
@@ -112,8 +131,7 @@ void check_render_options(const RenderOptions& options, const AovSet& aovs) {
     throw InputError("--compression: unknown '" + options.compression + "' (choose from " + known +
                      "; zip and zips also with a deflate level, zip:1 to zip:9)");
   }
-  miss_value(options.miss);  // refused here, before any work
-  half_outputs(options.half, aovs);
+  output_settings(options, aovs);  // refused here, before any work
   if (options.check && !aovs.needs_rays()) {
     throw InputError("--check compares depth and normal with the reference; add one of them to --aov");
   }
@@ -136,7 +154,7 @@ int run_render_views(const RenderOptions& options, const AovSet& aovs) {
   if (options.preview) batch.png = OutputPattern(*options.preview, "--preview");
   batch.shard = parse_shard(options.views);
   batch.manifest = manifest_path(options.views, batch.shard, batch.exr);
-  batch.exr_settings = {options.compression, miss_value(options.miss), half_outputs(options.half, aovs)};
+  batch.output_settings = output_settings(options, aovs);
   batch.aovs = aovs;
   batch.overwrite = options.views.overwrite;
   if (options.views.views_file) batch.cameras = batch_cameras(options.views, Camera{});
@@ -344,9 +362,12 @@ int run_render(const RenderOptions& options) {
   }
   stopwatch.lap_ms();
 
-  std::string written = options.output;
-  write_outputs(options.output, options.no_preview ? nullptr : &preview, frame,
-                {options.compression, miss_value(options.miss), half_outputs(options.half, aovs)});
+  const OutputSettings settings = output_settings(options, aovs);
+  write_outputs(options.output, options.no_preview ? nullptr : &preview, frame, settings);
+  std::string written;
+  for (const OutputFile& file : output_files(options.output, frame.aovs, settings.format)) {
+    written += (written.empty() ? "" : ", ") + file.path.string();
+  }
   if (!options.no_preview) written += " and " + preview.string();
   run.write_ms = stopwatch.lap_ms();
   run.total_ms = stopwatch.total_ms();
@@ -357,7 +378,7 @@ int run_render(const RenderOptions& options) {
     std::printf("preview: %s\n", depth_legend(finite_depth_range(frame)).c_str());
   }
   // A model is framed by vkray: say from where, ready to paste (to render it again, or a neighbour).
-  if (lower_extension(options.scene_path) == ".obj" || options.view) std::printf("camera: %s\n", camera_option(scene.camera).c_str());
+  if (is_model_extension(lower_extension(options.scene_path)) || options.view) std::printf("camera: %s\n", camera_option(scene.camera).c_str());
   if (error) std::printf("error vs. double-precision reference: %s\n", error->summary().c_str());
   if (stored_error) std::printf("as stored, with --half %s: %s\n", options.half.c_str(), stored_error->summary().c_str());
   if (float32_ray_error) {
@@ -395,6 +416,15 @@ Action add_render_command(CLI::App& app) {
   command->add_option("--compression", options->compression,
                       "OpenEXR compression, all lossless: zip, zips, piz, rle, none (fastest, largest); zip and zips "
                       "also with a deflate level from 1 (fastest) to 9, as zip:9")
+      ->capture_default_str();
+  command->add_option("--format", options->format,
+                      "How the outputs are stored: exr (one OpenEXR file), npy (a NumPy .npy an output, as OUTPUT.depth.npy "
+                      "for -o OUTPUT.exr, bit for bit the EXR's values) or png16 (a 16-bit PNG a depth, in steps of --depth-step; "
+                      "0 where there is none)")
+      ->capture_default_str();
+  command->add_option("--depth-step", options->depth_step,
+                      "With --format png16: the depth of one step of the 16-bit value (0.001: millimetres of a scene in metres), "
+                      "recorded in the PNG as vkray:depth_step")
       ->capture_default_str();
   command->add_option("--half", options->half,
                       "Outputs among --aov's stored as half floats (relative rounding up to 2^-11, infinity beyond "

@@ -1,5 +1,6 @@
 #include "engine/io/image_io.hpp"
 
+#include "engine/io/array_files.hpp"
 #include "engine/io/preview.hpp"
 #include "engine/scene/camera_description.hpp"
 
@@ -30,6 +31,9 @@
 #include <fstream>
 #include <future>
 #include <map>
+#include <sstream>
+#include <list>
+#include <iomanip>
 #include <mutex>
 #include <optional>
 #include <set>
@@ -152,8 +156,14 @@ void on_png_error(png_structp png, png_const_charp message) {
 
 void on_png_warning(png_structp, png_const_charp) {}
 
-bool write_png_rows(std::FILE* file, const uint8_t* rgb, uint32_t width, uint32_t height, const std::string& comment,
-                    std::array<char, 256>& error) {
+// The pixels a PNG is written from, rows from the top: 8-bit RGB, or 16-bit grey (big-endian).
+enum class PngPixels { rgb8, gray16 };
+
+// A PNG's text chunks, by keyword.
+using PngTexts = std::vector<std::pair<std::string, std::string>>;
+
+bool write_png_rows(std::FILE* file, const uint8_t* pixels, PngPixels kind, uint32_t width, uint32_t height,
+                    const PngTexts& texts, std::array<char, 256>& error) {
   png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, &error, on_png_error, on_png_warning);
   if (!png) return false;
   png_infop info = png_create_info_struct(png);
@@ -162,36 +172,36 @@ bool write_png_rows(std::FILE* file, const uint8_t* rgb, uint32_t width, uint32_
     return false;
   }
   png_init_io(png, file);
-  png_set_IHDR(png, info, width, height, 8, PNG_COLOR_TYPE_RGB, PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT,
-               PNG_FILTER_TYPE_DEFAULT);
-  std::string comment_text = comment;  // libpng takes non-const pointers
-  char comment_key[] = "Comment";
-  png_text text{};
-  if (!comment.empty()) {
-    text.compression = PNG_TEXT_COMPRESSION_NONE;
-    text.key = comment_key;
-    text.text = comment_text.data();
-    png_set_text(png, info, &text, 1);
+  const bool rgb = kind == PngPixels::rgb8;
+  png_set_IHDR(png, info, width, height, rgb ? 8 : 16, rgb ? PNG_COLOR_TYPE_RGB : PNG_COLOR_TYPE_GRAY, PNG_INTERLACE_NONE,
+               PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
+  PngTexts owned = texts;  // libpng takes non-const pointers
+  std::vector<png_text> chunks(owned.size());
+  for (size_t k = 0; k < owned.size(); ++k) {
+    chunks[k].compression = PNG_TEXT_COMPRESSION_NONE;
+    chunks[k].key = owned[k].first.data();
+    chunks[k].text = owned[k].second.data();
   }
+  if (!chunks.empty()) png_set_text(png, info, chunks.data(), static_cast<int>(chunks.size()));
   png_set_compression_level(png, 1);
   png_set_filter(png, PNG_FILTER_TYPE_BASE, PNG_FILTER_UP);
   png_write_info(png, info);
-  for (uint32_t row = 0; row < height; ++row) png_write_row(png, rgb + size_t{row} * width * 3);
+  const size_t row_bytes = size_t{width} * (rgb ? 3 : 2);
+  for (uint32_t row = 0; row < height; ++row) png_write_row(png, pixels + row * row_bytes);
   png_write_end(png, nullptr);
   png_destroy_write_struct(&png, &info);
   return true;
 }
 
-// `comment`, when given, goes into the PNG's "Comment" text chunk.
-void write_png(const std::filesystem::path& path, size_t width, size_t height, const uint8_t* rgb,
-               const std::filesystem::path& shown_path, const std::string& comment = {}) {
+void write_png(const std::filesystem::path& path, size_t width, size_t height, const uint8_t* pixels, PngPixels kind,
+               const std::filesystem::path& shown_path, const PngTexts& texts = {}) {
   if (width > PNG_UINT_31_MAX || height > PNG_UINT_31_MAX) {
     throw std::runtime_error(shown_path.string() + ": cannot write: too large for PNG");
   }
   std::FILE* file = std::fopen(path.c_str(), "wb");
   if (!file) throw std::runtime_error(shown_path.string() + ": cannot write: " + std::strerror(errno));
   std::array<char, 256> error{"libpng failed"};
-  const bool written = write_png_rows(file, rgb, static_cast<uint32_t>(width), static_cast<uint32_t>(height), comment, error);
+  const bool written = write_png_rows(file, pixels, kind, static_cast<uint32_t>(width), static_cast<uint32_t>(height), texts, error);
   const bool flushed = std::fflush(file) == 0 && !std::ferror(file);
   const int saved_errno = errno;
   std::fclose(file);
@@ -200,8 +210,9 @@ void write_png(const std::filesystem::path& path, size_t width, size_t height, c
 }
 
 void write_exr_to(const PartialFile& file, const std::filesystem::path& target, const Frame& frame,
-                  const ExrSettings& settings);
+                  const OutputSettings& settings);
 void write_preview_png_to(const PartialFile& file, const std::filesystem::path& target, const Frame& frame);
+void write_output_file_to(const PartialFile& partial, const OutputFile& file, const Frame& frame, const OutputSettings& settings);
 
 }  // namespace
 
@@ -266,7 +277,7 @@ bool is_exr_compression(std::string_view name) {
   return (method == "zip" || method == "zips") && level.size() == 1 && level[0] >= '1' && level[0] <= '9';
 }
 
-void write_exr(const std::filesystem::path& path, const Frame& frame, const ExrSettings& settings) {
+void write_exr(const std::filesystem::path& path, const Frame& frame, const OutputSettings& settings) {
   PartialFile file(path);
   write_exr_to(file, path, frame, settings);
   file.commit();
@@ -275,7 +286,7 @@ void write_exr(const std::filesystem::path& path, const Frame& frame, const ExrS
 void write_rgb_png(const std::filesystem::path& path, uint32_t width, uint32_t height, const std::vector<uint8_t>& rgb) {
   PartialFile file(path);
   if (rgb.size() != size_t{width} * height * 3) throw std::invalid_argument("write_rgb_png: not width x height RGB pixels");
-  write_png(file.path(), width, height, rgb.data(), path);
+  write_png(file.path(), width, height, rgb.data(), PngPixels::rgb8, path);
   file.commit();
 }
 
@@ -323,7 +334,7 @@ void start_exr_threads(unsigned count = std::max(1u, std::thread::hardware_concu
 }
 
 void write_exr_to(const PartialFile& file, const std::filesystem::path& path, const Frame& frame,
-                  const ExrSettings& settings) {
+                  const OutputSettings& settings) {
   const std::string_view compression = settings.compression;
   if (!is_exr_compression(compression)) throw std::invalid_argument("unknown EXR compression " + std::string(compression));
   if (frame.aovs.empty()) {
@@ -347,12 +358,12 @@ void write_exr_to(const PartialFile& file, const std::filesystem::path& path, co
     slices.insert(name, Imf::Slice(type, reinterpret_cast<char*>(const_cast<void*>(plane)), bytes, bytes * frame.width));
   };
   const size_t pixels = frame.pixel_count();
-  // Depths with the chosen value where the ray missed (ExrSettings::miss), in copies: the frame
+  // Depths with the chosen value where the ray missed (OutputSettings::miss), in copies: the frame
   // keeps +inf, by which hits are known.
   const bool miss_replaced = !(std::isinf(settings.miss) && settings.miss > 0.0f);
   std::vector<std::vector<float>> with_misses;
   with_misses.reserve(outputs().size());  // their planes stay where they are while the file is written
-  std::vector<std::vector<Imath::half>> halves;  // the planes of ExrSettings::half, rounded
+  std::vector<std::vector<Imath::half>> halves;  // the planes of OutputSettings::half, rounded
   halves.reserve(outputs().size());
   bool has_miss_value = false;
   for (const OutputInfo& output : outputs()) {
@@ -396,6 +407,25 @@ void write_exr_to(const PartialFile& file, const std::filesystem::path& path, co
   }
 }
 
+// One of output_files' files: the EXR, or one output's .npy or 16-bit PNG.
+void write_output_file_to(const PartialFile& partial, const OutputFile& file, const Frame& frame, const OutputSettings& settings) {
+  if (settings.format == FileFormat::exr) return write_exr_to(partial, file.path, frame, settings);
+  if (settings.format == FileFormat::npy) {
+    const std::string bytes = npy_file(frame, file.aov, settings.miss, settings.half.has(file.aov));
+    std::ofstream stream(partial.path(), std::ios::binary);
+    stream.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+    if (!stream.flush()) throw std::runtime_error(file.path.string() + ": cannot write: " + std::strerror(errno));
+    return;
+  }
+  size_t beyond = 0;
+  const std::vector<uint8_t> samples = png16_samples(frame, file.aov, settings.depth_step, beyond);
+  std::ostringstream step;
+  step << std::setprecision(17) << settings.depth_step;
+  write_png(partial.path(), frame.width, frame.height, samples.data(), PngPixels::gray16, file.path,
+            {{"Comment", "depth = value x " + step.str() + "; 0 where there is none (a miss, or past 65535 steps)"},
+             {"vkray:depth_step", step.str()}});
+}
+
 void write_preview_png_to(const PartialFile& file, const std::filesystem::path& path, const Frame& frame) {
   const std::vector<Aov> shown = preview_panels(frame);
   if (shown.empty()) throw std::runtime_error(path.string() + ": no outputs to preview");
@@ -410,7 +440,9 @@ void write_preview_png_to(const PartialFile& file, const std::filesystem::path& 
 
   // The depth panel's scale, for whoever reads a value off it.
   const bool depth_shown = std::find(shown.begin(), shown.end(), Aov::depth) != shown.end();
-  write_png(file.path(), row_width, height, rgb.data(), path, depth_shown ? depth_legend(finite_depth_range(frame)) : "");
+  PngTexts texts;
+  if (depth_shown) texts.emplace_back("Comment", depth_legend(finite_depth_range(frame)));
+  write_png(file.path(), row_width, height, rgb.data(), PngPixels::rgb8, path, texts);
 }
 
 }  // namespace
@@ -465,18 +497,21 @@ void remove_stale_partial_files(const std::vector<std::filesystem::path>& target
   }
 }
 
-void write_outputs(const std::filesystem::path& exr, const std::filesystem::path* preview, const Frame& frame,
-                   const ExrSettings& settings) {
-  PartialFile exr_file(exr);
+void write_outputs(const std::filesystem::path& target, const std::filesystem::path* preview, const Frame& frame,
+                   const OutputSettings& settings) {
+  const std::vector<OutputFile> files = output_files(target, frame.aovs, settings.format);
+  std::list<PartialFile> partials;  // each stays where it is: its slot names it to the signal handler
+  for (const OutputFile& file : files) partials.emplace_back(file.path);
   std::optional<PartialFile> png_file;
   if (preview) png_file.emplace(*preview);
   std::future<void> png;
   if (preview) png = std::async(std::launch::async, [&] { write_preview_png_to(*png_file, *preview, frame); });
-  std::exception_ptr exr_failure;
+  std::exception_ptr output_failure;
   try {
-    write_exr_to(exr_file, exr, frame, settings);
+    auto partial = partials.begin();
+    for (const OutputFile& file : files) write_output_file_to(*partial++, file, frame, settings);
   } catch (...) {
-    exr_failure = std::current_exception();
+    output_failure = std::current_exception();
   }
   std::exception_ptr png_failure;
   try {
@@ -484,14 +519,14 @@ void write_outputs(const std::filesystem::path& exr, const std::filesystem::path
   } catch (...) {
     png_failure = std::current_exception();
   }
-  // The EXR is the output asked for: its failure is the one to report. Neither file replaces an
-  // older one unless both are complete.
-  if (exr_failure) std::rethrow_exception(exr_failure);
+  // The outputs are what was asked for: their failure is the one to report. No file replaces an
+  // older one unless all are complete.
+  if (output_failure) std::rethrow_exception(output_failure);
   if (png_failure) std::rethrow_exception(png_failure);
-  // Nor when one of them may not be replaced: both targets are checked before either moves.
-  refuse_to_replace(exr);
+  // Nor when one of them may not be replaced: every target is checked before any moves.
+  for (const OutputFile& file : files) refuse_to_replace(file.path);
   if (preview) refuse_to_replace(*preview);
-  exr_file.commit();
+  for (PartialFile& partial : partials) partial.commit();
   if (png_file) png_file->commit();
 }
 

@@ -2,6 +2,7 @@
 #pragma once
 
 #include "engine/frame.hpp"
+#include "engine/io/array_files.hpp"
 
 #include <cmath>
 #include <filesystem>
@@ -24,7 +25,9 @@ bool is_exr_compression(std::string_view name);
 // How an EXR is written: its compression (is_exr_compression), and the value its depth channels
 // (Z, planar.Z) hold where the ray missed: +inf by default, which vkray's contract uses; 0, NaN or
 // another number for loaders that want one (the header's vkray:miss says which).
-struct ExrSettings {
+struct OutputSettings {
+  FileFormat format = FileFormat::exr;  // one EXR, or one file an output (array_files.hpp)
+  double depth_step = 0.001;            // png16: the depth of one step of the 16-bit value
   std::string compression = default_exr_compression;
   float miss = INFINITY;
   // Float outputs whose channels are stored as half (OpenEXR rounds each value to nearest even:
@@ -78,7 +81,7 @@ void use_exr_threads(unsigned count);
 // array) names what each mesh_id stands for. A frame with a camera has it in the header:
 // OpenEXR's worldToCamera and worldToNDC (engine/scene/camera.hpp) and vkray:camera, JSON
 // (engine/scene/camera_description.hpp). Throws std::runtime_error naming the file.
-void write_exr(const std::filesystem::path& path, const Frame& frame, const ExrSettings& settings = {});
+void write_exr(const std::filesystem::path& path, const Frame& frame, const OutputSettings& settings = {});
 
 // The panels of `frame`'s preview, left to right: depth, normal and uv where the frame has them, or
 // depth alone for a frame of camera outputs or ids. A depth panel's PNG carries depth_legend
@@ -88,13 +91,14 @@ std::vector<Aov> preview_panels(const Frame& frame);
 // 8-bit RGB pixels, 3 bytes a pixel, rows from the top, as PNG (the viewer's screenshots).
 void write_rgb_png(const std::filesystem::path& path, uint32_t width, uint32_t height, const std::vector<uint8_t>& rgb);
 
-// The EXR and, when `preview` is set, the PNG preview, written at the same time on two threads
-// (each takes about as long at 1920x1080), and renamed into place only when both are complete.
+// The files of `target` (output_files: the EXR, or one file an output in settings.format) and,
+// when `preview` is set, the PNG preview, written at the same time on two threads (each takes about
+// as long at 1920x1080), and renamed into place only when all are complete.
 // The preview is 8-bit RGB, one panel per output side by side in the order depth, normal, uv:
 // depth as grey (near bright, far dark, misses black), normals as (N+1)/2, uv as (u+1)/2, (v+1)/2
 // with the unit disk drawn brighter (it must touch the shorter borders).
-// Throws the EXR's failure, else the PNG's.
-void write_outputs(const std::filesystem::path& exr, const std::filesystem::path* preview, const Frame& frame,
-                   const ExrSettings& settings = {});
+// Throws the outputs' failure, else the preview's.
+void write_outputs(const std::filesystem::path& target, const std::filesystem::path* preview, const Frame& frame,
+                   const OutputSettings& settings = {});
 
 }  // namespace vkray

@@ -42,7 +42,12 @@ std::string manifest_line(const ViewRecord& record, const std::filesystem::path&
   nlohmann::ordered_json line;  // keys in this order, the index first
   line["index"] = record.index;
   line["views"] = record.views;
-  line["exr"] = relative_name(record.exr, folder);
+  if (record.files.empty()) {
+    line["exr"] = relative_name(record.exr, folder);
+  } else {
+    nlohmann::ordered_json& files = line["files"];
+    for (const OutputFile& file : record.files) files[output_info(file.aov).name] = relative_name(file.path, folder);
+  }
   if (record.png) line["png"] = relative_name(*record.png, folder);
   line["width"] = record.width;
   line["height"] = record.height;
@@ -162,6 +167,15 @@ std::string record_changes(const std::string& recorded, const std::string& now) 
     changes += (changes.empty() ? "" : "; ") + std::string(what);
     if (std::string(what) != "the camera") changes += ": " + shown(before, keys) + " then, " + shown(after, keys) + " now";
   }
+  // The kind of files: one EXR, or one file an output (--format), by the extension of the first.
+  const auto format = [](const nlohmann::json& record) {
+    const bool files = record.contains("files") && record["files"].is_object() && !record["files"].empty() &&
+                       record["files"].begin()->is_string();
+    return files ? std::filesystem::path(record["files"].begin()->get<std::string>()).extension().string().substr(1) : std::string("exr");
+  };
+  if (format(before) != format(after)) {
+    changes += (changes.empty() ? "" : "; ") + std::string("the format: ") + format(before) + " then, " + format(after) + " now";
+  }
   return changes;
 }
 
@@ -178,6 +192,11 @@ std::string with_names_moved(const std::string& line, const std::filesystem::pat
   for (const char* key : {"exr", "png"}) {
     if (record.contains(key) && record[key].is_string()) {
       record[key] = relative_name(from / record[key].get<std::string>(), to);
+    }
+  }
+  if (record.contains("files") && record["files"].is_object()) {
+    for (auto& file : record["files"]) {
+      if (file.is_string()) file = relative_name(from / file.get<std::string>(), to);
     }
   }
   return record.dump();

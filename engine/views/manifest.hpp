@@ -6,12 +6,14 @@
 //    "intrinsics": {"fx": ..., "fy": ..., "cx": ..., "cy": ...},
 //    "world_to_camera": [[...], [...], [...], [0, 0, 0, 1]]}
 //
-// "png" only where previews are written; "objects" (what each mesh_id stands for: a mesh's file or
+// "exr" where the outputs are one EXR, else "files": {"depth": "view-00042.depth.npy", ...}, one
+// file an output; "png" only where previews are written; "objects" (what each mesh_id stands for: a mesh's file or
 // glTF node, "spheres[i]", "planes[i]") only with the mesh-id output; file names relative to the manifest's folder; "scene" the
 // geometry's hash (geometry_hash); the camera's keys as engine/scene/camera_description.hpp
 // describes them (README "Many views").
 #pragma once
 
+#include "engine/io/array_files.hpp"
 #include "engine/scene/camera.hpp"
 #include "engine/views/manifest_record.hpp"
 
@@ -27,7 +29,8 @@ namespace vkray {
 struct ViewRecord {
   uint32_t index = 0;
   uint32_t views = 0;  // in the whole run, every shard's: what a merge checks its parts against
-  std::filesystem::path exr;
+  std::filesystem::path exr;       // the EXR, or the -o name the files below are named after
+  std::vector<OutputFile> files;   // one file an output (--format npy, png16): the record's "files"
   std::optional<std::filesystem::path> png;
   Camera camera;
   uint32_t width = 0, height = 0;

@@ -34,7 +34,8 @@ void read_pinhole(const Json& record, const std::filesystem::path& manifest, Pin
     throw InputError(manifest.string() + ": view " + std::to_string(view.index) +
                      " has no pinhole camera (orthographic and panoramic views cannot be exported)");
   }
-  view.image = record.at("exr").get<std::string>();
+  // The view's image: its EXR, or its first file of one output (--format npy, png16).
+  view.image = record.contains("exr") ? record.at("exr").get<std::string>() : record.at("files").begin()->get<std::string>();
   view.width = record.at("width").get<uint32_t>();
   view.height = record.at("height").get<uint32_t>();
   const Json& intrinsics = record.at("intrinsics");

@@ -32,7 +32,8 @@ std::optional<Json> parse_record(const std::string& line) {
   if (nested_deeper_than(line, max_record_depth)) return std::nullopt;
   const Json record = Json::parse(line, nullptr, false);
   if (!record.is_object() || !record.contains("index") || !record["index"].is_number_unsigned() ||
-      record["index"].get<uint64_t>() > UINT32_MAX || !record.contains("exr") || !record["exr"].is_string()) {
+      record["index"].get<uint64_t>() > UINT32_MAX ||
+      !((record.contains("exr") && record["exr"].is_string()) || (record.contains("files") && record["files"].is_object() && !record["files"].empty()))) {
     return std::nullopt;
   }
   return record;

@@ -9,6 +9,7 @@
 #include <deque>
 #include <exception>
 #include <mutex>
+#include <algorithm>
 #include <set>
 #include <thread>
 
@@ -79,10 +80,17 @@ class WriteQueue {
   std::exception_ptr failure_;
 };
 
+// The files of view `index`: its outputs' (one EXR, or one an output) and its preview.
+std::vector<std::filesystem::path> view_files(const ViewBatch& batch, uint32_t index) {
+  std::vector<std::filesystem::path> files;
+  for (const OutputFile& file : output_files(batch.exr.path(index), batch.aovs, batch.output_settings.format)) files.push_back(file.path);
+  if (batch.png) files.push_back(batch.png->path(index));
+  return files;
+}
+
 bool complete(const ViewBatch& batch, uint32_t index) {
   std::error_code error;
-  return std::filesystem::is_regular_file(batch.exr.path(index), error) &&
-         (!batch.png || std::filesystem::is_regular_file(batch.png->path(index), error));
+  return std::ranges::all_of(view_files(batch, index), [&](const auto& file) { return std::filesystem::is_regular_file(file, error); });
 }
 
 // The views this run renders: its shard's, less those complete unless it overwrites.
@@ -95,6 +103,7 @@ ViewRecord record_of(const ViewBatch& batch, uint32_t index) {
   record.index = index;
   record.views = static_cast<uint32_t>(batch.cameras.size());
   record.exr = batch.exr.path(index);
+  if (batch.output_settings.format != FileFormat::exr) record.files = output_files(record.exr, batch.aovs, batch.output_settings.format);
   if (batch.png) record.png = batch.png->path(index);
   record.camera = batch.cameras[index];
   record.width = batch.width;
@@ -118,8 +127,7 @@ void prepare_folders(const ViewBatch& batch, const std::vector<uint32_t>& views)
   };
   prepare(batch.manifest);
   for (uint32_t index : views) {
-    prepare(batch.exr.path(index));
-    if (batch.png) prepare(batch.png->path(index));
+    for (const std::filesystem::path& file : view_files(batch, index)) prepare(file);
   }
 }
 
@@ -202,8 +210,7 @@ ViewBatchSummary render_views(Renderer& renderer, const ViewBatch& batch,
       if (!recorded) manifest.append(record_of(batch, index));  // its files were in place before an interruption could record them
       continue;
     }
-    to_write.push_back(batch.exr.path(index));
-    if (batch.png) to_write.push_back(batch.png->path(index));
+    for (std::filesystem::path& file : view_files(batch, index)) to_write.push_back(std::move(file));
     to_render.push_back(index);
   }
   remove_stale_partial_files(to_write);
@@ -224,7 +231,7 @@ ViewBatchSummary render_views(Renderer& renderer, const ViewBatch& batch,
           const std::filesystem::path exr = batch.exr.path(job->index);
           const std::optional<std::filesystem::path> png =
               batch.png ? std::optional(batch.png->path(job->index)) : std::nullopt;
-          write_outputs(exr, png ? &*png : nullptr, job->frame, batch.exr_settings);
+          write_outputs(exr, png ? &*png : nullptr, job->frame, batch.output_settings);
           const std::lock_guard lock(progress_mutex);
           manifest.append(record_of(batch, job->index));
           ++done.done;

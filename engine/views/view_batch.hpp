@@ -32,7 +32,7 @@ struct ViewBatch {
   AovSet aovs;
   OutputPattern exr{"view-{index}.exr", "-o"};
   std::optional<OutputPattern> png;  // a preview per view, where given
-  ExrSettings exr_settings;
+  OutputSettings output_settings;
   std::filesystem::path manifest;
   Shard shard;
   std::string scene;       // geometry_hash of the scene, recorded with each view

@@ -228,6 +228,60 @@ def test_half_outputs_are_the_float_channels_rounded_to_half(tmp_path):
     assert refused.returncode == 2 and "holds integers" in refused.stderr, refused.stderr
 
 
+def test_npy_outputs_are_the_exr_channels_bit_for_bit_and_png16_their_depth_in_steps(tmp_path):
+    """--format npy writes one .npy an output holding exactly the EXR's channels (the ids too, misses
+    at --miss, half where --half says), in one view and in many, named in the manifest's "files";
+    --format png16 writes depth in steps of --depth-step, 0 where there is none."""
+    outputs = "depth,normal,planar-depth,mesh-id"
+    for many in (False, True):
+        where = tmp_path / ("many" if many else "one")
+        where.mkdir()
+        views = ["--orbit", "2"] if many else []
+        exr = where / ("v-{index}.exr" if many else "v.exr")
+        vkray("render", *SIZE, *views, "--aov", outputs, "--miss", "0", "-o", str(exr))
+        npy = ["render", *SIZE, *views, "--aov", outputs, "--miss", "0", "--format", "npy", "--half", "normal", "-o", str(exr)]
+        if many:  # the manifest records EXRs: a run writing npy files is another run
+            refused = vkray(*npy, check=False)
+            assert refused.returncode == 2 and "the format: exr then, npy now" in refused.stderr, refused.stderr
+            npy.append("--overwrite")
+        vkray(*npy)
+        for k in range(2 if many else 1):
+            name = f"v-{k}" if many else "v"
+            names, data = pixels(where / f"{name}.exr")
+            channels = {channel: data[..., i] for i, channel in enumerate(names)}
+            assert np.array_equal(np.load(where / f"{name}.depth.npy"), channels["Z"])
+            assert np.array_equal(np.load(where / f"{name}.planar-depth.npy"), channels["planar.Z"])
+            normal = np.load(where / f"{name}.normal.npy")
+            assert normal.dtype == np.float16 and normal.shape == (*channels["Z"].shape, 3)
+            stacked = np.stack([channels["N.X"], channels["N.Y"], channels["N.Z"]], axis=-1)
+            assert np.array_equal(normal, stacked.astype(np.float16))
+            ids = np.load(where / f"{name}.mesh-id.npy")
+            assert ids.dtype == np.uint32 and np.array_equal(ids, read_ids(where / f"{name}.exr"))
+        if many:
+            records = sorted(manifest_records(where / "manifest.jsonl"), key=lambda r: r["index"])
+            assert [r["files"] for r in records] == [{output: f"v-{k}.{output}.npy" for output in outputs.split(",")} for k in range(2)]
+    step = 2.0**-10
+    vkray("render", *SIZE, "--aov", "depth", "--format", "png16", "--depth-step", str(step), "-o", str(tmp_path / "d.exr"))
+    depth = pixels(tmp_path / "one" / "v.exr")[1][..., pixels(tmp_path / "one" / "v.exr")[0].index("Z")]
+    image = oiio.ImageInput.open(str(tmp_path / "d.depth.png"))
+    assert image.spec().format == oiio.UINT16 and image.spec().getattribute("vkray:depth_step") == repr(step)
+    steps = image.read_image(oiio.UINT16)[..., 0].astype(np.float64)
+    image.close()
+    held = (depth > 0) & (depth / step <= 65535)  # a hit within 65535 steps (the ground plane goes on past them)
+    assert np.all(steps[~held] == 0) and np.all(steps[held] > 0) and np.count_nonzero(held) > 1000
+    assert np.max(np.abs(steps[held] * step - depth[held])) <= step / 2
+    refused = vkray("render", *SIZE, "--aov", "depth,normal", "--format", "png16", "-o", str(tmp_path / "r.exr"), check=False)
+    assert refused.returncode == 2 and "'normal' is not a depth" in refused.stderr, refused.stderr
+
+
+def read_ids(path):
+    image = oiio.ImageInput.open(str(path))
+    channel = list(image.spec().channelnames).index("mesh_id")
+    ids = image.read_image(0, 0, channel, channel + 1, oiio.UINT)[..., 0]
+    image.close()
+    return ids
+
+
 def test_shards_together_are_the_whole_run(whole_run, tmp_path):
     for shard in range(3):
         vkray("render", *SIZE, "--orbit", "12", "-o", str(tmp_path / "view-{index:05}.exr"), "--shard", f"{shard}/3")
