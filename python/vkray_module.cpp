@@ -511,6 +511,9 @@ PYBIND11_MODULE(vkray, m) {
       .def_property_readonly("mesh_count", [](const Scene& scene) { return scene.meshes.size(); })
       .def_property_readonly("sphere_count", [](const Scene& scene) { return scene.spheres.size(); })
       .def_property_readonly("plane_count", [](const Scene& scene) { return scene.planes.size(); })
+      .def_property_readonly("object_names", &object_names,
+                             "What each mesh_id stands for, by id: each mesh's source (its model file, a glTF's "
+                             "'file#node', 'meshes[i]' for arrays), then 'spheres[i]', then 'planes[i]'.")
       .def("__repr__", [](const Scene& scene) {
         return "<vkray.Scene: " + std::to_string(scene.meshes.size()) + " meshes, " + std::to_string(scene.triangle_count()) +
                " triangles, " + std::to_string(scene.spheres.size()) + " spheres, " + std::to_string(scene.planes.size()) +

@@ -190,7 +190,9 @@ void add_geometry(Fnv1a& fnv, const Scene& scene) {
 
 std::vector<std::string> object_names(const Scene& scene) {
   std::vector<std::string> names;
-  for (const Mesh& mesh : scene.meshes) names.push_back(mesh.source);
+  for (size_t i = 0; i < scene.meshes.size(); ++i) {
+    names.push_back(scene.meshes[i].source.empty() ? "meshes[" + std::to_string(i) + "]" : scene.meshes[i].source);
+  }
   for (size_t i = 0; i < scene.spheres.size(); ++i) names.push_back("spheres[" + std::to_string(i) + "]");
   for (size_t i = 0; i < scene.planes.size(); ++i) names.push_back("planes[" + std::to_string(i) + "]");
   return names;

@@ -127,8 +127,8 @@ glm::dvec3 scene_anchor(const Scene& scene);
 // The largest distance from `anchor` of a sphere's surface or a mesh vertex (0 without either).
 double scene_radius(const Scene& scene, const glm::dvec3& anchor);
 
-// What each mesh_id of the outputs stands for, by id: the meshes' sources (Mesh::source), then
-// "spheres[i]", then "planes[i]", as ObjectPrimitive numbers them.
+// What each mesh_id of the outputs stands for, by id: the meshes' sources (Mesh::source; "meshes[i]"
+// for one built in memory), then "spheres[i]", then "planes[i]", as ObjectPrimitive numbers them.
 std::vector<std::string> object_names(const Scene& scene);
 
 // Whether every coordinate of `point` is finite and within max_coordinate. False for NaN too: each

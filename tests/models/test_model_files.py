@@ -234,6 +234,18 @@ def test_a_gltf_with_two_meshes_renders_from_its_camera_with_named_ids(tmp_path,
     assert set(np.unique(from_gltf["mesh_id"])) == {0, 1, 0xFFFFFFFF}  # both meshes and the sky seen
 
 
+def test_python_loads_a_gltf_and_names_its_meshes(tmp_path):
+    import vkray  # the module under test, on PYTHONPATH (tests/CMakeLists.txt)
+    meshes, nodes, cameras = two_meshes_and_a_camera()
+    write_glb(tmp_path / "two.glb", meshes, nodes, cameras)
+    scene = vkray.load(str(tmp_path / "two.glb"), None, 60)
+    assert (scene.width, scene.height) == (90, 60) and scene.triangle_count == 14
+    assert scene.object_names == [f"{tmp_path / 'two.glb'}#Ground", f"{tmp_path / 'two.glb'}#Box"]
+    ids = vkray.Renderer(scene).render(aovs=["mesh-id"])["mesh_id"]
+    assert set(np.unique(ids)) == {0, 1, vkray.NO_HIT}
+    assert vkray.Scene(meshes[0][0], meshes[0][1]).object_names == ["meshes[0]"]
+
+
 def run_cli(*arguments):
     return subprocess.run([CLI, *map(str, arguments)], capture_output=True, text=True)
 
