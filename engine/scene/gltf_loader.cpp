@@ -1,5 +1,6 @@
 #include "engine/scene/gltf_loader.hpp"
 
+#include <glm/gtc/matrix_transform.hpp>
 #include <glm/gtc/quaternion.hpp>
 #include <glm/gtc/type_ptr.hpp>
 #include <glm/mat4x4.hpp>
@@ -13,6 +14,7 @@
 #include <tiny_gltf.h>
 
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <numbers>
 
