@@ -101,12 +101,10 @@ class GltfReader {
     if (!allowed) fail(where + " has a component type vkray does not read here (" + std::to_string(component) + ")");
     const size_t component_size = component == TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE ? 1 : component == TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT ? 2 : 4;
     const size_t record_size = component_size * static_cast<size_t>(components);
+    // Without a buffer view an accessor is all zeros (glTF 2.0, 3.6.2.1), a base for sparse values,
+    // which vkray does not read: as it is, its count alone would set what is allocated.
+    if (accessor.bufferView < 0) fail(where + " has no buffer view (zeros for sparse values, which vkray does not read)");
     std::vector<double> values;
-    if (accessor.bufferView < 0) {  // no buffer view: zeros (glTF 2.0, 3.6.2.1)
-      if (accessor.count > max_node_instances * 64) fail(where + " counts too many values");
-      values.assign(accessor.count * static_cast<size_t>(components), 0.0);
-      return values;
-    }
     if (static_cast<size_t>(accessor.bufferView) >= gltf_.bufferViews.size()) fail(where + " names a missing buffer view");
     const tinygltf::BufferView& view = gltf_.bufferViews[static_cast<size_t>(accessor.bufferView)];
     if (view.buffer < 0 || static_cast<size_t>(view.buffer) >= gltf_.buffers.size()) fail(where + "'s buffer view names a missing buffer");
