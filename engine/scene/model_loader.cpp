@@ -58,6 +58,7 @@ Model read_model_bytes(std::string_view bytes, std::string_view extension, const
   if (extension == ".ply") {
     model.meshes.push_back(read_ply(bytes, name));
     model.meshes[0].source = name;
+    check_mesh_values(model.meshes[0], 0);  // its normals and texture coordinates (read_ply checks positions where it reads them)
   } else if (extension == ".gltf" || extension == ".glb") {
     model = read_gltf(bytes, extension == ".glb", folder, name);
   } else {

@@ -349,12 +349,6 @@ Mesh read_body(const Header& header, Body& body, const std::string& name) {
   }
   if (!vertices_read) throw InputError(name + ": no vertex element");
   if (mesh.triangles.empty()) throw InputError(name + ": no faces to render (no face element, or an empty one)");
-  for (const glm::dvec3& normal : mesh.normals) {
-    if (!std::isfinite(normal.x) || !std::isfinite(normal.y) || !std::isfinite(normal.z)) throw InputError(name + ": a vertex normal is not finite");
-  }
-  for (const glm::dvec2& uv : mesh.texcoords) {
-    if (!std::isfinite(uv.x) || !std::isfinite(uv.y)) throw InputError(name + ": a texture coordinate is not finite");
-  }
   // Shading normals and texture coordinates belong to the vertices: each corner names its vertex's.
   if (!mesh.normals.empty()) mesh.normal_corners = mesh.triangles;
   if (!mesh.texcoords.empty()) mesh.texcoord_corners = mesh.triangles;

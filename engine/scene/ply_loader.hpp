@@ -19,8 +19,9 @@ namespace vkray {
 // The mesh of the PLY `bytes`, `name` standing for the file in messages. Throws InputError
 // "<name>:<line>: ..." (header, ASCII body) or "<name>: byte <offset>: ..." (binary body) for a
 // malformed file: an unknown format or type, a missing x, y, z or face list, a count the file is too
-// short to hold, a value that is not a number or not finite, an index out of range, a face of fewer
-// than three or more than max_polygon_corners corners, or no face at all.
+// short to hold, a value that is not a number, a position not finite, an index out of range, a face
+// of fewer than three or more than max_polygon_corners corners, or no face at all. Normals and
+// texture coordinates are the caller's to check (check_mesh_values, model_loader.hpp).
 Mesh read_ply(std::string_view bytes, const std::string& name);
 
 }  // namespace vkray
