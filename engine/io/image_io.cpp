@@ -4,14 +4,6 @@
 #include "engine/io/preview.hpp"
 #include "engine/scene/camera_description.hpp"
 
-#include <OpenEXR/ImfChannelList.h>
-#include <OpenEXR/ImfFloatAttribute.h>
-#include <OpenEXR/ImfFrameBuffer.h>
-#include <OpenEXR/ImfHeader.h>
-#include <OpenEXR/ImfOutputFile.h>
-#include <OpenEXR/ImfStandardAttributes.h>
-#include <OpenEXR/ImfStringAttribute.h>
-#include <OpenEXR/ImfThreading.h>
 #include <Imath/half.h>
 #include <png.h>
 
@@ -268,15 +260,6 @@ void remove_partial_outputs() noexcept {
   }
 }
 
-bool is_exr_compression(std::string_view name) {
-  const size_t colon = name.find(':');
-  const std::string_view method = name.substr(0, colon);
-  if (std::find(std::begin(exr_compressions), std::end(exr_compressions), method) == std::end(exr_compressions)) return false;
-  if (colon == std::string_view::npos) return true;
-  const std::string_view level = name.substr(colon + 1);
-  return (method == "zip" || method == "zips") && level.size() == 1 && level[0] >= '1' && level[0] <= '9';
-}
-
 void write_exr(const std::filesystem::path& path, const Frame& frame, const OutputSettings& settings) {
   PartialFile file(path);
   write_exr_to(file, path, frame, settings);
@@ -292,28 +275,12 @@ void write_rgb_png(const std::filesystem::path& path, uint32_t width, uint32_t h
 
 namespace {
 
-// OpenEXR's compression and zip level for a name is_exr_compression accepts; level 0 is
-// OpenEXR's default.
-std::pair<Imf::Compression, int> exr_compression(std::string_view name) {
-  const size_t colon = name.find(':');
-  const std::string_view method = name.substr(0, colon);
-  const int level = colon == std::string_view::npos ? 0 : name[colon + 1] - '0';
-  if (method == "zip") return {Imf::ZIP_COMPRESSION, level};
-  if (method == "zips") return {Imf::ZIPS_COMPRESSION, level};
-  if (method == "piz") return {Imf::PIZ_COMPRESSION, level};
-  if (method == "rle") return {Imf::RLE_COMPRESSION, level};
-  return {Imf::NO_COMPRESSION, level};
-}
-
-std::once_flag exr_threads_started;
-
-// OpenEXR compresses blocks of rows on its own thread pool, one thread a core, unless
-// use_exr_threads said otherwise first.
-// Imath's matrices act on row vectors (p' = p M): the transpose of a matrix for column vectors.
-Imath::M44f row_vector_matrix(const Matrix4& m) {
-  Imath::M44f transposed;
+// Imath's matrices act on row vectors (p' = p M): the transpose of a matrix for column vectors,
+// in Imath's memory order.
+std::array<float, 16> row_vector_matrix(const Matrix4& m) {
+  std::array<float, 16> transposed;
   for (int r = 0; r < 4; ++r) {
-    for (int c = 0; c < 4; ++c) transposed[c][r] = static_cast<float>(m[r][c]);
+    for (int c = 0; c < 4; ++c) transposed[c * 4 + r] = static_cast<float>(m[r][c]);
   }
   return transposed;
 }
@@ -321,42 +288,26 @@ Imath::M44f row_vector_matrix(const Matrix4& m) {
 // The camera in OpenEXR's standard attributes worldToCamera and, for a perspective camera (the one
 // a matrix projects), worldToNDC (float32, as the standard defines them) and, exactly, as
 // vkray:camera (engine/scene/camera_description.hpp).
-void describe_camera(Imf::Header& header, const Camera& camera, uint32_t width, uint32_t height) {
-  Imf::addWorldToCamera(header, row_vector_matrix(world_to_openexr_camera(camera, width, height)));
+void describe_camera(std::vector<ExrAttribute>& attributes, const Camera& camera, uint32_t width, uint32_t height) {
+  attributes.push_back({"worldToCamera", row_vector_matrix(world_to_openexr_camera(camera, width, height))});
   if (camera.projection == Projection::perspective) {
-    Imf::addWorldToNDC(header, row_vector_matrix(world_to_openexr_ndc(camera, width, height)));
+    attributes.push_back({"worldToNDC", row_vector_matrix(world_to_openexr_ndc(camera, width, height))});
   }
-  header.insert("vkray:camera", Imf::StringAttribute(camera_description(camera, width, height).dump()));
-}
-
-void start_exr_threads(unsigned count = std::max(1u, std::thread::hardware_concurrency())) {
-  std::call_once(exr_threads_started, [count] { Imf::setGlobalThreadCount(static_cast<int>(count)); });
+  attributes.push_back({"vkray:camera", camera_description(camera, width, height).dump()});
 }
 
 void write_exr_to(const PartialFile& file, const std::filesystem::path& path, const Frame& frame,
                   const OutputSettings& settings) {
-  const std::string_view compression = settings.compression;
-  if (!is_exr_compression(compression)) throw std::invalid_argument("unknown EXR compression " + std::string(compression));
   if (frame.aovs.empty()) {
     throw std::runtime_error(path.string() + ": no outputs to write");
   }
-  start_exr_threads();
-  const auto [method, level] = exr_compression(compression);
-  Imf::Header header(static_cast<int>(frame.width), static_cast<int>(frame.height));
-  header.compression() = method;
-  if (level > 0) header.zipCompressionLevel() = level;
-  header.insert("software", Imf::StringAttribute("vkray"));
-  if (frame.camera) describe_camera(header, *frame.camera, frame.width, frame.height);
+  std::vector<ExrAttribute> attributes{{"software", std::string("vkray")}};
+  if (frame.camera) describe_camera(attributes, *frame.camera, frame.width, frame.height);
   if (!frame.mesh_id.empty() && !frame.object_names.empty()) {
-    header.insert("vkray:objects", Imf::StringAttribute(nlohmann::json(frame.object_names).dump()));
+    attributes.push_back({"vkray:objects", nlohmann::json(frame.object_names).dump()});
   }
-  // OpenEXR reads each channel from the frame's own planes (a slice with its strides): no copy.
-  Imf::FrameBuffer slices;
-  auto add_channel = [&](const char* name, Imf::PixelType type, const void* plane) {
-    header.channels().insert(name, Imf::Channel(type));
-    const size_t bytes = type == Imf::UINT ? sizeof(uint32_t) : type == Imf::HALF ? sizeof(Imath::half) : sizeof(float);
-    slices.insert(name, Imf::Slice(type, reinterpret_cast<char*>(const_cast<void*>(plane)), bytes, bytes * frame.width));
-  };
+  // OpenEXR reads each channel from the frame's own planes: no copy.
+  std::vector<ExrChannel> channels;
   const size_t pixels = frame.pixel_count();
   // Depths with the chosen value where the ray missed (OutputSettings::miss), in copies: the frame
   // keeps +inf, by which hits are known.
@@ -370,7 +321,7 @@ void write_exr_to(const PartialFile& file, const std::filesystem::path& path, co
     if (!frame.aovs.has(output.aov)) continue;
     if (output.integers) {
       const uint32_t* planes = (frame.*output.integers).data();
-      for (size_t c = 0; c < output.components; ++c) add_channel(output.channels[c], Imf::UINT, planes + c * pixels);
+      for (size_t c = 0; c < output.components; ++c) channels.push_back({output.channels[c], ExrSample::uint32, planes + c * pixels});
       continue;
     }
     const float* planes = (frame.*output.floats).data();
@@ -384,24 +335,24 @@ void write_exr_to(const PartialFile& file, const std::filesystem::path& path, co
         planes = written.data();
       }
     }
-    if (settings.half.has(output.aov)) {  // OpenEXR writes a half channel from half planes only
+    if (settings.half.has(output.aov)) {  // rounded by Imath, as stored_as_half rounds them
       std::vector<Imath::half>& rounded = halves.emplace_back(planes, planes + output.components * pixels);
-      for (size_t c = 0; c < output.components; ++c) add_channel(output.channels[c], Imf::HALF, rounded.data() + c * pixels);
+      for (size_t c = 0; c < output.components; ++c) channels.push_back({output.channels[c], ExrSample::half, rounded.data() + c * pixels});
       continue;
     }
-    for (size_t c = 0; c < output.components; ++c) add_channel(output.channels[c], Imf::FLOAT, planes + c * pixels);
+    for (size_t c = 0; c < output.components; ++c) channels.push_back({output.channels[c], ExrSample::float32, planes + c * pixels});
   }
-  if (has_miss_value) header.insert("vkray:miss", Imf::FloatAttribute(settings.miss));
-  std::vector<float> alpha;
+  if (has_miss_value) attributes.push_back({"vkray:miss", settings.miss});
+  // A holds 0 or 1, which half holds exactly: as half, it is a tenth of the bytes deflate reads for
+  // depth and normal rather than a fifth (deflate is half of a many-view run's time).
+  std::vector<Imath::half> alpha;
   if (frame.aovs.needs_rays()) {
     alpha.resize(pixels);
     for (size_t p = 0; p < pixels; ++p) alpha[p] = frame.hit(p) ? 1.0f : 0.0f;
-    add_channel("A", Imf::FLOAT, alpha.data());
+    channels.push_back({"A", ExrSample::half, alpha.data()});
   }
   try {
-    Imf::OutputFile output(file.path().c_str(), header);
-    output.setFrameBuffer(slices);
-    output.writePixels(static_cast<int>(frame.height));
+    write_exr_file(file.path(), frame.width, frame.height, channels, attributes, settings.compression);
   } catch (const std::exception& failure) {
     throw std::runtime_error(path.string() + ": cannot write: " + failure.what());
   }
@@ -467,8 +418,6 @@ std::vector<Aov> preview_panels(const Frame& frame) {
   if (shown.empty() && !frame.depth.empty()) shown.push_back(Aov::depth);
   return shown;
 }
-
-void use_exr_threads(unsigned count) { start_exr_threads(count); }
 
 void remove_stale_partial_files(const std::vector<std::filesystem::path>& targets) {
   // Each folder is read once for all its targets: read once a target, a folder of 40k other files

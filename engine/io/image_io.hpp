@@ -3,6 +3,7 @@
 
 #include "engine/frame.hpp"
 #include "engine/io/array_files.hpp"
+#include "engine/io/exr_file.hpp"
 
 #include <cmath>
 #include <filesystem>
@@ -11,16 +12,6 @@
 #include <vector>
 
 namespace vkray {
-
-// OpenEXR's lossless compressions, by the name OpenEXR gives them; zip and zips (deflate over
-// blocks of 16 rows and of 1 row) also as "zip:LEVEL", deflate level 1 (fastest) to 9, plain "zip"
-// being OpenEXR's default level 4. The default, zip at level 1, writes the bunny's depth and
-// normals at 1920x1080 in 4.3 MB, 13% more than level 4, 28% faster, and half the time of piz or
-// zips (README, "Command line", has the measured table). Lossy ones (pxr24, b44, dwa) would change
-// the float32 values and are not offered.
-inline constexpr const char* exr_compressions[] = {"zip", "zips", "piz", "rle", "none"};
-inline constexpr const char* default_exr_compression = "zip:1";
-bool is_exr_compression(std::string_view name);
 
 // How an EXR is written: its compression (is_exr_compression), and the value its depth channels
 // (Z, planar.Z) hold where the ray missed: +inf by default, which vkray's contract uses; 0, NaN or
@@ -68,14 +59,9 @@ void remove_partial_outputs() noexcept;
 // this node or another. A resumed many-view run starts clean. Each folder is read once.
 void remove_stale_partial_files(const std::vector<std::filesystem::path>& targets);
 
-// Threads OpenEXR compresses one file on: by default one a core, for one file at a time; 0 compresses
-// on the writing thread, for several threads each writing its own file. Takes effect only before the
-// first EXR is written.
-void use_exr_threads(unsigned count);
-
 // float32 channels, by output: depth -> Z; normal -> N.X N.Y N.Z; uv -> U V; planar-depth ->
-// planar.Z; position -> P.X P.Y P.Z; camera-position -> camera.P.X camera.P.Y camera.P.Z; and A (1
-// on a hit, 0 on a miss) whenever an output other than uv is present; barycentric -> barycentric.U
+// planar.Z; position -> P.X P.Y P.Z; camera-position -> camera.P.X camera.P.Y camera.P.Z; and A (a
+// half: 1 on a hit, 0 on a miss) whenever an output other than uv is present; barycentric -> barycentric.U
 // barycentric.V; shading-normal -> Ns.X Ns.Y Ns.Z; texcoord -> texcoord.U texcoord.V. mesh-id ->
 // mesh_id and primitive-id -> primitive_id are 32-bit unsigned, and the header's vkray:objects (a JSON
 // array) names what each mesh_id stands for. A frame with a camera has it in the header:

@@ -216,9 +216,9 @@ ViewBatchSummary render_views(Renderer& renderer, const ViewBatch& batch,
   remove_stale_partial_files(to_write);
   if (to_render.empty()) return summary;
 
-  // Each writer compresses its own file: with several views in flight, that keeps the cores as busy
-  // as OpenEXR's own threads would, without their hand-offs.
-  use_exr_threads(0);
+  // Each writer compresses its own file on its own thread: with several views in flight, that keeps
+  // the cores as busy as a file's encoding threads would, without their hand-offs.
+  use_exr_threads(1);
   const auto start = Clock::now();
   WriteQueue queue(batch.writers + 1);
   std::mutex progress_mutex;
