@@ -6,8 +6,12 @@
 #include <OpenImageIO/imageio.h>
 #include <gtest/gtest.h>
 
+#include <sys/resource.h>
+
+#include <csignal>
 #include <cstring>
 #include <random>
+#include <thread>
 
 namespace vkray {
 namespace {
@@ -87,6 +91,33 @@ TEST_F(ExrFileTest, EveryCompressionSampleKindAndThreadCountReadsBackBitForBit) 
       }
     }
   }
+}
+
+// A write that fails part way (the file size limit here, as a full disk would) throws OpenEXR's
+// reason on any thread count: no thread waits for a chunk that will never be written.
+TEST_F(ExrFileTest, AWriteFailingPartWayThrowsOnEveryThreadCount) {
+  const Planes planes = make_planes(64, 200);
+  const std::vector<ExrChannel> channels = {{"noise", ExrSample::float32, planes.noise.data()}};  // 51 kB, undeflatable
+  rlimit unlimited;
+  ASSERT_EQ(getrlimit(RLIMIT_FSIZE, &unlimited), 0);
+  rlimit limited = unlimited;
+  limited.rlim_cur = 20000;
+  const auto default_action = std::signal(SIGXFSZ, SIG_IGN);  // the write fails with EFBIG instead
+  ASSERT_EQ(setrlimit(RLIMIT_FSIZE, &limited), 0);
+  for (unsigned threads : {1u, 3u}) {
+    use_exr_threads(threads);
+    for (const char* compression : {"zip:1", "none"}) {
+      SCOPED_TRACE(std::to_string(threads) + " threads, " + compression);
+      try {
+        write_exr_file(dir_ / "cut.exr", 64, 200, channels, {}, compression);
+        ADD_FAILURE() << "written past the size limit";
+      } catch (const std::runtime_error& error) {
+        EXPECT_NE(std::string(error.what()).find("File too large"), std::string::npos) << error.what();
+      }
+    }
+  }
+  setrlimit(RLIMIT_FSIZE, &unlimited);
+  std::signal(SIGXFSZ, default_action);
 }
 
 // OpenEXR's reason reaches the caller (who names the file).

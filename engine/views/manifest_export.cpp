@@ -170,6 +170,14 @@ std::vector<std::pair<std::string, std::string>> export_manifest(const std::file
                                                                  const std::filesystem::path& folder) {
   const std::vector<PinholeView> views = pinhole_views(manifest, folder);
   if (format == ManifestFormat::nerf) return {{"transforms.json", nerf_transforms(views)}};
+  // COLMAP's images.txt ends an image's NAME at the next space (its ReadImagesText reads the line
+  // field by field): a name holding whitespace would be cut short, naming another file or none.
+  for (const PinholeView& view : views) {
+    if (view.image.find_first_of(" \t\n\r") != std::string::npos) {
+      throw InputError(manifest.string() + ": view " + std::to_string(view.index) + ": COLMAP reads a file name up to its first space, and '" +
+                       view.image + "' holds one: render to names without spaces, or export --format nerf");
+    }
+  }
   return colmap_model(views);
 }
 

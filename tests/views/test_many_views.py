@@ -171,7 +171,7 @@ def test_nerf_and_colmap_exports_reproject_each_views_planar_depth(tmp_path):
         assert np.all(np.abs(u - (i + 0.5)) <= pixel_tolerance) and np.all(np.abs(v - (j + 0.5)) <= pixel_tolerance)
 
 
-def test_manifest_export_refuses_a_short_set_and_views_without_a_pinhole(tmp_path):
+def test_manifest_export_refuses_a_short_set_views_without_a_pinhole_and_colmap_names_with_spaces(tmp_path):
     vkray("render", *SIZE, "--orbit", "4", "--shard", "0/2", "-o", str(tmp_path / "short" / "view-{index}.exr"))
     part = next((tmp_path / "short").glob("manifest-shard-*.jsonl"))
     result = vkray("manifest", "export", str(part), "--format", "nerf", "-o", str(tmp_path / "out"), check=False)
@@ -187,6 +187,15 @@ def test_manifest_export_refuses_a_short_set_and_views_without_a_pinhole(tmp_pat
     result = vkray("manifest", "export", str(tmp_path / "pano" / "manifest.jsonl"), "--format", "ply", "-o",
                    str(tmp_path / "out"), check=False)
     assert result.returncode == 2 and "nerf, colmap" in result.stderr, result.stderr
+    # COLMAP ends a name at its first space: such a name is refused, where NeRF's JSON holds it.
+    vkray("render", *SIZE, "--orbit", "2", "-o", str(tmp_path / "spaced" / "view {index}.exr"))
+    result = vkray("manifest", "export", str(tmp_path / "spaced" / "manifest.jsonl"), "--format", "colmap", "-o",
+                   str(tmp_path / "spaced-colmap"), check=False)
+    assert result.returncode == 2 and "view 0.exr' holds one" in result.stderr and len(result.stderr.splitlines()) == 1, result.stderr
+    assert not (tmp_path / "spaced-colmap" / "images.txt").exists()
+    vkray("manifest", "export", str(tmp_path / "spaced" / "manifest.jsonl"), "--format", "nerf", "-o", str(tmp_path / "spaced-nerf"))
+    frames = json.loads((tmp_path / "spaced-nerf" / "transforms.json").read_text())["frames"]
+    assert [os.path.basename(frame["file_path"]) for frame in frames] == ["view 0.exr", "view 1.exr"]
 
 
 def channel_formats(path):
