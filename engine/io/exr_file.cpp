@@ -180,11 +180,8 @@ void encode_chunks(FileWrite& file) {
     result = exr_encoding_run(file.context, 0, &encode);
   }
   if (result != EXR_ERR_SUCCESS) file.fail(exr_get_default_error_message(result));
-  if (initialized) {
-    // The compressed buffer, when set, is the deflater's or the packed one: OpenEXR frees neither.
-    encode.compressed_buffer = nullptr;
-    exr_encoding_destroy(file.context, &encode);
-  }
+  // OpenEXR frees the buffers it allocated, those with a size: not the deflater's (size 0).
+  if (initialized) exr_encoding_destroy(file.context, &encode);
 }
 
 // OpenEXR reports its errors here, with more detail than the error code: the first is kept.
