@@ -146,8 +146,10 @@ void encode_chunks(FileWrite& file) {
     exr_chunk_info_t info;
     result = exr_write_scanline_chunk_info(file.context, 0, chunk * file.lines_per_chunk, &info);
     if (result != EXR_ERR_SUCCESS) break;
-    result = initialized ? exr_encoding_update(file.context, 0, &info, &encode) : exr_encoding_initialize(file.context, 0, &info, &encode);
+    const bool first = !initialized;
+    result = first ? exr_encoding_initialize(file.context, 0, &info, &encode) : exr_encoding_update(file.context, 0, &info, &encode);
     if (result != EXR_ERR_SUCCESS) break;
+    initialized = true;  // from here on, destroyed whatever happens
     for (int16_t c = 0; c < encode.channel_count; ++c) {
       exr_coding_channel_info_t& channel = encode.channels[c];
       // OpenEXR keeps its channels sorted by name; each is found in ours by its name.
@@ -161,7 +163,7 @@ void encode_chunks(FileWrite& file) {
       channel.user_line_stride = static_cast<int32_t>(bytes * file.width);
       channel.encode_from_ptr = static_cast<const uint8_t*>(source.plane) + size_t(info.start_y) * file.width * bytes;
     }
-    if (!initialized) {
+    if (first) {  // the routines once the channels are described: the packing follows their types
       result = exr_encoding_choose_default_routines(file.context, 0, &encode);
       if (result != EXR_ERR_SUCCESS) break;
       if (info.compression == EXR_COMPRESSION_ZIP || info.compression == EXR_COMPRESSION_ZIPS) {
@@ -175,7 +177,6 @@ void encode_chunks(FileWrite& file) {
       encode.yield_until_ready_fn = wait_for_turn;
       encode.write_fn = write_in_turn;
       encode.encoding_user_data = &thread;
-      initialized = true;
     }
     result = exr_encoding_run(file.context, 0, &encode);
   }
