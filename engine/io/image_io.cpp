@@ -26,12 +26,10 @@
 #include <sstream>
 #include <list>
 #include <iomanip>
-#include <mutex>
 #include <optional>
 #include <set>
 #include <stdexcept>
 #include <string>
-#include <thread>
 #include <vector>
 
 namespace vkray {
