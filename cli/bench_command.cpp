@@ -6,6 +6,8 @@
 #include "engine/bench/bench.hpp"
 #include "engine/bench/bench_plot.hpp"
 #include "engine/bench/bench_report.hpp"
+#include "engine/bench/bench_suites.hpp"
+#include "engine/bench/given_rays_bench.hpp"
 #include "engine/io/image_io.hpp"
 #include "engine/typed_names.hpp"
 
@@ -32,6 +34,7 @@ struct BenchOptions {
   bool wide = false;
   std::string json, csv, plot, markdown;
   std::vector<std::string> compare;
+  size_t rays = 1 << 20;  // a kind's rays in --suite rays
 };
 
 // The options that decide what was measured, as a command: the accuracy document names it.
@@ -50,6 +53,31 @@ int run_compare(const BenchOptions& options) {
   const BenchReport before = read_bench_json(options.compare[0]);
   const BenchReport after = read_bench_json(options.compare[1]);
   std::fputs(compare_bench(before, after).c_str(), stdout);
+  return 0;
+}
+
+// --suite rays: every kind of given rays (ray_kinds) on each scene, a table row each.
+int run_given_rays(const BenchOptions& options, const std::vector<BenchScene>& scenes) {
+  for (const auto& [value, name] : {std::pair{options.variants, "--variants"}, std::pair{options.json, "--json"},
+                                    std::pair{options.csv, "--csv"}, std::pair{options.markdown, "--markdown"},
+                                    std::pair{options.plot, "--plot"}}) {
+    if (!value.empty()) throw InputError(std::string(name) + ": not for --suite rays, whose rows are kinds of rays, not variants");
+  }
+  GpuDevice device(options.device_options.device, options.device_options.transfer_mode());
+  print_cpu_device_note(device.info());
+  std::printf("vkray bench --suite rays on %s\n%zu scene%s, %zu rays a kind, %u timed calls after a first; times are medians\n%s",
+              device.info().name.c_str(), scenes.size(), scenes.size() == 1 ? "" : "s", options.rays, options.frames,
+              given_rays_table_header().c_str());
+  std::fflush(stdout);
+  BenchTiming timing;
+  timing.frames = options.frames;
+  for (const auto& scene : scenes) {
+    for (const auto& kind : ray_kinds()) {
+      const std::vector<GivenRay> rays = make_rays(kind.kind, scene.scene, options.rays);
+      std::fputs(given_rays_table_row(scene.name, bench_given_rays(device, scene.scene, kind.name, rays, timing)).c_str(), stdout);
+      std::fflush(stdout);
+    }
+  }
   return 0;
 }
 
@@ -73,13 +101,14 @@ int run_bench(const BenchOptions& options) {
     scenes = bench_suite(options.suite, width, height, options.models, &unreadable);
     for (const auto& error : unreadable) std::fprintf(stderr, "vkray: skipped %s\n", error.c_str());
     if (scenes.empty()) {
-      throw InputError("--suite models: no .obj files in '" + options.models + "' (name the folder with --models)");
+      throw InputError("--suite " + options.suite + ": no models in '" + options.models + "' (name the folder with --models)");
     }
   }
   for (const auto& path : options.scenes) {
     scenes.push_back({std::filesystem::path(path).filename().string(), load_scene_argument(path, width, height)});
   }
   if (scenes.empty()) scenes.push_back({"built-in", load_scene_argument("", width, height)});
+  if (options.suite == given_rays_suite) return run_given_rays(options, scenes);
 
   GpuDevice device(options.device_options.device, options.device_options.transfer_mode());
   print_cpu_device_note(device.info());
@@ -141,7 +170,10 @@ Action add_bench_command(CLI::App& app) {
                                               variant_names));
   measuring.push_back(add_device_options(command, options->device_options));
   measuring.push_back(
-      command->add_option("--models", options->models, "Folder of .obj files for --suite models")->capture_default_str());
+      command->add_option("--models", options->models, "Folder of .obj files for --suite models and rays")->capture_default_str());
+  measuring.push_back(command->add_option("--rays", options->rays, "Rays of each kind in --suite rays")
+                          ->capture_default_str()
+                          ->check(CLI::Range(size_t{1}, size_t{1} << 26)));
   measuring.push_back(command->add_flag("--wide", options->wide,
                                         "Print every column (about 160 characters wide; the default fits 100)"));
   measuring.push_back(

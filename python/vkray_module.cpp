@@ -18,6 +18,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -203,6 +204,43 @@ std::span<const GivenRay> given_rays(const py::array_t<double, py::array::c_styl
   return {reinterpret_cast<const GivenRay*>(rays.data()), static_cast<size_t>(rays.shape(0))};
 }
 
+// One end of cast_rays' or occluded's ranges, `what` (t_min or t_max): None (empty: the default), a
+// number for every ray, or one value a ray.
+std::vector<double> range_values(py::handle value, const char* what, size_t ray_count) {
+  if (value.is_none()) return {};
+  if (py::isinstance<py::float_>(value) || py::isinstance<py::int_>(value)) {
+    return std::vector<double>(ray_count, value.cast<double>());
+  }
+  py::array array = py::array::ensure(value);
+  const std::string expected = std::string(what) + ": expected None, a number or one value a ray (" + std::to_string(ray_count) + ")";
+  if (!array || array.ndim() != 1) throw InputError(expected);
+  const auto column = float_rows(array.reshape({-1, 1}), what, 1);  // any real dtype, as rays
+  if (static_cast<size_t>(column.shape(0)) != ray_count) {
+    throw InputError(expected + ", got " + std::to_string(column.shape(0)));
+  }
+  return {column.data(), column.data() + column.shape(0)};
+}
+
+// cast_rays' and occluded's arguments: the rays and their ranges, owned.
+struct RayArguments {
+  py::array_t<double, py::array::c_style> rays;
+  std::vector<double> t_min, t_max;
+  RayArguments(py::handle rays_argument, py::handle t_min_argument, py::handle t_max_argument)
+      : rays(float_rows(rays_argument, "rays", 6)),
+        t_min(range_values(t_min_argument, "t_min", static_cast<size_t>(rays.shape(0)))),
+        t_max(range_values(t_max_argument, "t_max", static_cast<size_t>(rays.shape(0)))) {}
+  std::span<const GivenRay> given() const { return given_rays(rays); }
+  RayRanges ranges() const { return {t_min, t_max}; }
+};
+
+// occluded()'s answer: a bool a ray.
+py::array_t<bool> bool_array(const std::vector<uint8_t>& values) {
+  py::array_t<bool> array(static_cast<py::ssize_t>(values.size()));
+  static_assert(sizeof(bool) == sizeof(uint8_t));
+  if (!values.empty()) std::memcpy(array.mutable_data(), values.data(), values.size());
+  return array;
+}
+
 // A mesh given as arrays: {"vertices": N x 3, "triangles": M x 3 integers, "transform": 4 x 4}.
 Mesh mesh_from(py::handle vertices, py::handle triangles, py::handle transform, const std::string& path) {
   Mesh mesh;
@@ -354,13 +392,13 @@ class PyRenderer {
     return result;
   }
 
-  py::dict cast_rays(py::handle rays_argument) {
-    const auto rays = float_rows(rays_argument, "rays", 6);
+  py::dict cast_rays(py::handle rays_argument, py::handle t_min, py::handle t_max) {
+    const RayArguments arguments(rays_argument, t_min, t_max);
     RayHits hits;
     {
       py::gil_scoped_release released;
       const std::lock_guard one_call_at_a_time(busy_);
-      hits = renderer_->cast_rays(given_rays(rays));
+      hits = renderer_->cast_rays(arguments.given(), arguments.ranges());
     }
     const auto count = static_cast<py::ssize_t>(hits.count);
     py::dict result;
@@ -371,6 +409,17 @@ class PyRenderer {
     result["primitive_id"] = scalar_plane(std::move(hits.primitive), 0, count);
     result["mesh_id"] = scalar_plane(std::move(hits.object), 0, count);
     return result;
+  }
+
+  py::array_t<bool> occluded(py::handle rays_argument, py::handle t_min, py::handle t_max) {
+    const RayArguments arguments(rays_argument, t_min, t_max);
+    std::vector<uint8_t> blocked;
+    {
+      py::gil_scoped_release released;
+      const std::lock_guard one_call_at_a_time(busy_);
+      blocked = renderer_->occluded(arguments.given(), arguments.ranges());
+    }
+    return bool_array(blocked);
   }
 
   std::string device_name() const { return device_->info().name; }
@@ -427,12 +476,12 @@ class PyReference {
     return result;
   }
 
-  py::dict cast_rays(py::handle rays_argument) {
-    const auto rays = float_rows(rays_argument, "rays", 6);
+  py::dict cast_rays(py::handle rays_argument, py::handle t_min, py::handle t_max) {
+    const RayArguments arguments(rays_argument, t_min, t_max);
     std::vector<ReferenceHit> hits;
     {
       py::gil_scoped_release released;
-      hits = trace_reference_rays(*reference_, given_rays(rays));
+      hits = trace_reference_rays(*reference_, arguments.given(), arguments.ranges());
     }
     const size_t count = hits.size();
     std::vector<double> t(count), normal(3 * count);
@@ -451,6 +500,19 @@ class PyReference {
     result["primitive_id"] = scalar_plane(std::move(primitive), 0, n);
     result["mesh_id"] = scalar_plane(std::move(object), 0, n);
     return result;
+  }
+
+  // The nearest hit decides: exactly whether any hit lies in the range.
+  py::array_t<bool> occluded(py::handle rays_argument, py::handle t_min, py::handle t_max) {
+    const RayArguments arguments(rays_argument, t_min, t_max);
+    std::vector<uint8_t> blocked;
+    {
+      py::gil_scoped_release released;
+      const std::vector<ReferenceHit> hits = trace_reference_rays(*reference_, arguments.given(), arguments.ranges());
+      blocked.resize(hits.size());
+      for (size_t k = 0; k < hits.size(); ++k) blocked[k] = hits[k].kind != PrimitiveKind::none ? 1 : 0;
+    }
+    return bool_array(blocked);
   }
 
  private:
@@ -556,9 +618,15 @@ PYBIND11_MODULE(vkray, m) {
       .def("render", &PyRenderer::render, py::arg("camera") = py::none(), py::arg("width") = py::none(),
            py::arg("height") = py::none(), py::arg("aovs") = py::make_tuple("depth", "normal"),
            render_help().c_str())
-      .def("cast_rays", &PyRenderer::cast_rays, py::arg("rays"),
-           "rays: N x 6 (origin, direction). A dict of arrays: t (distance along the normalized direction, inf on "
-           "a miss), normal N x 3, primitive_id and mesh_id (uint32, NO_HIT on a miss).")
+      .def("cast_rays", &PyRenderer::cast_rays, py::arg("rays"), py::kw_only(), py::arg("t_min") = py::none(),
+           py::arg("t_max") = py::none(),
+           "rays: N x 6 (origin, direction); t_min, t_max: None, a number or N values, hits counting only at "
+           "t_min < t < t_max (default 0 and inf). A dict of arrays: t (distance from the origin along the "
+           "normalized direction, inf on a miss), normal N x 3, primitive_id and mesh_id (uint32, NO_HIT on a miss).")
+      .def("occluded", &PyRenderer::occluded, py::arg("rays"), py::kw_only(), py::arg("t_min") = py::none(),
+           py::arg("t_max") = py::none(),
+           "Occlusion queries: the same arguments as cast_rays; a bool array, True where a ray hits anything at "
+           "t_min < t < t_max. Each ray's search stops at the first hit it meets.")
       .def_property_readonly("device_name", &PyRenderer::device_name, "The name of the device it opened (`vkray info`).")
       .def_property_readonly("timings", &PyRenderer::timings, "Where the last call's time went, in milliseconds.");
 
@@ -567,5 +635,8 @@ PYBIND11_MODULE(vkray, m) {
       .def("render", &PyReference::render, py::arg("camera") = py::none(), py::arg("width") = py::none(),
            py::arg("height") = py::none(), py::arg("aovs") = py::make_tuple("depth", "normal"),
            reference_render_help().c_str())
-      .def("cast_rays", &PyReference::cast_rays, py::arg("rays"));
+      .def("cast_rays", &PyReference::cast_rays, py::arg("rays"), py::kw_only(), py::arg("t_min") = py::none(),
+           py::arg("t_max") = py::none())
+      .def("occluded", &PyReference::occluded, py::arg("rays"), py::kw_only(), py::arg("t_min") = py::none(),
+           py::arg("t_max") = py::none());
 }

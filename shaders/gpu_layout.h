@@ -114,14 +114,17 @@ using uvec4 = glm::uvec4;
 #define VKRAY_RAY_INPUT_NONE 0        // a camera's pixels
 #define VKRAY_RAY_INPUT_RAYS 1        // GpuRays, one an invocation, each from its own origin
 // Directions from the origin in RayGenParams.camera, as a camera's: each ray's float32 unit
-// direction, a texel, at its position in an image of rows `width` wide, for the packet walk (the
+// direction with w = the end of its range (as GpuRay's), a texel, at its position in an image of rows `width` wide, for the packet walk (the
 // host chooses the positions so that neighbours point nearly the same way: see Renderer::cast_rays).
 #define VKRAY_RAY_INPUT_DIRECTIONS 2
 // The device's subgroup size where it is 8, else 0 (see shaders/packet_walk.glsl).
 #define VKRAY_SPEC_SUBGROUP_SIZE 21
 // Write what each camera ray hit to VKRAY_BINDING_HITS too (the mesh-id and primitive-id outputs).
 #define VKRAY_SPEC_WRITE_HIT 22
-#define VKRAY_SPEC_COUNT 23
+// Occlusion queries (Renderer::occluded): a ray's walk stops at its first hit, whichever it is;
+// only whether it hit means anything then, not its depth or normal.
+#define VKRAY_SPEC_ANY_HIT 23
+#define VKRAY_SPEC_COUNT 24
 #define VKRAY_STACK_REGISTERS_MAX 32
 
 #define VKRAY_SPHERE_STABLE 0               // Ray Tracing Gems ch. 7 (intersect.glsl)
@@ -150,9 +153,11 @@ struct GpuPoint {
 };
 VKRAY_CHECK_SIZE(GpuPoint, 32);
 
-// A ray given by the caller: its origin relative to the anchor, then its unit direction (w = 0),
-// each split as positions are, so float32 shaders keep the origin's ~48 bits and float64 shaders
-// read both exactly.
+// A ray given by the caller: its origin relative to the anchor, then its unit direction with w =
+// the end of its range (hits count at t < w; +infinity for none), each split as positions are, so
+// float32 shaders keep the origin's ~48 bits and float64 shaders read both exactly. float32 shaders
+// read the end rounded to float, as they read the direction (a hit within float32's distance error
+// of it may fall either side).
 struct GpuRay {
   GpuPoint origin;
   GpuPoint direction;

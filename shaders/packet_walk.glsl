@@ -225,9 +225,14 @@ void nearest_primitives_packet(Origin origin, vec3 dirs[VKRAY_PACKET_ROWS], inou
 #if VKRAY_BVH_MAX_LEAF_SIZE != 8
 #error "a slot line per leaf slot"
 #endif
+      // An occlusion query's ray with a hit searches no further: its bound, and so its t, drops to 0.
+      if (ANY_HIT) {
+        [[unroll]] for (uint r = 0; r < VKRAY_PACKET_ROWS; ++r) t_max[r] = slots[r] != no_primitive ? 0.0 : t_max[r];
+      }
       row_t_max = t_max[0];
       [[unroll]] for (uint r = 1; r < VKRAY_PACKET_ROWS; ++r) row_t_max = max(row_t_max, t_max[r]);
       packet_t_max = packet_max(row_t_max);
+      if (ANY_HIT && packet_t_max == 0.0) break;
       pop = true;
     } else {
       // Lane k fetches the node's texel k & 3 (GpuBvhNode): bounds x, y, z, then the children.

@@ -19,6 +19,7 @@ layout(constant_id = VKRAY_SPEC_TREE_HAS_SPHERES) const bool TREE_HAS_SPHERES = 
 layout(constant_id = VKRAY_SPEC_LOOP_BUDGET) const uint LOOP_BUDGET = 0;
 layout(constant_id = VKRAY_SPEC_GENERIC) const bool GENERIC = false;
 layout(constant_id = VKRAY_SPEC_STACK_REGISTERS) const uint STACK_REGISTERS = 0;
+layout(constant_id = VKRAY_SPEC_ANY_HIT) const bool ANY_HIT = false;
 // What the tree may hold: in the generic variant, both kinds.
 const bool TREE_TRIANGLES = GENERIC || TREE_HAS_TRIANGLES;
 const bool TREE_SPHERES = GENERIC || TREE_HAS_SPHERES;
@@ -238,7 +239,7 @@ uint pop_registers(inout RegisterStack s) {
 // found last: llvmpipe runs both sides of every branch masked, so an iteration costs the node step
 // plus the primitive test whatever the ray needs; doing both every time wastes neither. (A node may
 // be tested against a nearest hit not yet updated by its leaf's last primitive; that only makes the
-// test looser, never culls a hit.)
+// test looser, never culls a hit.) An occlusion query (ANY_HIT) stops at its first hit.
 PrimitiveHit nearest_primitive_in_tree(RayFrame frame, Origin origin, real3 dir, real t_max) {
   real3 inv_dir = safe_inverse(dir);
 #ifdef VKRAY_FLOAT64
@@ -258,7 +259,7 @@ PrimitiveHit nearest_primitive_in_tree(RayFrame frame, Origin origin, real3 dir,
   uint leaf_next = 0;  // the leaf's primitives still to test: [leaf_next, leaf_end)
   uint leaf_end = 0;
   uint iterations = 0;
-  while (current != no_node || leaf_next < leaf_end) {
+  while ((current != no_node || leaf_next < leaf_end) && !(ANY_HIT && hit.slot != no_primitive)) {
     if (LOOP_BUDGET > 0 && iterations == LOOP_BUDGET) {
       unfinished = true;
       break;

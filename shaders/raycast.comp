@@ -163,13 +163,18 @@ void main() {
     if (!WRITE_DEPTH && !WRITE_NORMAL) continue;
 
     // A GpuRay is two points; lanes past the last ray read the first (their t_max is 0). float32
-    // shaders take the direction rounded to float, as a camera's. The rays' buffer is read only
+    // shaders take the direction rounded to float, as a camera's. A given ray's range ends at its
+    // direction's w (+infinity where the caller set none); a camera's never does. The rays' buffer is read only
     // where rays are given: for a camera it is a 16-byte placeholder, which a driver that keeps a
     // dead read (of a storage buffer, in the storage-geometry variant) would read past.
+    const real no_hit = uintBitsToFloat(0x7f800000u);  // +infinity
+    real range_end = no_hit;
 #ifdef VKRAY_FLOAT64
     if (RAY_INPUT) {
       origin = Origin(fetch_point(rays_in, inside[r] ? 2 * int(ray_index) : 0).value.xyz);
-      dirs[r] = fetch_point(rays_in, inside[r] ? 2 * int(ray_index) + 1 : 1).value.xyz;
+      dvec4 direction_end = fetch_point(rays_in, inside[r] ? 2 * int(ray_index) + 1 : 1).value;
+      dirs[r] = direction_end.xyz;
+      range_end = direction_end.w;
     } else {
       dvec3 camera[4];  // origin, right, up, forward_scaled
       for (int k = 0; k < 4; ++k) {
@@ -189,11 +194,15 @@ void main() {
     if (GIVEN_ORIGINS) {
       Point ray_origin = fetch_point(rays_in, inside[r] ? 2 * int(ray_index) : 0);
       origin = Origin(ray_origin.hi.xyz, ray_origin.lo.xyz);
-      dirs[r] = fetch_point_hi(rays_in, inside[r] ? 2 * int(ray_index) + 1 : 1).hi.xyz;
+      vec4 direction_end = fetch_point_hi(rays_in, inside[r] ? 2 * int(ray_index) + 1 : 1).hi;
+      dirs[r] = direction_end.xyz;
+      range_end = direction_end.w;
     } else {
       origin = Origin(uintBitsToFloat(params.camera[0].xyz), use_lo_parts ? uintBitsToFloat(params.camera[1].xyz) : vec3(0.0));
       if (RAY_INPUT) {
-        dirs[r] = FETCH(rays_in, inside[r] ? int(ray_index) : 0).xyz;
+        vec4 direction_end = FETCH(rays_in, inside[r] ? int(ray_index) : 0);
+        dirs[r] = direction_end.xyz;
+        range_end = direction_end.w;
       } else {
         // `precise`: the ray must be the same bits in every pipeline that renders this pixel (the
         // workgroup shapes, the generic variant), so no compiler may fuse these products differently.
@@ -205,8 +214,7 @@ void main() {
 #endif
     real3 dir = dirs[r];
 
-    const real no_hit = uintBitsToFloat(0x7f800000u);  // +infinity
-    t_best[r] = inside[r] ? no_hit : 0.0;
+    t_best[r] = inside[r] ? range_end : 0.0;
     normal[r] = real3(0.0);
     hit_id[r] = VKRAY_HIT_NONE;
 
@@ -239,6 +247,8 @@ void main() {
         hit_id[r] = VKRAY_HIT_PLANE | i;
       }
     }
+    // An occlusion query hit by a plane is answered: its walk finds nothing below 0.
+    if (ANY_HIT && hit_id[r] != VKRAY_HIT_NONE) primitive_t_max[r] = 0.0;
   }
   if (!WRITE_DEPTH && !WRITE_NORMAL) return;
 
@@ -274,6 +284,8 @@ void main() {
     uint out_index = tile_pixel[r].y * width + tile_pixel[r].x;
     if (hits[r].unfinished && inside[r]) overflow_pixels[atomicAdd(overflow_count, 1u)] = out_index;
     // Unfinished rays stay out of the depth range: the host finishes them and folds their depth in.
+    // A ray that hit nothing keeps the end of its range as t_best; its depth is written +infinity.
+    if (hit_id[r] == VKRAY_HIT_NONE) t_best[r] = uintBitsToFloat(0x7f800000u);
     if (inside[r] && !hits[r].unfinished && t_best[r] < uintBitsToFloat(0x7f800000u)) {
       near = min(near, float(t_best[r]));
       far = max(far, float(t_best[r]));

@@ -6,6 +6,7 @@
 // random order (ordered by direction into packets) or from origins that differ (one ray at a time).
 #include "engine/scene/camera.hpp"
 #include "engine/render/ray_order.hpp"
+#include "engine/reference/reference.hpp"
 #include "engine/render/renderer.hpp"
 #include "engine/scene/scene_loader.hpp"
 #include "tests/gpu_test_support.hpp"
@@ -38,17 +39,19 @@ std::string listing_name(Listing listing) {
 // The walk cast_rays takes for `rays` listed as `listing` says: packets where the renderer's camera
 // rays take them (and the rays share its origin), in place where scan_width finds the image's rows
 // (its own tests check which images it finds), else one by one.
-GivenRayWalk expected_walk(const Renderer& renderer, Listing listing, std::span<const GivenRay> rays) {
-  if (renderer.scene_stats().search != PrimitiveSearch::bvh_packet || listing == Listing::distinct_origins) {
+// Ranges that start past the origin move it: those rays walk one by one.
+GivenRayWalk expected_walk(const Renderer& renderer, Listing listing, std::span<const GivenRay> rays,
+                           const RayRanges& ranges = {}) {
+  const bool moved = std::any_of(ranges.t_min.begin(), ranges.t_min.end(), [](double t) { return t > 0.0; });
+  if (renderer.scene_stats().search != PrimitiveSearch::bvh_packet || listing == Listing::distinct_origins || moved) {
     return GivenRayWalk::one_by_one;
   }
   return scan_width(rays) ? GivenRayWalk::packets_in_place : GivenRayWalk::packets_by_direction;
 }
 
-// Casts the pixel rays of `scene`'s camera as given rays listed as `listing` says; returns them
-// as a Frame in pixel order, and their ids. Checks the walk cast_rays took.
-Frame cast_camera_rays(Renderer& renderer, const Scene& scene, std::vector<ObjectPrimitive>& ids,
-                       Listing listing = Listing::image_rows) {
+// The pixel rays of `scene`'s camera listed as `listing` says; pixel_of[k] is the pixel whose ray
+// is listed k-th.
+std::vector<GivenRay> camera_rays(const Scene& scene, Listing listing, std::vector<size_t>& pixel_of) {
   const CameraBasis basis = make_camera_basis(scene.camera, scene.width, scene.height);
   std::vector<GivenRay> rays;
   for (uint32_t j = 0; j < scene.height; ++j) {
@@ -57,8 +60,7 @@ Frame cast_camera_rays(Renderer& renderer, const Scene& scene, std::vector<Objec
       rays.push_back({basis.origin.x, basis.origin.y, basis.origin.z, dir.x, dir.y, dir.z});
     }
   }
-  // pixel_of[k]: the pixel whose ray is listed k-th.
-  std::vector<size_t> pixel_of(rays.size());
+  pixel_of.resize(rays.size());
   std::iota(pixel_of.begin(), pixel_of.end(), size_t{0});
   if (listing == Listing::shuffled) {
     std::shuffle(pixel_of.begin(), pixel_of.end(), std::mt19937_64(20261125));
@@ -67,8 +69,18 @@ Frame cast_camera_rays(Renderer& renderer, const Scene& scene, std::vector<Objec
     rays = std::move(listed);
   }
   if (listing == Listing::distinct_origins) rays[0][0] = std::nextafter(rays[0][0], INFINITY);
-  const RayHits hits = renderer.cast_rays(rays);
-  EXPECT_EQ(renderer.timings().given_walk, expected_walk(renderer, listing, rays));
+  return rays;
+}
+
+// Casts the pixel rays of `scene`'s camera as given rays listed as `listing` says, over `ranges`
+// (in that listing's order); returns them as a Frame in pixel order, and their ids. Checks the walk
+// cast_rays took.
+Frame cast_camera_rays(Renderer& renderer, const Scene& scene, std::vector<ObjectPrimitive>& ids,
+                       Listing listing = Listing::image_rows, const RayRanges& ranges = {}) {
+  std::vector<size_t> pixel_of;
+  const std::vector<GivenRay> rays = camera_rays(scene, listing, pixel_of);
+  const RayHits hits = renderer.cast_rays(rays, ranges);
+  EXPECT_EQ(renderer.timings().given_walk, expected_walk(renderer, listing, rays, ranges));
   Frame frame(scene.width, scene.height, {Aov::depth, Aov::normal});
   frame.depth.resize(hits.count);
   frame.normal.resize(3 * hits.count);
@@ -198,6 +210,123 @@ TEST(GivenRays, TilesOfRaysGiveTheSameValues) {
     EXPECT_EQ(std::memcmp(a.normal.data(), b.normal.data(), a.normal.size() * sizeof(float)), 0);
     EXPECT_EQ(whole_ids, tiled_ids);
   }
+}
+
+// Ranges with every search, precision and listing, against the reference's nearest hits: t_max 1%
+// short of a ray's nearest hit leaves it a miss, 1% past it keeps that hit, the same bits (the bound
+// only culls what lies beyond it); an occlusion query over the same ranges says which; t_min half
+// way to it moves the ray's start, and the hit stays within the camera image's error envelope. 1%
+// is far beyond float32's distance error (below 1e-5 here), so no ray is ambiguous.
+TEST(GivenRays, RangesAndOcclusionQueries) {
+  const Scene scene = sized(default_scene(), 32, 24);
+  const ReferenceScene reference(scene);
+  for (const PrimitiveSearch search : runnable({PrimitiveSearch::brute_force, PrimitiveSearch::bvh_per_ray,
+                                                PrimitiveSearch::bvh_packet})) {
+    for (const Precision precision : {Precision::float32, Precision::float64}) {
+      if (search == PrimitiveSearch::bvh_packet && precision == Precision::float64) continue;
+      RendererOptions options;
+      options.scene.search = search;
+      options.shader.precision = precision;
+      Renderer renderer(device(), scene, options);
+      for (const Listing listing : listings) {
+        SCOPED_TRACE(testing::Message() << "search " << int(search) << ", precision " << int(precision) << ", "
+                                        << listing_name(listing));
+        std::vector<size_t> pixel_of;
+        const std::vector<GivenRay> rays = camera_rays(scene, listing, pixel_of);
+        const std::vector<ReferenceHit> nearest = trace_reference_rays(reference, rays);
+        const RayHits unranged = renderer.cast_rays(rays);
+        std::vector<double> t_max(rays.size()), t_min(rays.size(), 0.0);
+        std::vector<uint8_t> expect_hit(rays.size());
+        for (size_t k = 0; k < rays.size(); ++k) {
+          const bool hit = std::isfinite(nearest[k].t);
+          expect_hit[k] = hit && k % 2 == 0;
+          t_max[k] = hit ? nearest[k].t * (k % 2 == 0 ? 1.01 : 0.99) : (k % 3 == 0 ? 1.0 : INFINITY);
+          if (hit && k % 3 != 0) t_min[k] = 0.5 * nearest[k].t;
+        }
+        const RayHits ranged = renderer.cast_rays(rays, {{}, t_max});
+        EXPECT_EQ(renderer.timings().given_walk, expected_walk(renderer, listing, rays));
+        const std::vector<uint8_t> blocked = renderer.occluded(rays, {{}, t_max});
+        EXPECT_EQ(renderer.timings().given_walk, expected_walk(renderer, listing, rays));
+        size_t wrong_hits = 0, wrong_values = 0;
+        for (size_t k = 0; k < rays.size(); ++k) {
+          if (std::isfinite(ranged.t[k]) != bool(expect_hit[k]) || blocked[k] != expect_hit[k]) ++wrong_hits;
+          if (expect_hit[k] && (ranged.t[k] != unranged.t[k] || ranged.primitive[k] != unranged.primitive[k] ||
+                                ranged.object[k] != unranged.object[k])) {
+            ++wrong_values;
+          }
+        }
+        EXPECT_EQ(wrong_hits, 0u);
+        EXPECT_EQ(wrong_values, 0u);
+
+        std::vector<ObjectPrimitive> ids;
+        const Frame moved = cast_camera_rays(renderer, scene, ids, listing, {t_min, {}});
+        const EnvelopeReport report = check_against_reference(scene, moved, 1, &ids);
+        EXPECT_EQ(report.failures, 0u) << report.describe();
+      }
+    }
+  }
+}
+
+// t_min past a ray's first hit on a sphere: its far side, or a plane behind it where the ray
+// leaves the sphere before t_min, against the reference over the same ranges. Rays whose far hit
+// lies within 1e-3 of t_min either way are left out: there float32's distance error (below 1e-5)
+// could put the hit on either side.
+TEST(GivenRays, RangesThatStartPastTheFirstHit) {
+  Scene scene;
+  scene.camera = {{0, 0, 4}, {0, 0, 0}, {0, 1, 0}, 40};
+  scene.spheres.push_back({{0, 0, 0}, 1});
+  scene.planes.push_back({{0, 0, -3}, {0, 0, 1}});
+  scene = sized(scene, 32, 32);
+  const ReferenceScene reference(scene);
+  for (const Precision precision : {Precision::float32, Precision::float64}) {
+    SCOPED_TRACE(testing::Message() << "precision " << int(precision));
+    RendererOptions options;
+    options.shader.precision = precision;
+    Renderer renderer(device(), scene, options);
+    std::vector<size_t> pixel_of;
+    const std::vector<GivenRay> rays = camera_rays(scene, Listing::image_rows, pixel_of);
+    const std::vector<ReferenceHit> nearest = trace_reference_rays(reference, rays);
+    std::vector<double> t_min(rays.size(), 0.0);  // the rays that miss the sphere find the plane
+    for (size_t k = 0; k < rays.size(); ++k) {
+      if (nearest[k].kind == PrimitiveKind::sphere) t_min[k] = 1.05 * nearest[k].t;
+    }
+    const std::vector<ReferenceHit> exact = trace_reference_rays(reference, rays, {t_min, {}});
+    const RayHits hits = renderer.cast_rays(rays, {t_min, {}});
+    size_t checked = 0, sphere_hits = 0;
+    for (size_t k = 0; k < rays.size(); ++k) {
+      ASSERT_TRUE(std::isfinite(exact[k].t));
+      if (std::abs(exact[k].t - t_min[k]) < 1e-3 * t_min[k]) continue;
+      ++checked;
+      if (exact[k].kind == PrimitiveKind::sphere) ++sphere_hits;
+      EXPECT_NEAR(hits.t[k], exact[k].t, 1e-5 * exact[k].t) << "ray " << k;
+      EXPECT_EQ((ObjectPrimitive{hits.object[k], hits.primitive[k]}), reference.source(exact[k])) << "ray " << k;
+    }
+    EXPECT_GT(sphere_hits, rays.size() / 10);  // the far side of the sphere, not only the plane
+    EXPECT_GT(checked, rays.size() * 9 / 10);
+  }
+}
+
+TEST(GivenRays, BadRangesAreRefusedByIndex) {
+  Renderer renderer(device(), sized(default_scene(), 4, 4));
+  const std::vector<GivenRay> rays(3, GivenRay{0, 1, 5, 0, 0, -1});
+  auto message = [&](std::vector<double> t_min, std::vector<double> t_max) {
+    try {
+      renderer.occluded(rays, {t_min, t_max});
+    } catch (const InputError& error) {
+      return std::string(error.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_EQ(message({0, -1, 0}, {}), "ray 1: t_min is negative or not finite");
+  EXPECT_EQ(message({0, 0, INFINITY}, {}), "ray 2: t_min is negative or not finite");
+  EXPECT_EQ(message({}, {1, NAN, 1}), "ray 1: t_max is NaN or below t_min");
+  EXPECT_EQ(message({0, 2, 0}, {1, 1, 1}), "ray 1: t_max is NaN or below t_min");
+  EXPECT_EQ(message({0, 0, 3e15}, {}), "ray 2: the range starts farther than 1e15 from the world origin on some axis");
+  EXPECT_EQ(message({0, 0}, {}), "t_min: 2 values for 3 rays (one a ray, or none)");
+  EXPECT_EQ(message({}, {1, 1, 1, 1}), "t_max: 4 values for 3 rays (one a ray, or none)");
+  EXPECT_EQ(message({0, 1, 0}, {0, 1, INFINITY}), "no error");  // empty ranges are misses
+  const std::vector<uint8_t> blocked = renderer.occluded(rays, {std::vector<double>{0, 1, 0}, std::vector<double>{0, 1, INFINITY}});
+  EXPECT_EQ(blocked, (std::vector<uint8_t>{0, 0, 1}));
 }
 
 TEST(GivenRays, BadRaysAreRefusedByIndex) {

@@ -92,6 +92,24 @@ std::vector<BenchScene> models_suite(uint32_t width, uint32_t height, const std:
   return scenes;
 }
 
+// `name` from `models_dir`, framed at width x height; a line in `skipped` where it is not there.
+void add_model(std::vector<BenchScene>& scenes, const char* name, uint32_t width, uint32_t height,
+               const std::filesystem::path& models_dir, std::vector<std::string>* skipped) {
+  const std::filesystem::path model = models_dir / name;
+  if (!std::filesystem::exists(model)) {
+    if (skipped) skipped->push_back(std::string(name) + ": not in the models folder '" + models_dir.string() + "' (name it with --models)");
+    return;
+  }
+  try {
+    Scene scene = load_model_file(model);
+    scene.width = width;
+    scene.height = height;
+    scenes.push_back(framed(name, std::move(scene)));
+  } catch (const InputError& error) {  // one broken file does not end the suite
+    if (skipped) skipped->push_back(error.what());
+  }
+}
+
 }  // namespace
 
 std::vector<BenchScene> bench_suite(const std::string& suite, uint32_t width, uint32_t height,
@@ -103,19 +121,17 @@ std::vector<BenchScene> bench_suite(const std::string& suite, uint32_t width, ui
     // The stiff cases, then ordinary scenes to show what the robust default costs there.
     std::vector<BenchScene> scenes = stiff_suite(width, height);
     for (auto& scene : basic_suite(width, height)) scenes.push_back(std::move(scene));
-    const std::filesystem::path model = models_dir / accuracy_model;
-    if (std::filesystem::exists(model)) {
-      Scene scene = load_model_file(model);
-      scene.width = width;
-      scene.height = height;
-      scenes.push_back(framed(accuracy_model, std::move(scene)));
-    } else if (skipped) {
-      skipped->push_back(std::string(accuracy_model) + ": not in the models folder '" + models_dir.string() +
-                         "' (name it with --models)");
-    }
+    add_model(scenes, accuracy_model, width, height, models_dir, skipped);
     return scenes;
   }
   if (suite == "models") return models_suite(width, height, models_dir, skipped);
+  if (suite == given_rays_suite) {
+    std::vector<BenchScene> scenes;
+    for (const char* name : {"teapot.obj", "stanford-bunny.obj", "stanford-dragon-100k.obj"}) {
+      add_model(scenes, name, width, height, models_dir, skipped);
+    }
+    return scenes;
+  }
   throw InputError("--suite: unknown suite '" + suite + "' (choose from " + bench_suite_names + ")");
 }
 

@@ -15,8 +15,10 @@ struct BenchScene {
   Scene scene;
 };
 
-// "basic, scaling, stiff, accuracy, models": for help texts and error messages.
-inline constexpr const char* bench_suite_names = "basic, scaling, stiff, accuracy, models";
+// "basic, scaling, stiff, accuracy, models, rays": for help texts and error messages.
+inline constexpr const char* bench_suite_names = "basic, scaling, stiff, accuracy, models, rays";
+// The suite whose rows are given rays (engine/bench/given_rays_bench.hpp), not a camera's variants.
+inline constexpr const char* given_rays_suite = "rays";
 // The real mesh the accuracy suite adds from the models folder, when it is there.
 inline constexpr const char* accuracy_model = "stanford-bunny.obj";
 
@@ -29,7 +31,10 @@ inline constexpr const char* accuracy_model = "stanford-bunny.obj";
 //   `models_dir` has it, or a line in `skipped` saying it is not): what docs/accuracy.md tabulates;
 // - models: every .obj file in `models_dir`, framed to fill the image (none when the folder is
 //   absent; the caller says so). A file that does not load is left out, its error added to
-//   `skipped` when given.
+//   `skipped` when given;
+// - rays: three models of `models_dir` for given rays, framed: the Utah teapot (6k triangles, open
+//   seams), the Stanford bunny (70k) and dragon (100k); each one missing or broken is a line in
+//   `skipped`.
 // Throws InputError for an unknown suite name.
 std::vector<BenchScene> bench_suite(const std::string& suite, uint32_t width, uint32_t height,
                                     const std::filesystem::path& models_dir,

@@ -210,12 +210,13 @@ EmbreeResult trace_with_embree(const Scene& scene, uint32_t width, uint32_t heig
   return result;
 }
 
-EmbreeRays trace_rays_with_embree(const Scene& scene, std::span<const GivenRay> rays, uint32_t repeats) {
+EmbreeRays trace_rays_with_embree(const Scene& scene, std::span<const GivenRay> rays, uint32_t repeats,
+                                  const RayRanges& ranges, HitQuery query) {
   const glm::dvec3 anchor = scene_anchor(scene);
   EmbreeScene embree(scene, anchor);
   EmbreeRays result;
   result.threads = std::max(1u, std::thread::hardware_concurrency());
-  std::vector<RTCRayHit> queries(rays.size());
+  std::vector<RTCRayHit> queries(rays.size());  // occlusion queries use the leading RTCRay alone
   std::vector<glm::vec3> origins(rays.size()), directions(rays.size());
   for (size_t k = 0; k < rays.size(); ++k) {
     origins[k] = glm::vec3(glm::dvec3(rays[k][0], rays[k][1], rays[k][2]) - anchor);
@@ -236,10 +237,15 @@ EmbreeRays trace_rays_with_embree(const Scene& scene, std::span<const GivenRay> 
             for (size_t k = first; k < first + count; ++k) {  // a query is also its answer: set anew each run
               const glm::vec3 &o = origins[k], &d = directions[k];
               queries[k] = {};
-              queries[k].ray = {o.x, o.y, o.z, 0.0f, d.x, d.y, d.z, 0.0f, std::numeric_limits<float>::infinity(), ~0u, 0, 0};
+              queries[k].ray = {o.x, o.y, o.z, static_cast<float>(ranges.start(k)), d.x, d.y, d.z, 0.0f,
+                                static_cast<float>(ranges.end(k)), ~0u, 0, 0};
               queries[k].hit.geomID = RTC_INVALID_GEOMETRY_ID;
             }
-            rtcIntersect1M(embree.handle(), &context, &queries[first], static_cast<unsigned>(count), sizeof(RTCRayHit));
+            if (query == HitQuery::any) {
+              rtcOccluded1M(embree.handle(), &context, &queries[first].ray, static_cast<unsigned>(count), sizeof(RTCRayHit));
+            } else {
+              rtcIntersect1M(embree.handle(), &context, &queries[first], static_cast<unsigned>(count), sizeof(RTCRayHit));
+            }
           }
         });
       }
@@ -252,11 +258,16 @@ EmbreeRays trace_rays_with_embree(const Scene& scene, std::span<const GivenRay> 
   result.time = time_stats(times_ms);
   embree.check_errors("tracing given rays");
   result.t.resize(rays.size());
+  constexpr float miss = std::numeric_limits<float>::infinity();
   for (size_t k = 0; k < rays.size(); ++k) {
-    float t = queries[k].hit.geomID == RTC_INVALID_GEOMETRY_ID ? std::numeric_limits<float>::infinity() : queries[k].ray.tfar;
+    // rtcOccluded1M sets tfar to -inf where it found a hit.
+    float t = query == HitQuery::any ? (queries[k].ray.tfar == -miss ? 0.0f : miss)
+              : queries[k].hit.geomID == RTC_INVALID_GEOMETRY_ID ? miss
+                                                                  : queries[k].ray.tfar;
     for (const auto& plane : scene.planes) {
       const glm::dvec3 origin(rays[k][0], rays[k][1], rays[k][2]);
-      t = static_cast<float>(std::min<double>(t, intersect_plane(plane.normal, plane.point, origin, glm::dvec3(directions[k]), t)));
+      const double plane_t = intersect_plane(plane.normal, plane.point, origin, glm::dvec3(directions[k]), ranges.end(k));
+      if (plane_t > ranges.start(k) && plane_t < t) t = query == HitQuery::any ? 0.0f : static_cast<float>(plane_t);
     }
     result.t[k] = t;
   }

@@ -27,14 +27,17 @@ struct EmbreeResult {
 EmbreeResult trace_with_embree(const Scene& scene, uint32_t width, uint32_t height, uint32_t repeats);
 
 // Embree on given rays: rtcIntersect1M in chunks of 1024 rays on every core (what Open3D's
-// RaycastingScene.cast_rays does), origins relative to the scene's anchor and unit directions in
-// float, made once outside the timed runs; `repeats` timed runs after a warm-up. Planes, which
-// Embree lacks, are intersected after each query, as for the camera's rays.
+// RaycastingScene.cast_rays does), or rtcOccluded1M for occlusion queries (`query` any: what
+// Open3D's test_occlusions does), each ray over its range (tnear, tfar in float); origins relative
+// to the scene's anchor and unit directions in float, made once outside the timed runs; `repeats`
+// timed runs after a warm-up. Planes, which Embree lacks, are intersected after each query, as for
+// the camera's rays.
 struct EmbreeRays {
   TimeStats time;
   unsigned threads = 0;
-  std::vector<float> t;  // distance along the unit direction; +inf on a miss
+  std::vector<float> t;  // distance along the unit direction; +inf on a miss; for occlusion queries 0 where one hit
 };
-EmbreeRays trace_rays_with_embree(const Scene& scene, std::span<const GivenRay> rays, uint32_t repeats);
+EmbreeRays trace_rays_with_embree(const Scene& scene, std::span<const GivenRay> rays, uint32_t repeats,
+                                  const RayRanges& ranges = {}, HitQuery query = HitQuery::nearest);
 
 }  // namespace vkray

@@ -9,6 +9,8 @@
 #include <glm/geometric.hpp>
 
 #include <chrono>
+#include <cstdio>
+#include <limits>
 #include <cmath>
 #include <numbers>
 #include <random>
@@ -47,6 +49,16 @@ DistanceErrors distance_errors(const std::vector<ReferenceHit>& reference, Dista
   return errors;
 }
 
+// Occlusion answers (0 where occluded, +inf where not) against the reference's nearest hits
+// within the same ranges: the flips alone.
+DistanceErrors occlusion_flips(const std::vector<ReferenceHit>& reference, std::span<const float> found) {
+  DistanceErrors errors;
+  for (size_t k = 0; k < reference.size(); ++k) {
+    if ((reference[k].kind != PrimitiveKind::none) != (found[k] == 0.0f)) ++errors.mismatches;
+  }
+  return errors;
+}
+
 }  // namespace
 
 const std::vector<RayKindInfo>& ray_kinds() {
@@ -54,6 +66,7 @@ const std::vector<RayKindInfo>& ray_kinds() {
       {RayKind::camera_rows, "camera-rows", "one origin, a camera's pixel rays listed row by row"},
       {RayKind::sensor, "sensor", "one origin, a spinning 64-ring sensor (rings x azimuths all the way round)"},
       {RayKind::incoherent, "incoherent", "random origins around the model towards random points within it"},
+      {RayKind::occlusion, "occlusion", "whether anything lies between pairs of random points around the model"},
   };
   return kinds;
 }
@@ -96,10 +109,11 @@ std::vector<GivenRay> make_rays(RayKind kind, const Scene& scene, size_t count) 
       }
       break;
     }
-    case RayKind::incoherent: {
+    case RayKind::incoherent:
+    case RayKind::occlusion: {
       const glm::dvec3 centre = scene_anchor(scene);
       const double radius = std::max(scene_radius(scene, centre), 1e-300);
-      std::mt19937_64 random(20261126);
+      std::mt19937_64 random(kind == RayKind::incoherent ? 20261126 : 20261127);
       std::normal_distribution<double> gaussian;
       std::uniform_real_distribution<double> uniform;
       auto on_sphere = [&] {
@@ -107,11 +121,11 @@ std::vector<GivenRay> make_rays(RayKind kind, const Scene& scene, size_t count) 
         while (glm::length(v) == 0.0) v = {gaussian(random), gaussian(random), gaussian(random)};
         return glm::normalize(v);
       };
+      auto in_ball = [&] { return centre + radius * std::cbrt(uniform(random)) * on_sphere(); };
       rays.reserve(count);
       for (size_t k = 0; k < count; ++k) {
-        const glm::dvec3 origin = centre + 2.0 * radius * on_sphere();
-        const glm::dvec3 target = centre + radius * std::cbrt(uniform(random)) * on_sphere();
-        rays.push_back(ray_from(origin, target - origin));
+        const glm::dvec3 origin = kind == RayKind::incoherent ? centre + 2.0 * radius * on_sphere() : in_ball();
+        rays.push_back(ray_from(origin, in_ball() - origin));
       }
       break;
     }
@@ -119,35 +133,76 @@ std::vector<GivenRay> make_rays(RayKind kind, const Scene& scene, size_t count) 
   return rays;
 }
 
+std::vector<double> segment_ends(std::span<const GivenRay> rays) {
+  std::vector<double> ends(rays.size());
+  for (size_t k = 0; k < rays.size(); ++k) ends[k] = glm::length(glm::dvec3(rays[k][3], rays[k][4], rays[k][5]));
+  return ends;
+}
+
 GivenRaysRow bench_given_rays(GpuDevice& device, const Scene& scene, const std::string& kind,
                               const std::vector<GivenRay>& rays, const BenchTiming& timing) {
   GivenRaysRow row;
   row.kind = kind;
   row.rays = rays.size();
+  const bool occlusion = ray_kind_from_name(kind) == RayKind::occlusion;
+  const std::vector<double> ends = occlusion ? segment_ends(rays) : std::vector<double>{};
+  const RayRanges ranges{{}, ends};
   const ReferenceScene reference_scene(scene);
-  const std::vector<ReferenceHit> reference = trace_reference_rays(reference_scene, rays);
+  const std::vector<ReferenceHit> reference = trace_reference_rays(reference_scene, rays, ranges);
 
   Renderer renderer(device, scene);
-  RayHits hits = renderer.cast_rays(rays);  // the first call: the pipeline
+  // An occlusion query's answer as a distance: 0 where it is occluded.
+  UninitializedVector<float> found;
+  auto cast = [&] {
+    if (!occlusion) {
+      found = std::move(renderer.cast_rays(rays, ranges).t);  // only t is compared
+      return;
+    }
+    const std::vector<uint8_t> blocked = renderer.occluded(rays, ranges);
+    found.resize(blocked.size());
+    for (size_t k = 0; k < blocked.size(); ++k) found[k] = blocked[k] ? 0.0f : std::numeric_limits<float>::infinity();
+  };
+  cast();  // the first call: the pipeline
   row.vkray = time_stats(timed_runs(timing, [&] {
     const auto start = Clock::now();
-    hits = renderer.cast_rays(rays);
+    cast();
     return elapsed_ms(start);
   }));
   row.walk = given_ray_walk_name(renderer.timings().given_walk);
-  const DistanceErrors vkray_errors = distance_errors(reference, [&](size_t k) { return double{hits.t[k]}; });
+  const EmbreeRays embree =
+      trace_rays_with_embree(scene, rays, timing.frames, ranges, occlusion ? HitQuery::any : HitQuery::nearest);
+  row.embree = embree.time;
+  row.embree_threads = embree.threads;
+
+  auto errors = [&](std::span<const float> t) {
+    if (occlusion) return occlusion_flips(reference, t);
+    return distance_errors(reference, [&](size_t k) { return double{t[k]}; });
+  };
+  const DistanceErrors vkray_errors = errors(found);
   row.hit_mismatches = vkray_errors.mismatches;
   row.both_hit = vkray_errors.both_hit;
   row.t_rel_p99 = vkray_errors.p99;
   row.t_rel_max = vkray_errors.max;
-
-  const EmbreeRays embree = trace_rays_with_embree(scene, rays, timing.frames);
-  row.embree = embree.time;
-  row.embree_threads = embree.threads;
-  const DistanceErrors embree_errors = distance_errors(reference, [&](size_t k) { return double{embree.t[k]}; });
+  const DistanceErrors embree_errors = errors(embree.t);
   row.embree_hit_mismatches = embree_errors.mismatches;
   row.embree_t_rel_p99 = embree_errors.p99;
   return row;
+}
+
+std::string given_rays_table_header() {
+  char line[256];
+  std::snprintf(line, sizeof line, "%-28s %-11s %8s  %-20s %10s %10s %8s %6s %9s %7s\n", "scene", "rays", "count", "walk",
+                "vkray ms", "Embree ms", "E/vkray", "flips", "t p99", "E flips");
+  return line;
+}
+
+std::string given_rays_table_row(const std::string& scene, const GivenRaysRow& row) {
+  char line[512];
+  const std::string t_p99 = row.both_hit > 0 ? (std::snprintf(line, sizeof line, "%.2e", row.t_rel_p99), std::string(line)) : "-";
+  std::snprintf(line, sizeof line, "%-28s %-11s %8zu  %-20s %10.1f %10.1f %8.2f %6zu %9s %7zu\n", scene.c_str(),
+                row.kind.c_str(), row.rays, row.walk.c_str(), row.vkray.median_ms, row.embree.median_ms,
+                row.embree.median_ms / row.vkray.median_ms, row.hit_mismatches, t_p99.c_str(), row.embree_hit_mismatches);
+  return line;
 }
 
 }  // namespace vkray

@@ -201,16 +201,17 @@ void ReferenceScene::nearest_in_tree(const glm::dvec3& origin, const glm::dvec3&
 // Planes first, then spheres and triangles, in the shader's order (the first of equal distances
 // wins, but for the triangles' tie-break), up to VKRAY_PRIMITIVE_T_MAX behind the nearest plane:
 // the shader's rule for coincident surfaces (shaders/gpu_layout.h).
-ReferenceHit ReferenceScene::trace_with(const glm::dvec3& origin, const glm::dvec3& dir, bool brute_force) const {
+ReferenceHit ReferenceScene::trace_with(const glm::dvec3& origin, const glm::dvec3& dir, double t_max,
+                                        bool brute_force) const {
   ReferenceHit plane_hit;
+  plane_hit.t = t_max;
   for (uint32_t i = 0; i < planes_.size(); ++i) {
     const double t = intersect_plane(planes_[i].normal, planes_[i].point, origin, dir, plane_hit.t);
     if (t < plane_hit.t) plane_hit = {t, planes_[i].normal, PrimitiveKind::plane, i};
   }
   ReferenceHit hit;
-  if (plane_hit.kind != PrimitiveKind::none) {
-    hit.t = VKRAY_PRIMITIVE_T_MAX(plane_hit.t, std::abs(glm::dot(plane_hit.normal, dir)));
-  }
+  hit.t = plane_hit.kind != PrimitiveKind::none ? VKRAY_PRIMITIVE_T_MAX(plane_hit.t, std::abs(glm::dot(plane_hit.normal, dir)))
+                                                : t_max;
   if (brute_force) {
     for (uint32_t i = 0; i < spheres_.size(); ++i) test_sphere(i, origin, dir, hit);
     for (const auto& triangle : triangles_) test_triangle(triangle, origin, dir, hit);
@@ -218,6 +219,7 @@ ReferenceHit ReferenceScene::trace_with(const glm::dvec3& origin, const glm::dve
     nearest_in_tree(origin, dir, hit);
   }
   if (hit.kind == PrimitiveKind::none) hit = plane_hit;
+  if (hit.kind == PrimitiveKind::none) hit.t = no_hit;
   if (hit.kind != PrimitiveKind::none) {
     hit.normal = glm::normalize(hit.normal);
     if (hit.kind != PrimitiveKind::sphere && glm::dot(hit.normal, dir) > 0.0) hit.normal = -hit.normal;
@@ -225,12 +227,12 @@ ReferenceHit ReferenceScene::trace_with(const glm::dvec3& origin, const glm::dve
   return hit;
 }
 
-ReferenceHit ReferenceScene::trace(const glm::dvec3& origin, const glm::dvec3& dir) const {
-  return trace_with(origin, dir, false);
+ReferenceHit ReferenceScene::trace(const glm::dvec3& origin, const glm::dvec3& dir, double t_max) const {
+  return trace_with(origin, dir, t_max, false);
 }
 
 ReferenceHit ReferenceScene::trace_brute_force(const glm::dvec3& origin, const glm::dvec3& dir) const {
-  return trace_with(origin, dir, true);
+  return trace_with(origin, dir, no_hit, true);
 }
 
 ObjectPrimitive ReferenceScene::source(const ReferenceHit& hit) const {
@@ -288,16 +290,23 @@ Frame float32_ray_frame(const ReferenceScene& scene, const Camera& camera, uint3
   return frame;
 }
 
-std::vector<ReferenceHit> trace_reference_rays(const ReferenceScene& scene, std::span<const GivenRay> rays) {
+ReferenceHit trace_reference_ray(const ReferenceScene& scene, const GivenRay& ray, double t_min, double t_max) {
+  if (t_min == 0.0) return scene.trace({ray[0], ray[1], ray[2]}, unit_vector({ray[3], ray[4], ray[5]}), t_max);
+  const GivenRay start = range_start_ray(ray, t_min);
+  ReferenceHit hit = scene.trace({start[0], start[1], start[2]}, {start[3], start[4], start[5]}, t_max - t_min);
+  hit.t += t_min;  // a miss stays +infinity
+  return hit;
+}
+
+std::vector<ReferenceHit> trace_reference_rays(const ReferenceScene& scene, std::span<const GivenRay> rays,
+                                               const RayRanges& ranges) {
   check_given_rays(rays);
+  check_ray_ranges(rays, ranges);
   std::vector<ReferenceHit> hits(rays.size());
   parallel_for_chunks(
       rays.size(),
       [&](size_t begin, size_t end) {
-        for (size_t k = begin; k < end; ++k) {
-          const GivenRay& ray = rays[k];
-          hits[k] = scene.trace({ray[0], ray[1], ray[2]}, unit_vector({ray[3], ray[4], ray[5]}));
-        }
+        for (size_t k = begin; k < end; ++k) hits[k] = trace_reference_ray(scene, rays[k], ranges.start(k), ranges.end(k));
       },
       1);
   return hits;

@@ -41,9 +41,10 @@ struct ReferenceHit {
 class ReferenceScene {
  public:
   explicit ReferenceScene(const Scene& scene);
-  // The nearest hit. Among triangles at exactly the same distance the lowest index wins, so the
-  // tree and brute force agree on the triangle, not only on the distance.
-  ReferenceHit trace(const glm::dvec3& origin, const glm::dvec3& dir) const;
+  // The nearest hit before `t_max` (a miss where there is none). Among triangles at exactly the same
+  // distance the lowest index wins, so the tree and brute force agree on the triangle, not only on
+  // the distance.
+  ReferenceHit trace(const glm::dvec3& origin, const glm::dvec3& dir, double t_max = no_hit) const;
   // The same with every triangle tested: the check on the tree.
   ReferenceHit trace_brute_force(const glm::dvec3& origin, const glm::dvec3& dir) const;
   // The hit's object and primitive as the outputs number them (see ObjectPrimitive).
@@ -62,7 +63,7 @@ class ReferenceScene {
   void test_sphere(uint32_t index, const glm::dvec3& origin, const glm::dvec3& dir, ReferenceHit& hit) const;
   void test_triangle(const Triangle& triangle, const glm::dvec3& origin, const glm::dvec3& dir, ReferenceHit& hit) const;
   void nearest_in_tree(const glm::dvec3& origin, const glm::dvec3& dir, ReferenceHit& hit) const;
-  ReferenceHit trace_with(const glm::dvec3& origin, const glm::dvec3& dir, bool brute_force) const;
+  ReferenceHit trace_with(const glm::dvec3& origin, const glm::dvec3& dir, double t_max, bool brute_force) const;
 
   std::vector<uint32_t> first_triangle_of_mesh_;  // in the numbering of ReferenceHit::index
   std::vector<Sphere> spheres_;
@@ -87,9 +88,13 @@ std::vector<ReferenceHit> render_reference_hits(const ReferenceScene& scene, con
 Frame float32_ray_frame(const ReferenceScene& scene, const Camera& camera, uint32_t width, uint32_t height,
                         AovSet aovs = AovSet{Aov::depth, Aov::normal});
 
-// The hit of each given ray (checked first: check_given_rays), its direction normalized, on all
-// cores.
-std::vector<ReferenceHit> trace_reference_rays(const ReferenceScene& scene, std::span<const GivenRay> rays);
+// The nearest hit of each given ray within its range (both checked first: check_given_rays,
+// check_ray_ranges), its direction normalized, on all cores; t counts from the ray's origin.
+std::vector<ReferenceHit> trace_reference_rays(const ReferenceScene& scene, std::span<const GivenRay> rays,
+                                               const RayRanges& ranges = {});
+
+// The nearest hit of `ray` within (t_min, t_max) (see RayRanges), t counting from its origin.
+ReferenceHit trace_reference_ray(const ReferenceScene& scene, const GivenRay& ray, double t_min, double t_max);
 
 // Pixel `pixel` of `frame`'s outputs (depth and normal; uv is the camera's) from a reference hit,
 // rounded to float only here.

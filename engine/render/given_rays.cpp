@@ -6,6 +6,7 @@
 #include "engine/unit_vector.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <cstring>
 
 namespace vkray {
@@ -61,21 +62,32 @@ void RayHits::store(size_t ray, double distance, const glm::dvec3& unit_normal, 
   primitive[ray] = source.primitive;
 }
 
-void Renderer::Impl::cast_given(std::span<const GivenRay> rays, RaycastMode mode, uint32_t width, uint32_t tile_rows,
+void Renderer::Impl::cast_given(const GivenRays& given, RaycastMode mode, uint32_t width, uint32_t tile_rows,
                                 size_t positions, const glm::dvec3* origin, const std::vector<uint32_t>* order,
                                 RayHits& hits) {
+  const std::span<const GivenRay> rays = given.rays;
+  const RayRanges& ranges = given.ranges;
   auto ray_at = [&](size_t position) {  // rays.size() for padding
     if (!order) return position;
     const size_t n = packet_order_index(position);
     return n < order->size() ? size_t{(*order)[n]} : rays.size();
   };
+  // Ray k as traced: from the start of its range (RayRanges).
+  auto traced = [&](size_t k) { return ranges.start(k) > 0.0 ? range_start_ray(rays[k], ranges.start(k)) : rays[k]; };
   const AovSet aovs{Aov::depth, Aov::normal};
   // The lo parts of positions as for a camera (needs_lo_parts), wherever any of the rays starts.
-  const bool lo_parts = origin ? needs_lo_parts(anchor, scene_radius, *origin)
-                               : std::any_of(rays.begin(), rays.end(), [&](const GivenRay& ray) {
-                                   return needs_lo_parts(anchor, scene_radius, {ray[0], ray[1], ray[2]});
-                                 });
-  const vk::raii::Pipeline& chosen = pipeline->pipeline(aovs, lo_parts, mode, timings.pipeline_ms);
+  bool lo_parts = origin && needs_lo_parts(anchor, scene_radius, *origin);
+  if (!origin) {
+    std::atomic<bool> any_near = false;
+    parallel_for_chunks(rays.size(), [&](size_t begin, size_t end) {
+      for (size_t k = begin; k < end && !any_near; ++k) {
+        const GivenRay ray = traced(k);
+        if (needs_lo_parts(anchor, scene_radius, {ray[0], ray[1], ray[2]})) any_near = true;
+      }
+    });
+    lo_parts = any_near;
+  }
+  const vk::raii::Pipeline& chosen = pipeline->pipeline(aovs, lo_parts, mode, timings.pipeline_ms, given.query);
   // The planes' heights above the one origin; rays from their own origins subtract it themselves.
   if (origin) set_planes_above(*origin);
   prepare_tile(width, tile_rows, aovs, nullptr, mode);
@@ -89,13 +101,15 @@ void Renderer::Impl::cast_given(std::span<const GivenRay> rays, RaycastMode mode
     const auto encode_start = Clock::now();
     parallel_for_chunks(count, [&](size_t begin, size_t end) {
       for (size_t p = begin; p < end; ++p) {
-        const size_t k = ray_at(first + p);
-        const GivenRay& ray = rays[k < rays.size() ? k : order->back()];
-        const glm::dvec3 direction(ray[3], ray[4], ray[5]);
+        const size_t k = std::min(ray_at(first + p), rays.size() - 1);  // padding traces the last ray again
+        const double range_end = ranges.end(k) - ranges.start(k);  // from the range's start
         if (origin) {  // float32 alone: the packet walk's
-          static_cast<glm::vec4*>(tile.rays->buffer.mapped)[p] = glm::vec4(glm::vec3(unit_vector(direction)), 0.0f);
+          const glm::dvec3 direction(rays[k][3], rays[k][4], rays[k][5]);
+          static_cast<glm::vec4*>(tile.rays->buffer.mapped)[p] = glm::vec4(glm::vec3(unit_vector(direction)), range_end);
         } else {
-          static_cast<gpu::GpuRay*>(tile.rays->buffer.mapped)[p] = encode_ray({ray[0], ray[1], ray[2]}, direction, anchor, precision());
+          const GivenRay ray = traced(k);
+          static_cast<gpu::GpuRay*>(tile.rays->buffer.mapped)[p] =
+              encode_ray({ray[0], ray[1], ray[2]}, {ray[3], ray[4], ray[5]}, range_end, anchor, precision());
         }
       }
     });
@@ -113,11 +127,11 @@ void Renderer::Impl::cast_given(std::span<const GivenRay> rays, RaycastMode mode
           const size_t k = ray_at(first + p);
           if (k >= rays.size()) continue;
           const glm::dvec3 normal(unit_normals[p], unit_normals[plane_size + p], unit_normals[2 * plane_size + p]);
-          hits.store(k, depths[p], normal, hit_sources(slots[p]));
+          hits.store(k, ranges.start(k) + depths[p], normal, hit_sources(slots[p]));
         }
       });
     };
-    if (!order && precision() == Precision::float32) {  // in place: the planes as they are, the ids named
+    if (!order && precision() == Precision::float32 && ranges.t_min.empty()) {  // in place: the planes as they are, the ids named
       const auto* unit_normals = static_cast<const float*>(tile.normal->host());
       std::memcpy(hits.t.data() + first, tile.depth->host(), count * sizeof(float));
       for (size_t c = 0; c < 3; ++c) {
@@ -140,16 +154,17 @@ void Renderer::Impl::cast_given(std::span<const GivenRay> rays, RaycastMode mode
       finish_unfinished([&](uint32_t position) {
         const size_t k = ray_at(first + position);
         if (k >= rays.size()) return;
-        const GivenRay& ray = rays[k];
-        const ReferenceHit hit = reference->trace(glm::dvec3(ray[0], ray[1], ray[2]), unit_vector(glm::dvec3(ray[3], ray[4], ray[5])));
+        const ReferenceHit hit = trace_reference_ray(*reference, rays[k], ranges.start(k), ranges.end(k));
         hits.store(k, hit.t, hit.normal, reference->source(hit));
       });
     }
   }
 }
 
-RayHits Renderer::Impl::cast_rays(std::span<const GivenRay> rays) {
+RayHits Renderer::Impl::cast_rays(const GivenRays& given) {
+  const std::span<const GivenRay> rays = given.rays;
   check_given_rays(rays);
+  check_ray_ranges(rays, given.ranges);
   RayHits hits;
   hits.allocate(rays.size(), precision() == Precision::float64);
   reset_timings();
@@ -167,12 +182,15 @@ RayHits Renderer::Impl::cast_rays(std::span<const GivenRay> rays) {
     // as long (README, "Python"). A packet's rays must point nearly the same way: rays listed as an
     // image's rows keep their places, as a camera's pixels; others are ordered by direction, 64
     // consecutive ones a packet, in tiles of whole packets (where the device's buffers hold one).
+    // Ranges that start past the origin move it, ray by ray: those rays walk one by one.
+    const bool from_origins = std::all_of(given.ranges.t_min.begin(), given.ranges.t_min.end(), [](double t) { return t == 0.0; });
     const std::optional<glm::dvec3> origin =
-        stats.search == PrimitiveSearch::bvh_packet && precision() == Precision::float32 ? shared_origin(rays)
-                                                                                         : std::nullopt;
+        stats.search == PrimitiveSearch::bvh_packet && precision() == Precision::float32 && from_origins
+            ? shared_origin(rays)
+            : std::nullopt;
     if (const std::optional<uint32_t> rows_width = origin ? scan_width(rays) : std::nullopt) {
       timings.given_walk = GivenRayWalk::packets_in_place;
-      cast_given(rays, RaycastMode::given_directions, *rows_width,
+      cast_given(given, RaycastMode::given_directions, *rows_width,
                  tile_rows(*rows_width, rays.size(), RaycastMode::given_directions), rays.size(), &*origin, nullptr, hits);
       return;
     }
@@ -185,7 +203,7 @@ RayHits Renderer::Impl::cast_rays(std::span<const GivenRay> rays) {
         const auto order_start = Clock::now();
         const std::vector<uint32_t> order = order_by_direction(rays);
         timings.rays_ms += elapsed_ms(order_start);
-        cast_given(rays, RaycastMode::given_directions, VKRAY_PACKET_GROUP_WIDTH, rows, positions, &*origin, &order, hits);
+        cast_given(given, RaycastMode::given_directions, VKRAY_PACKET_GROUP_WIDTH, rows, positions, &*origin, &order, hits);
         return;
       }
     }
@@ -193,7 +211,7 @@ RayHits Renderer::Impl::cast_rays(std::span<const GivenRay> rays) {
     // usually order as they lie in space (a scan line, an image's rows).
     timings.given_walk = GivenRayWalk::one_by_one;
     const uint32_t width = options.shader.workgroup_width;
-    cast_given(rays, RaycastMode::given_rays, width, tile_rows(width, rays.size(), RaycastMode::given_rays), rays.size(),
+    cast_given(given, RaycastMode::given_rays, width, tile_rows(width, rays.size(), RaycastMode::given_rays), rays.size(),
                nullptr, nullptr, hits);
   });
   return hits;
@@ -211,7 +229,7 @@ void Renderer::Impl::render_by_given_rays(const Camera& camera, Frame& frame) {
       }
     }
   }, 16);
-  const RayHits hits = cast_rays(rays);
+  const RayHits hits = cast_rays({rays, {}, HitQuery::nearest});
   const size_t pixels = frame.pixel_count();
   parallel_for_chunks(pixels, [&](size_t begin, size_t end) {
     for (size_t p = begin; p < end; ++p) {

@@ -333,10 +333,12 @@ ObjectPrimitive HitSources::operator()(uint32_t hit) const {
   return slots[index];
 }
 
-gpu::GpuRay encode_ray(const glm::dvec3& origin, const glm::dvec3& direction, const glm::dvec3& anchor,
-                       Precision precision) {
-  return {encode_point(glm::dvec4(origin - anchor, 0.0), precision),
-          encode_point(glm::dvec4(unit_vector(direction), 0.0), precision)};
+gpu::GpuRay encode_ray(const glm::dvec3& origin, const glm::dvec3& direction, double range_end,
+                       const glm::dvec3& anchor, Precision precision) {
+  gpu::GpuRay ray{encode_point(glm::dvec4(origin - anchor, 0.0), precision),
+                  encode_point(glm::dvec4(unit_vector(direction), range_end), precision)};
+  if (precision == Precision::float32) ray.direction.second.w = 0.0f;  // unread; inf - inf would leave NaN there
+  return ray;
 }
 
 GpuSceneShape GpuScene::shape() const {

@@ -121,9 +121,9 @@ void set_plane_heights(std::vector<gpu::GpuPlane>& planes, const std::vector<Pla
                        const glm::dvec3& origin, Precision precision);
 
 // A given ray as the shader reads it (GpuRay): the origin relative to `anchor`, the direction
-// normalized in double.
-gpu::GpuRay encode_ray(const glm::dvec3& origin, const glm::dvec3& direction, const glm::dvec3& anchor,
-                       Precision precision);
+// normalized in double, the end of its range (+infinity for none).
+gpu::GpuRay encode_ray(const glm::dvec3& origin, const glm::dvec3& direction, double range_end,
+                       const glm::dvec3& anchor, Precision precision);
 // RayGenParams.counts: what the generic shader variant reads instead of specialization constants.
 glm::uvec4 run_time_counts(const GpuScene& scene);
 

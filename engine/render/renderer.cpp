@@ -1,5 +1,6 @@
 #include "engine/render/renderer_impl.hpp"
 
+#include "engine/parallel.hpp"
 #include "engine/render/specialization.hpp"
 #include "engine/stopwatch.hpp"
 #include "engine/surface_outputs.hpp"
@@ -138,7 +139,18 @@ double Renderer::sustained_dispatch_ms(const Camera& camera, uint32_t width, uin
   return ms;
 }
 
-RayHits Renderer::cast_rays(std::span<const GivenRay> rays) { return impl_->cast_rays(rays); }
+RayHits Renderer::cast_rays(std::span<const GivenRay> rays, const RayRanges& ranges) {
+  return impl_->cast_rays({rays, ranges, HitQuery::nearest});
+}
+
+std::vector<uint8_t> Renderer::occluded(std::span<const GivenRay> rays, const RayRanges& ranges) {
+  const RayHits hits = impl_->cast_rays({rays, ranges, HitQuery::any});
+  std::vector<uint8_t> blocked(hits.count);
+  parallel_for_chunks(hits.count, [&](size_t begin, size_t end) {
+    for (size_t k = begin; k < end; ++k) blocked[k] = hits.object[k] != no_object ? 1 : 0;
+  });
+  return blocked;
+}
 
 DepthRange Renderer::render(const Camera& camera, Aov aov, ImageTarget& target) {
   const uint32_t width = target.width(), height = target.height();

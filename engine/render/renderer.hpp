@@ -139,10 +139,14 @@ class Renderer {
   // at 0.68 and 3.8 ms, its clock at 1980 and 345 MHz). The outputs are left unread.
   double sustained_dispatch_ms(const Camera& camera, uint32_t width, uint32_t height, AovSet aovs, uint32_t repeats);
 
-  // Traces each ray (checked first: check_given_rays) to its nearest hit, with the precision
-  // contract of images: the origin relative to the scene's anchor, the direction normalized in
-  // double, then rounded as a camera's are.
-  RayHits cast_rays(std::span<const GivenRay> rays);
+  // Traces each ray (checked first: check_given_rays, check_ray_ranges) to its nearest hit within
+  // its range, with the precision contract of images: the origin relative to the scene's anchor, the
+  // direction normalized in double, then rounded as a camera's are.
+  RayHits cast_rays(std::span<const GivenRay> rays, const RayRanges& ranges = {});
+
+  // Whether each ray hits anything within its range (1) or not (0): an occlusion query, whose walk
+  // stops at the first hit it meets. The same rays, ranges and precision contract as cast_rays.
+  std::vector<uint8_t> occluded(std::span<const GivenRay> rays, const RayRanges& ranges = {});
 
   // Timings of the last render (upload_ms and bvh_build_ms are the constructor's).
   const RenderTimings& timings() const;

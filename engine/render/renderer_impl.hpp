@@ -164,12 +164,18 @@ struct Renderer::Impl {
   double sustained_dispatch_ms(const Camera& camera, uint32_t width, uint32_t height, AovSet aovs, uint32_t repeats);
 
   // given_rays.cpp
-  RayHits cast_rays(std::span<const GivenRay> rays);
+  // What Renderer::cast_rays or Renderer::occluded traces: the rays, their ranges, what they look for.
+  struct GivenRays {
+    std::span<const GivenRay> rays;
+    RayRanges ranges;
+    HitQuery query = HitQuery::nearest;
+  };
+  RayHits cast_rays(const GivenRays& given);
   // Given rays in dispatches of at most `tile_rows` rows of `width` positions. Position p holds ray
   // p, or with an `order` (by direction) the ray at its place packet_order_index(p) in it; places
   // past its end are padding, which trace its last ray again and keep nothing. `origin`: the rays'
   // one origin (given_directions), sent as a camera's.
-  void cast_given(std::span<const GivenRay> rays, RaycastMode mode, uint32_t width, uint32_t tile_rows, size_t positions,
+  void cast_given(const GivenRays& given, RaycastMode mode, uint32_t width, uint32_t tile_rows, size_t positions,
                   const glm::dvec3* origin, const std::vector<uint32_t>* order, RayHits& hits);
   // The depth, normal and ids of a camera whose rays do not leave one point through an image
   // plane's pixels, into `frame`: its pixels' rays cast as given rays.

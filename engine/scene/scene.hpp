@@ -156,6 +156,29 @@ using GivenRay = std::array<double, 6>;
 // whose origin is beyond max_coordinate, or whose direction is 0.
 void check_given_rays(std::span<const GivenRay> rays);
 
+// Where along each given ray a hit counts: t_min < t < t_max, t the distance from the ray's origin
+// along its unit direction. An empty span means 0 (t_min) or +infinity (t_max) for every ray. A range
+// that starts past the origin is traced as the ray from origin + t_min * unit direction, that point
+// computed in double (by vkray's shaders and the reference alike), and its distances count from the
+// origin again: the start is exact to double's rounding of that point, far below float32's.
+struct RayRanges {
+  std::span<const double> t_min, t_max;
+  double start(size_t ray) const { return t_min.empty() ? 0.0 : t_min[ray]; }
+  double end(size_t ray) const { return t_max.empty() ? std::numeric_limits<double>::infinity() : t_max[ray]; }
+};
+
+// What a given ray looks for: its nearest hit, or any hit at all (an occlusion query).
+enum class HitQuery : uint32_t { nearest, any };
+
+// The ray traced for `ray`'s range from `t_min` on: its origin moved to the range's start, its
+// direction unit length.
+GivenRay range_start_ray(const GivenRay& ray, double t_min);
+
+// Throws InputError naming the first ray (by its index) whose t_min is negative or not finite, whose
+// t_max is NaN or below its t_min, or whose range starts beyond max_coordinate; or naming the span
+// whose length is not `rays`'.
+void check_ray_ranges(std::span<const GivenRay> rays, const RayRanges& ranges);
+
 // Throws InputError unless 1 <= side <= max_image_side and the pixel count is within the limit.
 void check_image_size(uint32_t width, uint32_t height);
 

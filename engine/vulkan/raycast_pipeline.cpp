@@ -49,11 +49,13 @@ RaycastPipeline::RaycastPipeline(VulkanContext& context, PipelineSpecialization 
   layout_ = vk::raii::PipelineLayout(context.device, vk::PipelineLayoutCreateInfo({}, set_layout, push_range));
 }
 
-const vk::raii::Pipeline& RaycastPipeline::pipeline(AovSet aovs, bool lo_parts, RaycastMode mode, double& created_ms) {
+const vk::raii::Pipeline& RaycastPipeline::pipeline(AovSet aovs, bool lo_parts, RaycastMode mode, double& created_ms,
+                                                    HitQuery query) {
   created_ms = 0.0;
-  // The output bits in the low word, then the lo parts and the mode above every output's bit (Aov::hit
-  // is 256, where the lo parts once were: two different pipelines shared a key).
-  const uint64_t key = uint64_t{aovs.bits()} | (uint64_t{lo_parts} << 32) | (uint64_t{static_cast<uint32_t>(mode)} << 33);
+  // The output bits in the low word, then the lo parts, the mode (two bits) and the query above every
+  // output's bit (Aov::hit is 256, where the lo parts once were: two different pipelines shared a key).
+  const uint64_t key = uint64_t{aovs.bits()} | (uint64_t{lo_parts} << 32) | (uint64_t{static_cast<uint32_t>(mode)} << 33) |
+                       (uint64_t{static_cast<uint32_t>(query)} << 35);
   if (auto found = pipelines_.find(key); found != pipelines_.end()) return found->second;
 
   const auto start = Clock::now();
@@ -85,6 +87,7 @@ const vk::raii::Pipeline& RaycastPipeline::pipeline(AovSet aovs, bool lo_parts, 
                                                                         : VKRAY_RAY_INPUT_NONE;
   values[VKRAY_SPEC_STACK_REGISTERS] = specialization_.stack_registers;
   values[VKRAY_SPEC_SUBGROUP_SIZE] = context_.info.subgroup_size == 8 ? 8u : 0u;
+  values[VKRAY_SPEC_ANY_HIT] = query == HitQuery::any ? 1u : 0u;
   std::array<vk::SpecializationMapEntry, values.size()> entries;
   for (uint32_t id = 0; id < entries.size(); ++id) entries[id] = vk::SpecializationMapEntry(id, id * 4u, 4u);
   const vk::SpecializationInfo specialization(entries, vk::ArrayProxyNoTemporaries<const uint32_t>(values));

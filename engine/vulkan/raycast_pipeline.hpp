@@ -49,9 +49,10 @@ class RaycastPipeline {
   const PipelineSpecialization& specialization() const { return specialization_; }
 
   // The pipeline for this set of outputs, with or without the lo parts of positions
-  // (VKRAY_SPEC_LO_PARTS), in `mode`, created on first request. `created_ms` receives the creation
-  // time, 0 when it was already there.
-  const vk::raii::Pipeline& pipeline(AovSet aovs, bool lo_parts, RaycastMode mode, double& created_ms);
+  // (VKRAY_SPEC_LO_PARTS), in `mode`, for `query`, created on first request. `created_ms` receives
+  // the creation time, 0 when it was already there.
+  const vk::raii::Pipeline& pipeline(AovSet aovs, bool lo_parts, RaycastMode mode, double& created_ms,
+                                     HitQuery query = HitQuery::nearest);
 
   // What each binding (VKRAY_BINDING_*) reads or writes: a storage buffer, a texel view or a
   // storage image (in the GENERAL layout).

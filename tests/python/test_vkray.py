@@ -469,6 +469,34 @@ def test_more_bad_calls_raise_value_error_with_the_place(default_renderer, call,
     assert message in str(raised.value)
 
 
+def test_ranges_and_occlusion_queries_on_a_sphere_against_the_reference():
+    """A unit sphere 4 in front of each ray (5 from its origin, as the scene is 2 across): its near side at 4, its
+    far side at 6. Float32 places them within a few ulps; the bounds lie 0.05 away, far outside that."""
+    scene = vkray.Scene(spheres=np.array([[0.0, 0.0, 0.0, 1.0]]))
+    rays = np.array([[0, 0, 5, 0, 0, -1], [0, 5, 0, 0, -3, 0], [5, 0, 0, -2, 0, 0], [0, 0, 5, 0, 0, 1]], dtype=float)
+    t_min = np.array([0.0, 4.05, 6.05, 0.0])
+    t_max = np.array([3.95, np.inf, np.inf, np.inf])
+    for caster, tolerance in ((vkray.Reference(scene), 0.0), (vkray.Renderer(scene), 8 * EPS)):
+        t = caster.cast_rays(rays, t_min=t_min, t_max=t_max)["t"]
+        assert t[0] == np.inf and t[2] == np.inf and t[3] == np.inf  # before the sphere, past it, away from it
+        assert abs(t[1] - 6.0) <= tolerance * 6.0  # its far side
+        assert caster.cast_rays(rays, t_max=4.05)["t"][:3] == pytest.approx([4.0] * 3, rel=max(tolerance, 1e-15))
+        assert caster.occluded(rays, t_min=t_min, t_max=t_max).tolist() == [False, True, False, False]
+        assert caster.occluded(rays, t_max=3.95).tolist() == [False] * 4
+        assert caster.occluded(rays).tolist() == [True, True, True, False]
+        assert caster.occluded(rays).dtype == np.bool_
+    renderer = vkray.Renderer(scene)
+    with pytest.raises(ValueError, match=r"ray 1: t_max is NaN or below t_min"):
+        renderer.occluded(rays, t_min=1.0, t_max=[2.0, 0.5, 2.0, 2.0])
+    with pytest.raises(ValueError, match=r"t_min: expected None, a number or one value a ray \(4\), got 3"):
+        renderer.cast_rays(rays, t_min=[0.0, 0.0, 0.0])
+    with pytest.raises(ValueError, match=r"t_max: expected None, a number or one value a ray \(4\)"):
+        vkray.Reference(scene).occluded(rays, t_max=np.ones((4, 1)))
+    with pytest.raises(ValueError, match=r"t_max: expected an array of numbers"):
+        renderer.cast_rays(rays, t_max=["far"] * 4)
+    assert renderer.occluded(np.zeros((0, 6)), t_max=1.0).shape == (0,)
+
+
 def test_no_rays_give_empty_arrays(default_renderer):
     hits = default_renderer.cast_rays(np.zeros((0, 6)))
     assert hits["t"].shape == (0,) and hits["normal"].shape == (0, 3) and hits["mesh_id"].shape == (0,)
