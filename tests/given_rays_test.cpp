@@ -212,6 +212,46 @@ TEST(GivenRays, TilesOfRaysGiveTheSameValues) {
   }
 }
 
+// A spinning sensor at the camera (16 rings, 1024 azimuths a ring, listed ring by ring) walks in
+// packets of 64 consecutive rays as listed; shuffled, the same rays are ordered by direction. A
+// packet's rays only share its culling, which never drops a hit: both give the same bits.
+TEST(GivenRays, SensorRingsWalkInTheirOrder) {
+  const Scene scene = default_scene();
+  Renderer renderer(device(), scene);
+  if (renderer.scene_stats().search != PrimitiveSearch::bvh_packet) GTEST_SKIP() << "no packet walk on this device";
+  const CameraBasis basis = make_camera_basis(scene.camera, 1, 1);
+  std::vector<GivenRay> rays;
+  for (int ring = 0; ring < 16; ++ring) {
+    const double elevation = (ring - 7.5) * 0.03;
+    for (int a = 0; a < 1024; ++a) {
+      const double azimuth = 2.0 * M_PI * a / 1024.0;
+      const glm::dvec3 d = std::cos(elevation) * (std::cos(azimuth) * -basis.forward + std::sin(azimuth) * basis.right) +
+                           std::sin(elevation) * basis.up;
+      rays.push_back({basis.origin.x, basis.origin.y, basis.origin.z, d.x, d.y, d.z});
+    }
+  }
+  const RayHits in_order = renderer.cast_rays(rays);
+  EXPECT_EQ(renderer.timings().given_walk, GivenRayWalk::packets_in_order);
+  std::vector<size_t> listed(rays.size());
+  std::iota(listed.begin(), listed.end(), size_t{0});
+  std::shuffle(listed.begin(), listed.end(), std::mt19937_64(20261127));
+  std::vector<GivenRay> shuffled_rays;
+  for (const size_t k : listed) shuffled_rays.push_back(rays[k]);
+  const RayHits sorted = renderer.cast_rays(shuffled_rays);
+  EXPECT_EQ(renderer.timings().given_walk, GivenRayWalk::packets_by_direction);
+  size_t differing = 0, hits = 0;
+  for (size_t n = 0; n < listed.size(); ++n) {
+    const size_t k = listed[n];
+    hits += std::isfinite(in_order.t[k]) ? 1 : 0;
+    if (std::memcmp(&in_order.t[k], &sorted.t[n], sizeof(float)) != 0 || in_order.primitive[k] != sorted.primitive[n] ||
+        in_order.object[k] != sorted.object[n] || in_order.normal[k] != sorted.normal[n]) {
+      ++differing;
+    }
+  }
+  EXPECT_EQ(differing, 0u);
+  EXPECT_GT(hits, rays.size() / 20);  // the scene's objects are in view, not only misses
+}
+
 // Ranges with every search, precision and listing, against the reference's nearest hits: t_max 1%
 // short of a ray's nearest hit leaves it a miss, 1% past it keeps that hit, the same bits (the bound
 // only culls what lies beyond it); an occlusion query over the same ranges says which; t_min half

@@ -63,6 +63,34 @@ TEST(RayOrder, OtherListsAreNoImage) {
   EXPECT_FALSE(scan_width(ordered));
 }
 
+// A spinning sensor's rays, ring by ring (64 rings over 30 degrees of elevation, `azimuths` all
+// the way round each), and a spiral's: listed in order, their runs of 64 are nearly as compact as
+// packets ordered by direction. Shuffled, too few to fill two runs, or an image's rows (a run is a
+// row's 64 pixels, where its 8x8 blocks are the packets: scan_width), they are not.
+TEST(RayOrder, SensorRingsAndSpiralsKeepTheirOrder) {
+  auto sensor = [](size_t azimuths) {
+    std::vector<GivenRay> rays;
+    for (size_t ring = 0; ring < 64; ++ring) {
+      const double elevation = (static_cast<double>(ring) / 63.0 - 0.5) * 0.52;
+      for (size_t a = 0; a < azimuths; ++a) {
+        const double azimuth = 2.0 * M_PI * static_cast<double>(a) / static_cast<double>(azimuths);
+        rays.push_back({0, 0, 0, std::cos(elevation) * std::cos(azimuth), std::cos(elevation) * std::sin(azimuth), std::sin(elevation)});
+      }
+    }
+    return rays;
+  };
+  EXPECT_TRUE(runs_stay_compact(sensor(4096), 64));
+  EXPECT_FALSE(runs_stay_compact(shuffled(sensor(4096)), 64));
+  std::vector<GivenRay> spiral;  // 16 turns from pole to pole, 0.001 radians between neighbours
+  for (size_t k = 0; k < 100000; ++k) {
+    const double z = 1.0 - 2.0 * (static_cast<double>(k) + 0.5) / 100000.0, angle = 0.001 * static_cast<double>(k);
+    spiral.push_back({0, 0, 0, std::sqrt(1 - z * z) * std::cos(angle), std::sqrt(1 - z * z) * std::sin(angle), z});
+  }
+  EXPECT_TRUE(runs_stay_compact(spiral, 64));
+  EXPECT_FALSE(runs_stay_compact(camera_rays(640, 480), 64));
+  EXPECT_FALSE(runs_stay_compact(camera_rays(10, 10), 64));
+}
+
 TEST(RayOrder, OrderIsAPermutation) {
   const std::vector<GivenRay> rays = shuffled(camera_rays(123, 45));
   std::vector<uint32_t> order = order_by_direction(rays);

@@ -21,6 +21,12 @@ std::optional<glm::dvec3> shared_origin(std::span<const GivenRay> rays);
 // image (fewer than 8 rows, rows under 8 rays or a list in no spatial order). Directions non-zero.
 std::optional<uint32_t> scan_width(std::span<const GivenRay> rays);
 
+// Whether runs of `run` consecutive rays, sampled over the whole list, each point into as small a
+// patch of directions as `run` rays ordered by direction would (a spinning sensor's rings, scan
+// lines, spirals, an image's rows): then they make packets as they are listed, with no sorting.
+// Directions non-zero.
+bool runs_stay_compact(std::span<const GivenRay> rays, size_t run);
+
 // The rays' indices ordered along a Hilbert curve over their directions' octahedral map: any run of
 // consecutive ones points into a small patch of the sphere of directions. Directions non-zero;
 // fewer than 2^32 rays.

@@ -21,10 +21,11 @@ enum class GivenRayWalk {
   none,                  // no rays given
   one_by_one,            // each ray walked the tree on its own
   packets_in_place,      // rays from one origin listed as an image's rows: packets of its 8x8 blocks
+  packets_in_order,      // rays from one origin whose list keeps neighbours together: packets of 64 consecutive ones
   packets_by_direction,  // rays from one origin in another order: packets of 64 ordered by direction
 };
 
-// "one by one", "packets in place", "packets by direction" ("none" for none).
+// "one by one", "packets in place", "packets in order", "packets by direction" ("none" for none).
 const char* given_ray_walk_name(GivenRayWalk walk);
 
 struct RenderTimings {
