@@ -58,11 +58,6 @@ int run_compare(const BenchOptions& options) {
 
 // --suite rays: every kind of given rays (ray_kinds) on each scene, a table row each.
 int run_given_rays(const BenchOptions& options, const std::vector<BenchScene>& scenes) {
-  for (const auto& [value, name] : {std::pair{options.variants, "--variants"}, std::pair{options.json, "--json"},
-                                    std::pair{options.csv, "--csv"}, std::pair{options.markdown, "--markdown"},
-                                    std::pair{options.plot, "--plot"}}) {
-    if (!value.empty()) throw InputError(std::string(name) + ": not for --suite rays, whose rows are kinds of rays, not variants");
-  }
   GpuDevice device(options.device_options.device, options.device_options.transfer_mode());
   print_cpu_device_note(device.info());
   std::printf("vkray bench --suite rays on %s\n%zu scene%s, %zu rays a kind, %u timed calls after a first; times are medians\n%s",
@@ -83,6 +78,13 @@ int run_given_rays(const BenchOptions& options, const std::vector<BenchScene>& s
 
 int run_bench(const BenchOptions& options) {
   if (!options.compare.empty()) return run_compare(options);
+  if (options.suite == given_rays_suite) {
+    for (const auto& [value, name] : {std::pair{options.variants, "--variants"}, std::pair{options.json, "--json"},
+                                      std::pair{options.csv, "--csv"}, std::pair{options.markdown, "--markdown"},
+                                      std::pair{options.plot, "--plot"}}) {
+      if (!value.empty()) throw InputError(std::string(name) + ": not for --suite rays, whose rows are kinds of rays, not variants");
+    }
+  }
   const auto [width, height] = parse_size(options.size);
   BenchSettings settings;
   settings.frames = options.frames;
@@ -99,10 +101,10 @@ int run_bench(const BenchOptions& options) {
   if (!options.suite.empty()) {
     std::vector<std::string> unreadable;
     scenes = bench_suite(options.suite, width, height, options.models, &unreadable);
-    for (const auto& error : unreadable) std::fprintf(stderr, "vkray: skipped %s\n", error.c_str());
     if (scenes.empty()) {
       throw InputError("--suite " + options.suite + ": no models in '" + options.models + "' (name the folder with --models)");
     }
+    for (const auto& error : unreadable) std::fprintf(stderr, "vkray: skipped %s\n", error.c_str());
   }
   for (const auto& path : options.scenes) {
     scenes.push_back({std::filesystem::path(path).filename().string(), load_scene_argument(path, width, height)});

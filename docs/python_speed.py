@@ -7,6 +7,11 @@
    rays listed row by row (they keep their places in packets), in a random order (ordered by
    direction into packets first) and each moved along itself to an origin of its own (no packets:
    every ray walks the tree alone).
+3. Rays that share nothing: a million from random points on the sphere of twice the model's radius
+   about its centre towards random points within that radius, through cast_rays, and a million
+   occlusion queries between pairs of random points within it (t_max the pair's distance) through
+   occluded, numpy to numpy, best of FRAMES each. `vkray bench --suite rays` times Embree on rays
+   made the same way.
 
 Run from the repository root after building:
     PYTHONPATH=build/python python3 docs/python_speed.py [MODEL.obj] [VIEWS]
@@ -100,7 +105,44 @@ def rays():
               f"ratio {min(cast_s) / min(render_s):.2f}")
 
 
+def obj_vertices(path):
+    with open(path) as obj:
+        return np.array([line.split()[1:4] for line in obj if line.startswith("v ")], dtype=np.float64)
+
+
+def incoherent():
+    vertices = obj_vertices(MODEL)
+    centre = 0.5 * (vertices.min(axis=0) + vertices.max(axis=0))
+    radius = np.linalg.norm(vertices - centre, axis=1).max()
+    generator = np.random.default_rng(2)
+    count = 1_000_000
+
+    def on_sphere():
+        v = generator.normal(size=(count, 3))
+        return v / np.linalg.norm(v, axis=1, keepdims=True)
+
+    def in_ball():
+        return centre + radius * np.cbrt(generator.uniform(size=(count, 1))) * on_sphere()
+
+    renderer = vkray.Renderer(vkray.load(MODEL))
+    origins = centre + 2 * radius * on_sphere()
+    rays = np.concatenate([origins, in_ball() - origins], axis=1)
+    starts = in_ball()
+    segments = np.concatenate([starts, in_ball() - starts], axis=1)
+    lengths = np.linalg.norm(segments[:, 3:], axis=1)
+    for name, call in (("cast_rays() of rays from random origins", lambda: renderer.cast_rays(rays)),
+                       ("occluded() of segments between random points", lambda: renderer.occluded(segments, t_max=lengths))):
+        times = []
+        for _ in range(FRAMES):
+            start = time.perf_counter()
+            call()
+            times.append(time.perf_counter() - start)
+        print(f"1,000,000 {name}: {1e3 * min(times):.1f} ms (best of {FRAMES}, {renderer.timings['rays_walk']}), "
+              f"{count / min(times) / 1e6:.2f} Mrays/s")
+
+
 if __name__ == "__main__":
     print(f"device: {vkray.Renderer(vkray.load('', 8, 8)).device_name}")
     views()
     rays()
+    incoherent()

@@ -1117,6 +1117,37 @@ TEST_F(CliTest, BenchPrintsTimesBesideErrors) {
   expect_error(vkray({"bench", "--csv", "missing/bench.csv"}), 1, {"missing/bench.csv", "does not exist"});
 }
 
+// The rays suite on the one of its models a folder holds (the teapot, linked): a row per kind of
+// rays, each with no flips against the reference; the two models it lacks are named. Options that
+// only make sense for variants are refused.
+TEST_F(CliTest, BenchRaysSuitePrintsARowPerKindOfRays) {
+  const fs::path teapot = fs::path(VKRAY_MODELS_DIR) / "teapot.obj";
+  if (!fs::exists(teapot)) GTEST_SKIP() << teapot << " is absent: the shared models folder is not beside the project";
+  fs::create_directory(path("models"));
+  fs::create_symlink(teapot, path("models/teapot.obj"));
+  const RunResult run = vkray({"bench", "--suite", "rays", "--models", path("models").string(), "--rays", "4096", "--frames", "1"});
+  ASSERT_EQ(run.exit_code, 0) << run.out << run.err;
+  for (const char* missing : {"stanford-bunny.obj", "stanford-dragon-100k.obj"}) {
+    EXPECT_NE(run.err.find(std::string("skipped ") + missing), std::string::npos) << run.err;
+  }
+  for (const char* kind : {"camera-rows", "sensor", "incoherent", "occlusion"}) {
+    const size_t row = run.out.find(std::string("teapot.obj                   ") + kind);
+    ASSERT_NE(row, std::string::npos) << kind << " missing from:\n" << run.out;
+    std::istringstream fields(run.out.substr(row, run.out.find('\n', row) - row));
+    std::string scene, name, count, walk_or_number;
+    fields >> scene >> name >> count;
+    EXPECT_EQ(count, "4096");
+    std::vector<std::string> rest;
+    while (fields >> walk_or_number) rest.push_back(walk_or_number);
+    ASSERT_GE(rest.size(), 6u);
+    EXPECT_EQ(rest[rest.size() - 3], "0") << "flips against the reference in: " << run.out.substr(row, 120);
+  }
+  expect_error(vkray({"bench", "--suite", "rays", "--models", path("models").string(), "--json", "rays.json"}), 2,
+               {"--json", "--suite rays"});
+  expect_error(vkray({"bench", "--suite", "rays", "--models", "/nonexistent/vkray-models"}), 2,
+               {"--suite rays", "/nonexistent/vkray-models"});
+}
+
 // The basic suite's JSON: every field of every row present and sane. Times are only required to be
 // positive and consistent with each other, never fast.
 TEST_F(CliTest, BenchBasicSuiteJsonHasEveryFieldAndSaneFigures) {
@@ -1570,10 +1601,10 @@ TEST_F(CliTest, ReportReducedWritesJsonAndMarkdown) {
     }
     views += row.at("section") == "views";
   }
-  EXPECT_EQ(rays, 3u);
+  EXPECT_EQ(rays, 4u);
   EXPECT_EQ(views, 1u);
   const std::string markdown = read_text(path("report/report.md"));
-  for (const char* heading : {"# vkray on ", "## Given rays", "## Many views", "| camera-rows | 65536 |"}) {
+  for (const char* heading : {"# vkray on ", "## Given rays", "## Many views", "| camera-rows | 65536 |", "| occlusion | 65536 |"}) {
     EXPECT_NE(markdown.find(heading), std::string::npos) << heading;
   }
 }

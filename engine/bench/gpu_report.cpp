@@ -629,8 +629,8 @@ std::string report_markdown(const std::string& json_text) {
   text += unfinished(by_section["views"]);
 
   text += "\n## Given rays\n\nA whole `cast_rays` call (ordering, writing, dispatch, reading back) against Embree's "
-          "rtcIntersect1M in chunks of 1024 on every host thread, same rays; flips and distance error against the "
-          "reference.\n\n| rays | count | walk | vkray ms | Embree ms | Embree / vkray | flips | t p99 | Embree flips |\n"
+          "rtcIntersect1M in chunks of 1024 on every host thread, same rays (for occlusion rays `occluded` against "
+          "rtcOccluded1M); flips and distance error against the reference.\n\n| rays | count | walk | vkray ms | Embree ms | Embree / vkray | flips | t p99 | Embree flips |\n"
           "| --- | ---: | --- | ---: | ---: | ---: | ---: | ---: | ---: |\n";
   for (const Json* row : by_section["rays"]) {
     if (row->value("status", "") != "ok") continue;

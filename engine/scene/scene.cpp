@@ -165,6 +165,7 @@ void check_ray_ranges(std::span<const GivenRay> rays, const RayRanges& ranges) {
                        std::to_string(rays.size()) + " rays (one a ray, or none)");
     }
   }
+  if (ranges.t_min.empty() && ranges.t_max.empty()) return;
   check_each_ray(rays.size(), [&](size_t k) -> const char* {
     const double t_min = ranges.start(k), t_max = ranges.end(k);
     if (!std::isfinite(t_min) || t_min < 0.0) return "t_min is negative or not finite";
