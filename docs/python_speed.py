@@ -10,8 +10,10 @@
 3. Rays that share nothing: a million from random points on the sphere of twice the model's radius
    about its centre towards random points within that radius, through cast_rays, and a million
    occlusion queries between pairs of random points within it (t_max the pair's distance) through
-   occluded, numpy to numpy, best of FRAMES each. `vkray bench --suite rays` times Embree on rays
-   made the same way.
+   occluded, numpy to numpy, best of FRAMES each, beside Open3D's RaycastingScene (Embree 3 on
+   every core: cast_rays and test_occlusions) on the same rays in float32, where Open3D is
+   installed (Debian: python3-open3d; the install script leaves it out). `vkray bench --suite rays`
+   times Embree itself on rays made the same way.
 
 Run from the repository root after building:
     PYTHONPATH=build/python python3 docs/python_speed.py [MODEL.obj] [VIEWS]
@@ -130,15 +132,38 @@ def incoherent():
     starts = in_ball()
     segments = np.concatenate([starts, in_ball() - starts], axis=1)
     lengths = np.linalg.norm(segments[:, 3:], axis=1)
-    for name, call in (("cast_rays() of rays from random origins", lambda: renderer.cast_rays(rays)),
-                       ("occluded() of segments between random points", lambda: renderer.occluded(segments, t_max=lengths))):
+    calls = {"cast_rays() of rays from random origins": [lambda: renderer.cast_rays(rays)],
+             "occluded() of segments between random points": [lambda: renderer.occluded(segments, t_max=lengths)]}
+    try:
+        import open3d
+        mesh = open3d.t.geometry.TriangleMesh.from_legacy(open3d.io.read_triangle_mesh(MODEL))
+        scene = open3d.t.geometry.RaycastingScene()
+        scene.add_triangles(mesh)
+        unit = np.concatenate([rays[:, :3], rays[:, 3:] / np.linalg.norm(rays[:, 3:], axis=1, keepdims=True)], axis=1)
+        o3d_rays = open3d.core.Tensor(unit.astype(np.float32))
+        # Open3D's distances are in units of the direction's length: the segment itself up to 1.
+        o3d_segments = open3d.core.Tensor(segments.astype(np.float32))
+        calls["cast_rays() of rays from random origins"].append(lambda: scene.cast_rays(o3d_rays))
+        calls["occluded() of segments between random points"].append(lambda: scene.test_occlusions(o3d_segments, tfar=1.0))
+    except ImportError:
+        print("Open3D is not installed (Debian: python3-open3d): vkray alone")
+
+    def best(call):
         times = []
         for _ in range(FRAMES):
             start = time.perf_counter()
             call()
             times.append(time.perf_counter() - start)
-        print(f"1,000,000 {name}: {1e3 * min(times):.1f} ms (best of {FRAMES}, {renderer.timings['rays_walk']}), "
-              f"{count / min(times) / 1e6:.2f} Mrays/s")
+        return min(times)
+
+    for name, (vkray_call, *open3d_call) in calls.items():
+        vkray_s = best(vkray_call)
+        line = (f"1,000,000 {name}: {1e3 * vkray_s:.1f} ms (best of {FRAMES}, {renderer.timings['rays_walk']}), "
+                f"{count / vkray_s / 1e6:.2f} Mrays/s")
+        if open3d_call:
+            open3d_s = best(open3d_call[0])
+            line += f"; Open3D {1e3 * open3d_s:.1f} ms; Open3D's time over vkray's {open3d_s / vkray_s:.2f}"
+        print(line)
 
 
 if __name__ == "__main__":
