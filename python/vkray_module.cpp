@@ -208,13 +208,11 @@ std::span<const GivenRay> given_rays(const py::array_t<double, py::array::c_styl
 // number for every ray, or one value a ray.
 std::vector<double> range_values(py::handle value, const char* what, size_t ray_count) {
   if (value.is_none()) return {};
-  if (py::isinstance<py::float_>(value) || py::isinstance<py::int_>(value)) {
-    return std::vector<double>(ray_count, value.cast<double>());
-  }
   py::array array = py::array::ensure(value);
   const std::string expected = std::string(what) + ": expected None, a number or one value a ray (" + std::to_string(ray_count) + ")";
-  if (!array || array.ndim() != 1) throw InputError(expected);
+  if (!array || array.ndim() > 1) throw InputError(expected);
   const auto column = float_rows(array.reshape({-1, 1}), what, 1);  // any real dtype, as rays
+  if (array.ndim() == 0) return std::vector<double>(ray_count, column.at(0, 0));  // a number, numpy's too
   if (static_cast<size_t>(column.shape(0)) != ray_count) {
     throw InputError(expected + ", got " + std::to_string(column.shape(0)));
   }

@@ -114,8 +114,9 @@ using uvec4 = glm::uvec4;
 #define VKRAY_RAY_INPUT_NONE 0        // a camera's pixels
 #define VKRAY_RAY_INPUT_RAYS 1        // GpuRays, one an invocation, each from its own origin
 // Directions from the origin in RayGenParams.camera, as a camera's: each ray's float32 unit
-// direction with w = the end of its range (as GpuRay's), a texel, at its position in an image of rows `width` wide, for the packet walk (the
-// host chooses the positions so that neighbours point nearly the same way: see Renderer::cast_rays).
+// direction with w = the end of its range (as GpuRay's), a texel, at its position in an image of
+// rows `width` wide, for the packet walk (the host chooses the positions so that neighbours point
+// nearly the same way: see Renderer::cast_rays).
 #define VKRAY_RAY_INPUT_DIRECTIONS 2
 // The device's subgroup size where it is 8, else 0 (see shaders/packet_walk.glsl).
 #define VKRAY_SPEC_SUBGROUP_SIZE 21

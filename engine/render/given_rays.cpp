@@ -103,7 +103,8 @@ void Renderer::Impl::cast_given(const GivenRays& given, RaycastMode mode, uint32
     const auto encode_start = Clock::now();
     parallel_for_chunks(count, [&](size_t begin, size_t end) {
       for (size_t p = begin; p < end; ++p) {
-        const size_t k = std::min(ray_at(first + p), rays.size() - 1);  // padding traces the last ray again
+        const size_t listed = ray_at(first + p);
+        const size_t k = listed < rays.size() ? listed : order->back();  // padding: the order's last ray again
         const double range_end = ranges.end(k) - ranges.start(k);  // from the range's start
         if (origin) {  // float32 alone: the packet walk's
           const glm::dvec3 direction(rays[k][3], rays[k][4], rays[k][5]);

@@ -483,6 +483,8 @@ def test_ranges_and_occlusion_queries_on_a_sphere_against_the_reference():
         assert caster.cast_rays(rays, t_max=4.05)["t"][:3] == pytest.approx([4.0] * 3, rel=max(tolerance, 1e-15))
         assert caster.occluded(rays, t_min=t_min, t_max=t_max).tolist() == [False, True, False, False]
         assert caster.occluded(rays, t_max=3.95).tolist() == [False] * 4
+        assert caster.occluded(rays, t_max=np.float32(4.05)).tolist() == [True, True, True, False]  # numpy numbers too
+        assert caster.occluded(rays, t_min=np.int64(5), t_max=7).tolist() == [True, True, True, False]
         assert caster.occluded(rays).tolist() == [True, True, True, False]
         assert caster.occluded(rays).dtype == np.bool_
     renderer = vkray.Renderer(scene)
