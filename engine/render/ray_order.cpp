@@ -92,6 +92,16 @@ uint32_t direction_key(const glm::vec3& unit) {
   return hilbert_index(cell(p.x), cell(p.y));
 }
 
+// Whether groups of `group` rays out of `count`, spanning `mean_span` on average (unit directions),
+// are compact enough to walk as packets: within `allowance` times what a compact patch of `group`
+// rays spans, sqrt(group / count) of the whole list's extent `extent`, and within a sixth of that
+// extent (a small list's compact patch is a large part of it, and ordering by direction does as
+// well there).
+bool groups_are_compact(double mean_span, size_t group, size_t count, double extent, double allowance) {
+  const double compact = std::sqrt(static_cast<double>(group) / static_cast<double>(count)) * extent;
+  return mean_span <= std::min(allowance * compact, extent / 6.0);
+}
+
 }  // namespace
 
 std::optional<uint32_t> scan_width(std::span<const GivenRay> rays) {
@@ -128,16 +138,14 @@ std::optional<uint32_t> scan_width(std::span<const GivenRay> rays) {
     }
   }
   block_extent /= samples * samples;
-  const double compact = std::sqrt(double{block * block} / static_cast<double>(rays.size())) * glm::distance(low, high);
-  if (block_extent > std::min(2.0 * compact, glm::distance(low, high) / 6.0)) return std::nullopt;
+  if (!groups_are_compact(block_extent, block * block, rays.size(), glm::distance(low, high), 2.0)) return std::nullopt;
   return static_cast<uint32_t>(width);
 }
 
 bool runs_stay_compact(std::span<const GivenRay> rays, size_t run) {
   auto unit = [&](size_t k) { return unit_vector(glm::dvec3(rays[k][3], rays[k][4], rays[k][5])); };
-  // As scan_width's blocks are tested: a run's span, over 256 runs sampled evenly, against what a
-  // compact patch of `run` rays spans, sqrt(run / N) of the whole list's extent (the box of the
-  // sampled runs), and at most a sixth of that extent. A run is a strip, thin across: up to four
+  // As scan_width's blocks are tested (groups_are_compact): a run's span, over 256 runs sampled
+  // evenly, the extent the box of the sampled runs. A run is a strip, thin across: up to four
   // times a patch's span it walked the bunny within 8% of packets ordered by direction (a sensor
   // inside it, every ray a hit, 4096 and 16384 azimuths a ring), and sorting costs more than that;
   // at five times (1024 azimuths) the walk took 35% longer, as long as sorting and walking.
@@ -156,8 +164,7 @@ bool runs_stay_compact(std::span<const GivenRay> rays, size_t run) {
     run_extent += glm::distance(run_low, run_high);
   }
   run_extent /= samples;
-  const double compact = std::sqrt(static_cast<double>(run) / static_cast<double>(rays.size())) * glm::distance(low, high);
-  return run_extent <= std::min(4.0 * compact, glm::distance(low, high) / 6.0);
+  return groups_are_compact(run_extent, run, rays.size(), glm::distance(low, high), 4.0);
 }
 
 std::vector<uint32_t> order_by_direction(std::span<const GivenRay> rays) {
