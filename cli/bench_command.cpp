@@ -56,10 +56,12 @@ int run_compare(const BenchOptions& options) {
   return 0;
 }
 
-// --suite rays: every kind of given rays (ray_kinds) on each scene, a table row each.
+// --suite rays: every kind of given rays (ray_kinds) on each scene, a table row each; the files
+// (--json, --csv) have every figure of each row.
 int run_given_rays(const BenchOptions& options, const std::vector<BenchScene>& scenes) {
   GpuDevice device(options.device_options.device, options.device_options.transfer_mode());
   print_cpu_device_note(device.info());
+  BenchReport report = new_bench_report(device.info(), options.suite, options.frames);
   std::printf("vkray bench --suite rays on %s\n%zu scene%s, %zu rays a kind, %u timed calls after a first; times are medians\n%s",
               device.info().name.c_str(), scenes.size(), scenes.size() == 1 ? "" : "s", options.rays, options.frames,
               given_rays_table_header().c_str());
@@ -69,19 +71,23 @@ int run_given_rays(const BenchOptions& options, const std::vector<BenchScene>& s
   for (const auto& scene : scenes) {
     for (const auto& kind : ray_kinds()) {
       const std::vector<GivenRay> rays = make_rays(kind.kind, scene.scene, options.rays);
-      std::fputs(given_rays_table_row(scene.name, bench_given_rays(device, scene.scene, kind.name, rays, timing)).c_str(), stdout);
+      GivenRaysResult result{scene.name, scene_hash(scene.scene),
+                             bench_given_rays(device, scene.scene, kind.name, rays, timing)};
+      std::fputs(given_rays_table_row(scene.name, result.row).c_str(), stdout);
       std::fflush(stdout);
+      report.given_rays.push_back(std::move(result));
     }
   }
+  if (!options.json.empty()) write_text_file(options.json, given_rays_json(report));
+  if (!options.csv.empty()) write_text_file(options.csv, given_rays_csv(report));
   return 0;
 }
 
 int run_bench(const BenchOptions& options) {
   if (!options.compare.empty()) return run_compare(options);
   if (options.suite == given_rays_suite) {
-    for (const auto& [value, name] : {std::pair{options.variants, "--variants"}, std::pair{options.json, "--json"},
-                                      std::pair{options.csv, "--csv"}, std::pair{options.markdown, "--markdown"},
-                                      std::pair{options.plot, "--plot"}}) {
+    for (const auto& [value, name] : {std::pair{options.variants, "--variants"},
+                                      std::pair{options.markdown, "--markdown"}, std::pair{options.plot, "--plot"}}) {
       if (!value.empty()) throw InputError(std::string(name) + ": not for --suite rays, whose rows are kinds of rays, not variants");
     }
   }

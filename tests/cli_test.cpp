@@ -1118,14 +1118,15 @@ TEST_F(CliTest, BenchPrintsTimesBesideErrors) {
 }
 
 // The rays suite on the one of its models a folder holds (the teapot, linked): a row per kind of
-// rays, each with no flips against the reference; the two models it lacks are named. Options that
-// only make sense for variants are refused.
+// rays, each with no flips against the reference, in the table and in the JSON and CSV files; the
+// two models it lacks are named. Options that only make sense for variants are refused.
 TEST_F(CliTest, BenchRaysSuitePrintsARowPerKindOfRays) {
   const fs::path teapot = fs::path(VKRAY_MODELS_DIR) / "teapot.obj";
   if (!fs::exists(teapot)) GTEST_SKIP() << teapot << " is absent: the shared models folder is not beside the project";
   fs::create_directory(path("models"));
   fs::create_symlink(teapot, path("models/teapot.obj"));
-  const RunResult run = vkray({"bench", "--suite", "rays", "--models", path("models").string(), "--rays", "4096", "--frames", "1"});
+  const RunResult run = vkray({"bench", "--suite", "rays", "--models", path("models").string(), "--rays", "4096", "--frames",
+                               "1", "--json", "rays.json", "--csv", "rays.csv"});
   ASSERT_EQ(run.exit_code, 0) << run.out << run.err;
   for (const char* missing : {"stanford-bunny.obj", "stanford-dragon-100k.obj"}) {
     EXPECT_NE(run.err.find(std::string("skipped ") + missing), std::string::npos) << run.err;
@@ -1142,8 +1143,31 @@ TEST_F(CliTest, BenchRaysSuitePrintsARowPerKindOfRays) {
     ASSERT_GE(rest.size(), 6u);
     EXPECT_EQ(rest[rest.size() - 3], "0") << "flips against the reference in: " << run.out.substr(row, 120);
   }
-  expect_error(vkray({"bench", "--suite", "rays", "--models", path("models").string(), "--json", "rays.json"}), 2,
-               {"--json", "--suite rays"});
+  const auto json = nlohmann::json::parse(read_text(path("rays.json")));
+  EXPECT_EQ(json.at("schema"), "vkray-bench-rays-1");
+  EXPECT_EQ(json.at("suite"), "rays");
+  const std::vector<std::string> kinds = {"camera-rows", "sensor", "incoherent", "occlusion"};
+  ASSERT_EQ(json.at("rows").size(), kinds.size());
+  for (size_t k = 0; k < kinds.size(); ++k) {
+    const auto& row = json.at("rows").at(k);
+    EXPECT_EQ(row.at("scene"), "teapot.obj");
+    EXPECT_EQ(row.at("rays"), kinds[k]);
+    EXPECT_EQ(row.at("count"), 4096);
+    EXPECT_EQ(row.at("hit_mismatches"), 0) << kinds[k];
+    EXPECT_EQ(row.at("embree_variant"), kinds[k] == "occlusion" ? "embree-occluded" : "embree-1m");
+    EXPECT_GT(row.at("median_ms").get<double>(), 0.0);
+    EXPECT_LE(row.at("min_ms").get<double>(), row.at("median_ms").get<double>());
+    EXPECT_GT(row.at("embree_median_ms").get<double>(), 0.0);
+    // Rays that hit are compared by distance (occlusion answers only whether, so none are).
+    EXPECT_EQ(row.at("both_hit").get<size_t>() > 0, kinds[k] != "occlusion") << kinds[k];
+  }
+  const std::string csv = read_text(path("rays.csv"));
+  EXPECT_EQ(count_lines(csv), kinds.size() + 1);
+  const std::string header = csv.substr(0, csv.find('\n'));
+  EXPECT_EQ(header.rfind("vkray_version,git_commit,device,driver,suite,frames,scene,scene_hash,rays,count,walk,", 0), 0u)
+      << header;
+  expect_error(vkray({"bench", "--suite", "rays", "--models", path("models").string(), "--variants", "default"}), 2,
+               {"--variants", "--suite rays"});
   expect_error(vkray({"bench", "--suite", "rays", "--models", "/nonexistent/vkray-models"}), 2,
                {"--suite rays", "/nonexistent/vkray-models"});
 }

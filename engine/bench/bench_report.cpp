@@ -21,13 +21,15 @@ using Json = nlohmann::ordered_json;  // fields in the order written here
 
 static_assert(std::is_same_v<size_t, uint64_t>, "row fields store counts as uint64_t");
 
-// Every figure of a row, by its name in JSON and CSV: one table, so both formats and the reader
-// always hold the same fields.
+// Every figure of a row, by its name in JSON and CSV: one table per kind of row, so both formats and
+// the reader always hold the same fields.
 using FieldRef = std::variant<double*, uint64_t*, uint32_t*, bool*, std::string*>;
-struct RowField {
+template <typename Row>
+struct Field {
   std::string name;
-  std::function<FieldRef(BenchRow&)> ref;
+  std::function<FieldRef(Row&)> ref;
 };
+using RowField = Field<BenchRow>;
 
 const RowField fixed_row_fields[] = {
     {"variant", [](BenchRow& r) -> FieldRef { return &r.variant; }},
@@ -84,15 +86,43 @@ const std::vector<RowField>& row_fields() {
   return fields;
 }
 
-Json row_json(BenchRow row) {
+// A row of `vkray bench --suite rays`: Embree's figures are those of its row for the same rays,
+// embree-1m (rtcIntersect1M) or embree-occluded (rtcOccluded1M).
+const std::vector<Field<GivenRaysRow>>& given_rays_fields() {
+  using R = GivenRaysRow;
+  static const std::vector<Field<R>> fields = {
+      {"rays", [](R& r) -> FieldRef { return &r.kind; }},
+      {"count", [](R& r) -> FieldRef { return &r.rays; }},
+      {"walk", [](R& r) -> FieldRef { return &r.walk; }},
+      {"median_ms", [](R& r) -> FieldRef { return &r.vkray.median_ms; }},
+      {"min_ms", [](R& r) -> FieldRef { return &r.vkray.min_ms; }},
+      {"max_ms", [](R& r) -> FieldRef { return &r.vkray.max_ms; }},
+      {"hit_mismatches", [](R& r) -> FieldRef { return &r.hit_mismatches; }},
+      {"both_hit", [](R& r) -> FieldRef { return &r.both_hit; }},
+      {"t_rel_p99", [](R& r) -> FieldRef { return &r.t_rel_p99; }},
+      {"t_rel_max", [](R& r) -> FieldRef { return &r.t_rel_max; }},
+      {"embree_variant", [](R& r) -> FieldRef { return &r.embree_variant; }},
+      {"embree_threads", [](R& r) -> FieldRef { return &r.embree_threads; }},
+      {"embree_median_ms", [](R& r) -> FieldRef { return &r.embree.median_ms; }},
+      {"embree_min_ms", [](R& r) -> FieldRef { return &r.embree.min_ms; }},
+      {"embree_max_ms", [](R& r) -> FieldRef { return &r.embree.max_ms; }},
+      {"embree_hit_mismatches", [](R& r) -> FieldRef { return &r.embree_hit_mismatches; }},
+      {"embree_t_rel_p99", [](R& r) -> FieldRef { return &r.embree_t_rel_p99; }},
+  };
+  return fields;
+}
+
+template <typename Row>
+Json row_json(Row row, const std::vector<Field<Row>>& fields) {
   Json json = Json::object();
-  for (const auto& field : row_fields()) {
+  for (const auto& field : fields) {
     std::visit([&](auto* value) { json[field.name] = *value; }, field.ref(row));
   }
   return json;
 }
 
-std::string csv_cell(BenchRow row, const RowField& field) {
+template <typename Row>
+std::string csv_cell(Row row, const Field<Row>& field) {
   return std::visit(
       [](auto* value) -> std::string {
         using T = std::remove_pointer_t<decltype(value)>;
@@ -254,11 +284,37 @@ std::string bench_table_rows(const BenchSceneResult& scene, bool wide) {
   return text;
 }
 
+namespace {
+
+// What every report file starts with: the build, the device and what was run; `schema` tells the
+// image suites' files from the rays suite's.
+Json report_json(const BenchReport& report, const char* schema) {
+  return {{"schema", schema},
+          {"vkray_version", report.vkray_version},
+          {"git_commit", report.git_commit},
+          {"device",
+           {{"name", report.device},
+            {"type", report.device_type},
+            {"driver", report.driver},
+            {"api_version", report.api_version}}},
+          {"suite", report.suite},
+          {"frames", report.frames}};
+}
+
+// The same as the first columns of every CSV line.
+const char* const report_csv_header = "vkray_version,git_commit,device,driver,suite,frames";
+std::string report_csv_cells(const BenchReport& report) {
+  return csv_quoted(report.vkray_version) + "," + report.git_commit + "," + csv_quoted(report.device) + "," +
+         csv_quoted(report.driver) + "," + report.suite + "," + std::to_string(report.frames);
+}
+
+}  // namespace
+
 std::string bench_json(const BenchReport& report) {
   Json scenes = Json::array();
   for (const auto& scene : report.scenes) {
     Json rows = Json::array();
-    for (const auto& row : scene.rows) rows.push_back(row_json(row));
+    for (const auto& row : scene.rows) rows.push_back(row_json(row, row_fields()));
     scenes.push_back({{"name", scene.name},
                       {"hash", scene.hash},
                       {"width", scene.width},
@@ -270,33 +326,46 @@ std::string bench_json(const BenchReport& report) {
                       {"skipped", scene.skipped},
                       {"rows", rows}});
   }
-  const Json json = {{"schema", bench_schema},
-                     {"vkray_version", report.vkray_version},
-                     {"git_commit", report.git_commit},
-                     {"device",
-                      {{"name", report.device},
-                       {"type", report.device_type},
-                       {"driver", report.driver},
-                       {"api_version", report.api_version}}},
-                     {"suite", report.suite},
-                     {"frames", report.frames},
-                     {"scenes", scenes}};
+  Json json = report_json(report, bench_schema);
+  json["scenes"] = scenes;
   return json.dump(2) + "\n";
 }
 
 std::string bench_csv(const BenchReport& report) {
-  std::string text = "vkray_version,git_commit,device,driver,suite,frames,scene,scene_hash,width,height";
+  std::string text = std::string(report_csv_header) + ",scene,scene_hash,width,height";
   for (const auto& field : row_fields()) text += std::string(",") + field.name;
   text += "\n";
   for (const auto& scene : report.scenes) {
     for (const auto& row : scene.rows) {
-      text += csv_quoted(report.vkray_version) + "," + report.git_commit + "," + csv_quoted(report.device) + "," +
-              csv_quoted(report.driver) + "," + report.suite + "," + std::to_string(report.frames) + "," +
-              csv_quoted(scene.name) + "," + scene.hash + "," + std::to_string(scene.width) + "," +
-              std::to_string(scene.height);
+      text += report_csv_cells(report) + "," + csv_quoted(scene.name) + "," + scene.hash + "," +
+              std::to_string(scene.width) + "," + std::to_string(scene.height);
       for (const auto& field : row_fields()) text += "," + csv_cell(row, field);
       text += "\n";
     }
+  }
+  return text;
+}
+
+std::string given_rays_json(const BenchReport& report) {
+  Json rows = Json::array();
+  for (const auto& result : report.given_rays) {
+    Json row = {{"scene", result.scene}, {"scene_hash", result.scene_hash}};
+    row.update(row_json(result.row, given_rays_fields()));
+    rows.push_back(row);
+  }
+  Json json = report_json(report, given_rays_schema);
+  json["rows"] = rows;
+  return json.dump(2) + "\n";
+}
+
+std::string given_rays_csv(const BenchReport& report) {
+  std::string text = std::string(report_csv_header) + ",scene,scene_hash";
+  for (const auto& field : given_rays_fields()) text += std::string(",") + field.name;
+  text += "\n";
+  for (const auto& result : report.given_rays) {
+    text += report_csv_cells(report) + "," + csv_quoted(result.scene) + "," + result.scene_hash;
+    for (const auto& field : given_rays_fields()) text += "," + csv_cell(result.row, field);
+    text += "\n";
   }
   return text;
 }

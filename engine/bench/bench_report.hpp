@@ -4,6 +4,7 @@
 #pragma once
 
 #include "engine/bench/bench.hpp"
+#include "engine/bench/given_rays_bench.hpp"
 
 #include <filesystem>
 #include <string>
@@ -12,6 +13,13 @@
 namespace vkray {
 
 inline constexpr const char* bench_schema = "vkray-bench-1";
+inline constexpr const char* given_rays_schema = "vkray-bench-rays-1";  // --suite rays
+
+// A row of --suite rays, with the scene it ran on (scene_hash).
+struct GivenRaysResult {
+  std::string scene, scene_hash;
+  GivenRaysRow row;
+};
 
 struct BenchReport {
   std::string vkray_version;
@@ -20,6 +28,7 @@ struct BenchReport {
   std::string suite;  // empty when scenes were named on the command line
   uint32_t frames = 0;
   std::vector<BenchSceneResult> scenes;
+  std::vector<GivenRaysResult> given_rays;  // --suite rays has these rows instead of scenes
 };
 
 // This build's version and the git commit it was built from ("unknown" outside a checkout).
@@ -42,6 +51,9 @@ std::string bench_table_rows(const BenchSceneResult& scene, bool wide);
 
 std::string bench_json(const BenchReport& report);
 std::string bench_csv(const BenchReport& report);
+// --suite rays' files: the report's given_rays, every figure of each row.
+std::string given_rays_json(const BenchReport& report);
+std::string given_rays_csv(const BenchReport& report);
 
 // Throws InputError naming the file (and the field) when it is not a bench JSON file.
 BenchReport read_bench_json(const std::filesystem::path& path);

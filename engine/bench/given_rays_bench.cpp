@@ -172,6 +172,7 @@ GivenRaysRow bench_given_rays(GpuDevice& device, const Scene& scene, const std::
   const EmbreeRays embree =
       trace_rays_with_embree(scene, rays, timing.frames, ranges, occlusion ? HitQuery::any : HitQuery::nearest);
   row.embree = embree.time;
+  row.embree_variant = occlusion ? "embree-occluded" : "embree-1m";
   row.embree_threads = embree.threads;
 
   auto errors = [&](std::span<const float> t) {

@@ -51,7 +51,8 @@ struct GivenRaysRow {
   // rtcIntersect1M (rtcOccluded1M) in chunks of 1024 rays on every core, what Open3D's cast_rays
   // (test_occlusions) does.
   TimeStats embree;
-  unsigned embree_threads = 0;
+  std::string embree_variant;  // its name as a bench row: embree-1m, or embree-occluded for occlusion
+  uint32_t embree_threads = 0;
   // vkray's and Embree's answers against the reference's (distances relative to it, where both hit;
   // for occlusion rays, only whether each is occluded).
   size_t hit_mismatches = 0, embree_hit_mismatches = 0;
