@@ -5,6 +5,7 @@
 set(VKRAY_PARSER_SOURCES
   ${CMAKE_CURRENT_LIST_DIR}/typed_names.cpp
   ${CMAKE_CURRENT_LIST_DIR}/scene/camera.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/scene/gltf_json_shape.cpp
   ${CMAKE_CURRENT_LIST_DIR}/scene/gltf_loader.cpp
   ${CMAKE_CURRENT_LIST_DIR}/scene/model_loader.cpp
   ${CMAKE_CURRENT_LIST_DIR}/scene/obj_loader.cpp

@@ -12,7 +12,8 @@ namespace vkray {
 // The items of a comma-separated list, empty ones kept ("a,,b" has three); none for "".
 std::vector<std::string> split_list(std::string_view list);
 
-// Levenshtein distance: insertions, deletions and substitutions of one character each cost 1.
+// Damerau-Levenshtein distance (optimal string alignment): insertions, deletions, substitutions of
+// one character and swaps of two neighbours each cost 1, so "fvoy" is 1 from "fovy", 2 from "from".
 size_t edit_distance(std::string_view a, std::string_view b);
 
 // The name in `names` closest to `given`, when it is close enough to be the one meant: at most 2

@@ -13,6 +13,7 @@
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
+#include <pybind11/stl/filesystem.h>
 
 #include <glm/mat4x4.hpp>
 
@@ -582,7 +583,7 @@ PYBIND11_MODULE(vkray, m) {
 
   m.def(
       "load",
-      [](const std::string& path, std::optional<int64_t> width, std::optional<int64_t> height, py::handle view) {
+      [](const std::filesystem::path& path, std::optional<int64_t> width, std::optional<int64_t> height, py::handle view) {
         const auto w = size_argument(width, "width"), h = size_argument(height, "height");
         std::optional<FramingView> side;
         if (py::isinstance<py::str>(view)) {

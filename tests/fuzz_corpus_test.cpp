@@ -1,11 +1,13 @@
 // Every input in the fuzzers' corpus (tests/fuzz/corpus: seeds, and each finding of a fuzz run,
 // added there as a regression test) goes through the loaders in the ordinary suite too: it must be
 // accepted or rejected with InputError, nothing else.
+#include "engine/scene/gltf_loader.hpp"
 #include "engine/scene/model_loader.hpp"
 #include "engine/scene/obj_loader.hpp"
 #include "engine/scene/scene_loader.hpp"
 #include "engine/views/manifest_record.hpp"
 #include "engine/views/view_list.hpp"
+#include "tests/fuzz/ply_header_input.hpp"
 
 #include <gtest/gtest.h>
 
@@ -74,6 +76,34 @@ TEST(FuzzCorpus, ModelInputsAreAcceptedOrRejectedCleanly) {
   });
   EXPECT_GE(inputs, 5u);
   EXPECT_GE(accepted, 4u);  // one seed a kind is a good file: each kind's reader reached
+}
+
+TEST(FuzzCorpus, GltfInputsAreAcceptedOrRejectedCleanly) {
+  size_t accepted = 0;
+  const size_t inputs = for_each_input("gltf", [&](const std::string& text, const std::string& name) {
+    const Model model = read_gltf(text, false, "/nonexistent", name);
+    for (const Mesh& mesh : model.meshes) {
+      for (const auto& triangle : mesh.triangles) {
+        for (uint32_t index : triangle) EXPECT_LT(index, mesh.positions.size());
+      }
+    }
+    ++accepted;
+  });
+  EXPECT_GE(inputs, 12u);
+  EXPECT_GE(accepted, 3u);  // the triangle, the cycle-free shared accessors, the flattened node
+}
+
+TEST(FuzzCorpus, PlyHeaderInputsAreAcceptedOrRejectedCleanly) {
+  size_t accepted = 0;
+  const size_t inputs = for_each_input("ply_header", [&](const std::string& header, const std::string& name) {
+    const Model model = read_model_bytes(test::ply_from_header(header), ".ply", name);
+    for (const auto& triangle : model.meshes.at(0).triangles) {
+      for (uint32_t index : triangle) EXPECT_LT(index, model.meshes[0].positions.size());
+    }
+    ++accepted;
+  });
+  EXPECT_GE(inputs, 7u);
+  EXPECT_GE(accepted, 3u);  // ASCII and binary triangles, MeshLab's texcoords
 }
 
 TEST(FuzzCorpus, ViewsInputsAreAcceptedOrRejectedCleanly) {

@@ -193,6 +193,45 @@ TEST(ObjText, PolygonsUpToTheLimitAreTriangulatedAndLargerOnesRefused) {
                "a face of 4098 vertices; vkray takes at most 4096");
 }
 
+// The ear tests' work, in corner tests, stays within a small multiple of the corners on the shapes
+// that made ear clipping quadratic: a comb of 4096 corners (its teeth along x, then along y: each
+// tooth's triangle once read every reflex corner, 1280 tests a corner, 60 ms a face) and a star.
+TEST(ObjText, EarClippingWorkStaysNearLinearOnCombsAndStars) {
+  std::vector<glm::dvec2> teeth{{0, -1}};
+  for (int k = 0; k < 1023; ++k) {
+    for (const glm::dvec2 corner : {glm::dvec2(2 * k, 0), glm::dvec2(2 * k, 10), glm::dvec2(2 * k + 1, 10), glm::dvec2(2 * k + 1, 0)}) {
+      teeth.push_back(corner);
+    }
+  }
+  teeth.emplace_back(2045, -1);
+  std::vector<glm::dvec2> turned;
+  for (const glm::dvec2 corner : teeth) turned.emplace_back(-corner.y, corner.x);
+  for (const auto& corners : {teeth, turned, star(vkray::max_polygon_corners / 2)}) {
+    for (const bool reversed : {false, true}) {
+      std::vector<glm::dvec3> polygon;
+      for (const glm::dvec2 corner : corners) polygon.emplace_back(corner, 0.0);
+      if (reversed) std::reverse(polygon.begin(), polygon.end());
+      std::vector<std::array<uint32_t, 3>> triangles;
+      const size_t work = vkray::triangulate_polygon(polygon, triangles);
+      EXPECT_EQ(triangles.size(), polygon.size() - 2);
+      EXPECT_LE(work, 64 * polygon.size()) << polygon.size() << " corners" << (reversed ? ", clockwise" : "");
+    }
+  }
+}
+
+// A quad whose corners are not in one plane is two different surfaces depending on the diagonal:
+// vkray takes the one from its first corner, as Blender's importers and trimesh do, whichever is
+// shorter (tinyobjloader, which vkray used before, took the shorter: here 2-4).
+TEST(ObjText, ANonPlanarQuadIsCutAlongTheDiagonalFromItsFirstCorner) {
+  for (const char* lift : {"0.5", "-0.5"}) {
+    const Mesh mesh = vkray::load_obj_text(std::string("v 0 0 0\nv 1 0 0\nv 1.5 1.5 ") + lift + "\nv 0 1 0\nf 1 2 3 4\n", "t.obj");
+    ASSERT_EQ(mesh.triangles.size(), 2u);
+    for (const auto& triangle : mesh.triangles) {  // both hold the diagonal 1-3 (0 and 2 here)
+      EXPECT_TRUE(std::ranges::count(triangle, 0u) == 1 && std::ranges::count(triangle, 2u) == 1) << lift;
+    }
+  }
+}
+
 TEST(ObjText, NegativeIndicesCountBackFromTheNewestVertex) {
   const Mesh mesh = vkray::load_obj_text(tri_vertices + "f -3 -2 -1\nv 1 1 0\nf -3 -2 -1\nf -1 1 -3\n", "t.obj");
   ASSERT_EQ(mesh.positions.size(), 4u);

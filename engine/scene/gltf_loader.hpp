@@ -11,11 +11,18 @@
 
 #include "engine/scene/model_loader.hpp"
 
+#include <cstddef>
 #include <filesystem>
 #include <string>
 #include <string_view>
 
 namespace vkray {
+
+// A glTF's nodes may place at most this many triangle corners and vertices for each byte of the mesh
+// data they come from (one mesh named by 256 nodes, reached along 256 paths of the node graph, or
+// its accessors shared by 256 primitives, each carries at most that): vkray stores each placement as
+// a copy, so what a file makes stays within this factor of what it holds.
+inline constexpr size_t max_gltf_instancing = 256;
 
 // The model of the glTF `bytes` (JSON, or binary when `binary`), its external buffers found in
 // `folder`; `name` stands for the file in messages and sources ("scene.gltf#Wheel"). Throws

@@ -44,11 +44,14 @@ void check_mesh_values(const Mesh& mesh, size_t first_vertex) {
                        (finite(p) ? " lies beyond the supported coordinate magnitude 1e15" : " is not finite"));
     }
   }
-  for (const glm::dvec3& normal : mesh.normals) {
-    if (!finite(normal)) throw InputError(mesh.source + ": a vertex normal is not finite");
+  for (size_t i = 0; i < mesh.normals.size(); ++i) {
+    if (!finite(mesh.normals[i])) throw InputError(mesh.source + ": vertex normal " + std::to_string(i + first_vertex) + " is not finite");
   }
-  for (const glm::dvec2& uv : mesh.texcoords) {
-    if (!std::isfinite(uv.x) || !std::isfinite(uv.y)) throw InputError(mesh.source + ": a texture coordinate is not finite");
+  for (size_t i = 0; i < mesh.texcoords.size(); ++i) {
+    const glm::dvec2& uv = mesh.texcoords[i];
+    if (!std::isfinite(uv.x) || !std::isfinite(uv.y)) {
+      throw InputError(mesh.source + ": texture coordinate " + std::to_string(i + first_vertex) + " is not finite");
+    }
   }
 }
 

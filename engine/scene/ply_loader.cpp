@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <initializer_list>
 #include <optional>
 #include <vector>
 
@@ -38,6 +39,20 @@ size_t byte_size(Scalar scalar) {
     case Scalar::float64: return 8;
   }
   return 0;
+}
+
+// The values an integer type holds; {0, 0} for the floating types.
+std::pair<double, double> integer_range(Scalar scalar) {
+  switch (scalar) {
+    case Scalar::int8: return {INT8_MIN, INT8_MAX};
+    case Scalar::uint8: return {0, UINT8_MAX};
+    case Scalar::int16: return {INT16_MIN, INT16_MAX};
+    case Scalar::uint16: return {0, UINT16_MAX};
+    case Scalar::int32: return {INT32_MIN, INT32_MAX};
+    case Scalar::uint32: return {0, UINT32_MAX};
+    case Scalar::float32: case Scalar::float64: return {0, 0};
+  }
+  return {0, 0};
 }
 
 struct Property {
@@ -97,6 +112,7 @@ Header read_header(std::string_view bytes, const std::string& name) {
       return header;
     }
     if (keyword == "format") {
+      if (format_seen) throw InputError(where + "a second 'format' line (a header has one)");
       if (tokens.size() != 3 || tokens[2] != "1.0") throw InputError(where + "expected 'format ascii|binary_little_endian|binary_big_endian 1.0'");
       if (tokens[1] == "ascii") header.format = Format::ascii;
       else if (tokens[1] == "binary_little_endian") header.format = Format::little_endian;
@@ -108,6 +124,12 @@ Header read_header(std::string_view bytes, const std::string& name) {
       if (tokens.size() != 3 || std::from_chars(tokens[2].data(), tokens[2].data() + tokens[2].size(), count).ec != std::errc{} ||
           std::to_string(count) != tokens[2]) {
         throw InputError(where + "expected 'element NAME COUNT'");
+      }
+      // One vertex and one face element: a face's indices and the vertices' attributes are read as
+      // one list each (a second vertex element without normals left its vertices without any).
+      const bool unique = tokens[1] == "vertex" || tokens[1] == "face";
+      if (unique && std::any_of(header.elements.begin(), header.elements.end(), [&](const Element& e) { return e.name == tokens[1]; })) {
+        throw InputError(where + "a second '" + std::string(tokens[1]) + "' element (vkray reads one)");
       }
       header.elements.push_back({std::string(tokens[1]), count, {}});
     } else if (keyword == "property") {
@@ -154,9 +176,13 @@ class AsciiBody {
       value = static_cast<double>(integer);
     }
     const char* end = std::find_if(first, last, [](char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\n'; });
+    const std::string text(first, std::min<size_t>(static_cast<size_t>(end - first), 40));
     if (result.ec != std::errc{} || result.ptr != end) {
-      fail("'" + std::string(first, std::min<size_t>(static_cast<size_t>(end - first), 40)) + "' is not " +
-           (type == Scalar::float32 || type == Scalar::float64 ? "a number" : "an integer"));
+      fail("'" + text + "' is not " + (type == Scalar::float32 || type == Scalar::float64 ? "a number" : "an integer"));
+    }
+    if (const auto [least, most] = integer_range(type); least < most && !(value >= least && value <= most)) {
+      fail("'" + text + "' is beyond its type's range (" + std::to_string(static_cast<int64_t>(least)) + " to " +
+           std::to_string(static_cast<int64_t>(most)) + ")");
     }
     at_ = static_cast<size_t>(end - bytes_.data());
     return value;
@@ -254,10 +280,11 @@ VertexLayout vertex_layout(const Element& vertex, const std::string& name) {
   return layout;
 }
 
-std::optional<size_t> face_list(const Element& face) {
+// The face's list property of one of `names`, by its number among the face's properties.
+std::optional<size_t> face_list(const Element& face, std::initializer_list<std::string_view> names) {
   for (size_t i = 0; i < face.properties.size(); ++i) {
     const Property& property = face.properties[i];
-    if (property.list_count && (property.name == "vertex_indices" || property.name == "vertex_index")) return i;
+    if (property.list_count && std::find(names.begin(), names.end(), property.name) != names.end()) return i;
   }
   return std::nullopt;
 }
@@ -279,7 +306,11 @@ Mesh read_body(const Header& header, Body& body, const std::string& name) {
   std::vector<double> values;  // one record's, its lists left out
   std::vector<glm::dvec3> polygon;
   std::vector<uint32_t> corners;
+  std::vector<double> corner_texcoords;  // a face's texcoord list: u, v a corner
   std::vector<std::array<uint32_t, 3>> triangles;
+  // Texture coordinates by face corner (MeshLab's face "texcoord" list), and each triangle's corners in them.
+  std::vector<glm::dvec2> wedge_texcoords;
+  std::vector<std::array<uint32_t, 3>> wedge_corners;
   bool vertices_read = false;
   for (const Element& element : header.elements) {
     if (element.count > body.room(least_record(element, binary))) {
@@ -293,14 +324,19 @@ Mesh read_body(const Header& header, Body& body, const std::string& name) {
       mesh.positions.reserve(element.count);
     }
     constexpr size_t none = ~size_t{0};
-    const size_t list = is_face ? face_list(element).value_or(none) : none;  // the face's corner list
+    const size_t list = is_face ? face_list(element, {"vertex_indices", "vertex_index"}).value_or(none) : none;  // the face's corner list
+    const size_t texcoord_list = is_face ? face_list(element, {"texcoord"}).value_or(none) : none;
     if (is_face && list == none) throw InputError(name + ": the face element has no vertex_indices list");
     if (is_face && (element.properties[list].type == Scalar::float32 || element.properties[list].type == Scalar::float64)) {
       throw InputError(name + ": the face element's vertex indices must have an integer type");
     }
     if (is_face && !vertices_read) throw InputError(name + ": the face element comes before the vertex element");
+    vertices_read = vertices_read || is_vertex;
+    // Records of no properties take no bytes: nothing to read, however many the header claims.
+    if (element.properties.empty()) continue;
     for (uint64_t record = 0; record < element.count; ++record) {
       values.clear();
+      corner_texcoords.clear();
       for (size_t p = 0; p < element.properties.size(); ++p) {
         const Property& property = element.properties[p];
         if (!property.list_count) {
@@ -313,15 +349,16 @@ Mesh read_body(const Header& header, Body& body, const std::string& name) {
                     " corners (a face has 3 to " + std::to_string(max_polygon_corners) + ")");
         }
         if (length < 0) body.fail("a list of negative length");
-        corners.clear();
+        if (p == list) corners.clear();
         for (double k = 0; k < length; ++k) {
-          const double index = body.next(property.type);
+          const double value = body.next(property.type);
+          if (p == texcoord_list) corner_texcoords.push_back(value);
           if (p != list) continue;
-          if (!(index >= 0 && index < static_cast<double>(mesh.positions.size()))) {
-            body.fail("face " + std::to_string(record) + " names vertex " + std::to_string(static_cast<int64_t>(index)) +
+          if (!(value >= 0 && value < static_cast<double>(mesh.positions.size()))) {
+            body.fail("face " + std::to_string(record) + " names vertex " + std::to_string(static_cast<int64_t>(value)) +
                       " of " + std::to_string(mesh.positions.size()));
           }
-          corners.push_back(static_cast<uint32_t>(index));
+          corners.push_back(static_cast<uint32_t>(value));
         }
       }
       if (is_vertex) {
@@ -342,16 +379,30 @@ Mesh read_body(const Header& header, Body& body, const std::string& name) {
           for (uint32_t corner : corners) polygon.push_back(mesh.positions[corner]);
           triangulate_polygon(polygon, triangles);
         }
-        for (const auto& t : triangles) mesh.triangles.push_back({corners[t[0]], corners[t[1]], corners[t[2]]});
+        // A texcoord list of u, v for each corner gives the face's own texture coordinates.
+        const bool wedges = corner_texcoords.size() == 2 * corners.size();
+        const auto first_wedge = static_cast<uint32_t>(wedge_texcoords.size());
+        for (size_t k = 0; wedges && k < corners.size(); ++k) wedge_texcoords.emplace_back(corner_texcoords[2 * k], corner_texcoords[2 * k + 1]);
+        for (const auto& t : triangles) {
+          mesh.triangles.push_back({corners[t[0]], corners[t[1]], corners[t[2]]});
+          if (texcoord_list == none) continue;
+          wedge_corners.push_back(wedges ? std::array{first_wedge + t[0], first_wedge + t[1], first_wedge + t[2]}
+                                         : std::array{no_attribute, no_attribute, no_attribute});
+        }
       }
     }
-    vertices_read = vertices_read || is_vertex;
   }
   if (!vertices_read) throw InputError(name + ": no vertex element");
   if (mesh.triangles.empty()) throw InputError(name + ": no faces to render (no face element, or an empty one)");
-  // Shading normals and texture coordinates belong to the vertices: each corner names its vertex's.
+  // Shading normals and texture coordinates belong to the vertices, each corner naming its vertex's;
+  // texture coordinates given by face corner take the place of the vertices'.
   if (!mesh.normals.empty()) mesh.normal_corners = mesh.triangles;
-  if (!mesh.texcoords.empty()) mesh.texcoord_corners = mesh.triangles;
+  if (!wedge_texcoords.empty()) {
+    mesh.texcoords = std::move(wedge_texcoords);
+    mesh.texcoord_corners = std::move(wedge_corners);
+  } else if (!mesh.texcoords.empty()) {
+    mesh.texcoord_corners = mesh.triangles;
+  }
   return mesh;
 }
 

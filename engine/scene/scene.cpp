@@ -14,19 +14,27 @@
 
 namespace vkray {
 
-std::string with_controls_escaped(const std::string& text) {
+std::string one_line_message(const std::string& text) {
   std::string escaped;
-  escaped.reserve(text.size());
+  escaped.reserve(std::min(text.size(), 4 * max_message_bytes));
   for (const char c : text) {
     const auto byte = static_cast<unsigned char>(c);
     if ((byte >= 0x20 && byte != 0x7f) || c == '\t') {
       escaped += c;
-      continue;
+    } else {
+      constexpr char hex[] = "0123456789abcdef";
+      escaped += {'\\', 'x', hex[byte >> 4], hex[byte & 15]};
     }
-    constexpr char hex[] = "0123456789abcdef";
-    escaped += {'\\', 'x', hex[byte >> 4], hex[byte & 15]};
   }
-  return escaped;
+  if (escaped.size() <= max_message_bytes) return escaped;
+  // The start names the file and the place, the end often the remedy: both kept, whole UTF-8
+  // characters on either side of the cut.
+  const auto character_start = [&](size_t at) {
+    while (at > 0 && (static_cast<unsigned char>(escaped[at]) & 0xc0) == 0x80) --at;
+    return at;
+  };
+  const size_t head = character_start(2 * max_message_bytes / 3), tail = character_start(escaped.size() - max_message_bytes / 4);
+  return escaped.substr(0, head) + " [... " + std::to_string(tail - head) + " bytes left out ...] " + escaped.substr(tail);
 }
 
 size_t Scene::triangle_count() const {
@@ -68,6 +76,21 @@ void check_coordinates(const glm::dvec3& p, const std::string& path) {
   }
 }
 
+void check_camera_reach(const Camera& camera, uint32_t width, uint32_t height, const std::string& what) {
+  if (camera.projection != Projection::orthographic) return;
+  // An orthographic ray starts at its pixel of the image plane (pixel_ray): the corners reach
+  // farthest, and vkray's coordinates end at max_coordinate.
+  const CameraBasis basis = make_camera_basis(camera, width, height);
+  for (const auto& [i, j] : {std::pair{0u, 0u}, {width - 1, 0u}, {0u, height - 1}, {width - 1, height - 1}}) {
+    const glm::dvec3 corner = pixel_ray(camera, basis, i, j, width, height).origin;
+    if (within_coordinate_bound(corner)) continue;
+    char text[200];
+    std::snprintf(text, sizeof text, ": an orthographic view_height of %g at %ux%u puts the image's corner at (%g, %g, %g), beyond "
+                  "vkray's coordinates (1e15 on each axis)", camera.view_height, width, height, corner.x, corner.y, corner.z);
+    throw InputError(what + text);
+  }
+}
+
 void check_scene(Scene& scene) {
   check_coordinates(scene.camera.from, "camera.from");
   check_coordinates(scene.camera.to, "camera.to");
@@ -79,6 +102,7 @@ void check_scene(Scene& scene) {
     throw InputError("camera.fovy: field of view must be in (0, 180) degrees, got " + std::to_string(scene.camera.fovy_degrees));
   }
   check_image_size(scene.width, scene.height);
+  check_camera_reach(scene.camera, scene.width, scene.height, "camera");
   for (size_t k = 0; k < scene.spheres.size(); ++k) {
     check_coordinates(scene.spheres[k].center, item("spheres", k) + ".center");
     const double radius = scene.spheres[k].radius;

@@ -18,16 +18,18 @@
 
 namespace vkray {
 
-// `text` with its control characters but tab as \xNN: a NUL from the input would end a printed
-// line there, a line break would make two of one message.
-std::string with_controls_escaped(const std::string& text);
+// `text` as one line a person can read: its control characters but tab as \xNN (a NUL from the input
+// would end a printed line there, a line break would make two of one message), and beyond
+// max_message_bytes its middle left out (a message quoting a whole data: uri ran to 4 MB).
+std::string one_line_message(const std::string& text);
+inline constexpr size_t max_message_bytes = 1000;
 
 // Bad input from the user (scene file, OBJ file, option value). The message names the file and the
 // place (a JSON path or a line number), on one line whatever bytes it quotes from the input. The CLI
 // maps it to exit code 2.
 class InputError : public std::runtime_error {
  public:
-  explicit InputError(const std::string& message) : std::runtime_error(with_controls_escaped(message)) {}
+  explicit InputError(const std::string& message) : std::runtime_error(one_line_message(message)) {}
 };
 
 struct Sphere {
@@ -140,6 +142,10 @@ inline bool within_coordinate_bound(const glm::dvec3& point) {
 // Throws InputError naming `path` unless every coordinate of `point` is finite and within
 // max_coordinate.
 void check_coordinates(const glm::dvec3& point, const std::string& path);
+
+// Throws InputError, its message after `what` (where the camera comes from), where `camera` cannot
+// render at width x height: an orthographic image plane reaching beyond max_coordinate.
+void check_camera_reach(const Camera& camera, uint32_t width, uint32_t height, const std::string& what);
 
 // Checks a scene built in memory (Python's vkray.Scene) as a scene file is checked, naming the item
 // by its path ("meshes[2].triangles[7]: ..."): every coordinate finite and within max_coordinate,

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 
 namespace vkray {
 
@@ -32,9 +33,15 @@ Scene load_scene_or_model(const std::filesystem::path& path, std::optional<uint3
   if (height) scene.height = *height;
   // A glTF camera's aspect ratio gives the side not given (the width of the default height).
   if (model.aspect_ratio && !(width && height)) {
-    const auto side = [](double pixels) { return static_cast<uint32_t>(std::clamp(std::lround(pixels), 1L, long{max_image_side})); };
-    if (width) scene.height = side(*width / *model.aspect_ratio);
-    else scene.width = side(scene.height * *model.aspect_ratio);
+    const double ratio = *model.aspect_ratio;
+    const double pixels = width ? *width / ratio : scene.height * ratio;
+    if (!(pixels >= 0.5 && pixels < max_image_side + 0.5)) {
+      char text[160];
+      std::snprintf(text, sizeof text, ": its camera's aspect ratio %.6g makes the image %.6g pixels %s, outside 1 to %u: give --width and --height",
+                    ratio, pixels, width ? "high" : "wide", max_image_side);
+      throw InputError(name + text);
+    }
+    (width ? scene.height : scene.width) = static_cast<uint32_t>(std::lround(pixels));
   }
   check_image_size(scene.width, scene.height);
   if (model.camera) {

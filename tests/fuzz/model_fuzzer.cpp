@@ -2,12 +2,11 @@
 // arbitrary bytes. The kind follows the bytes as a user's file's extension would: "ply" at the start
 // is a PLY, "glTF" a binary glTF, anything else a glTF's JSON. Bad input must end in InputError; any
 // other exception, a crash, a hang or a sanitizer report is a finding. An accepted model must keep
-// the loader's promises: finite positions within the coordinate bound, indices in range.
+// the loader's promises (mesh_promises.hpp).
 #include "engine/scene/model_loader.hpp"
+#include "tests/fuzz/mesh_promises.hpp"
 
-#include <cmath>
 #include <cstdint>
-#include <cstdlib>
 #include <string_view>
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
@@ -15,18 +14,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   const std::string_view extension = bytes.starts_with("ply") ? ".ply" : bytes.starts_with("glTF") ? ".glb" : ".gltf";
   try {
     const vkray::Model model = vkray::read_model_bytes(bytes, extension, "fuzz");
-    for (const vkray::Mesh& mesh : model.meshes) {
-      for (const auto& position : mesh.positions) {
-        for (int k = 0; k < 3; ++k) {
-          if (!(std::abs(position[k]) <= vkray::max_coordinate)) std::abort();
-        }
-      }
-      for (const auto& triangle : mesh.triangles) {
-        for (uint32_t index : triangle) {
-          if (index >= mesh.positions.size()) std::abort();
-        }
-      }
-    }
+    for (const vkray::Mesh& mesh : model.meshes) vkray::test::check_mesh_promises(mesh);
   } catch (const vkray::InputError&) {
   }
   return 0;
