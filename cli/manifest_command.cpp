@@ -33,12 +33,20 @@ Action add_manifest_command(CLI::App& app) {
     if (!merge->parsed()) {
       const auto files = export_manifest(*manifest, manifest_format_from_name(*format), *folder);
       std::filesystem::create_directories(*folder);
+      // All the files or none: each is checked before the first is written (a link at images.txt
+      // must not leave cameras.txt of this export beside an older images.txt).
+      for (const auto& file : files) check_output_path(std::filesystem::path(*folder) / file.first);
       for (const auto& [name, text] : files) write_text_file(std::filesystem::path(*folder) / name, text);
       std::printf("vkray: wrote %zu file%s into %s\n", files.size(), files.size() == 1 ? "" : "s", folder->c_str());
       return 0;
     }
     const std::vector<std::filesystem::path> paths(parts->begin(), parts->end());
     const std::string merged = merge_manifests(paths, *output);
+    // As render makes the folders it writes into.
+    if (const std::filesystem::path output_folder = std::filesystem::path(*output).parent_path(); !output_folder.empty()) {
+      std::filesystem::create_directories(output_folder);
+    }
+    check_output_path(*output);
     write_text_file(*output, merged);
     size_t views = 0;
     for (char c : merged) views += c == '\n';

@@ -111,6 +111,9 @@ OutputSettings output_settings(const RenderOptions& options, const AovSet& aovs)
   settings.compression = options.compression;
   settings.miss = miss_value(options.miss);
   settings.half = half_outputs(options.half, aovs);
+  if (settings.format == FileFormat::png16 && !settings.half.empty()) {
+    throw InputError("--half: --format png16 stores depths as 16-bit steps, not floats: leave out --half, or store them as exr or npy");
+  }
   return settings;
 }
 
@@ -120,7 +123,11 @@ OutputSettings output_settings(const RenderOptions& options, const AovSet& aovs)
 // every hit as a mismatch.
 void check_render_options(const RenderOptions& options, const AovSet& aovs) {
   if (lower_extension(options.output) != ".exr") {
-    throw InputError("-o/--output: '" + options.output + "' must end in .exr (OpenEXR)");
+    throw InputError("-o/--output: '" + options.output + "' must end in .exr: " +
+                     (options.format == "exr" ? std::string("the OpenEXR file")
+                                              : "with --format " + options.format + " it names the view, whose outputs go beside it as "
+                                                "NAME.OUTPUT." + (options.format == "npy" ? "npy" : "png") + " (view.exr: view.depth." +
+                                                (options.format == "npy" ? "npy" : "png") + ")"));
   }
   if (options.preview && lower_extension(*options.preview) != ".png") {
     throw InputError("--preview: '" + *options.preview + "' must end in .png (the preview is an 8-bit PNG)");
@@ -135,6 +142,14 @@ void check_render_options(const RenderOptions& options, const AovSet& aovs) {
   if (options.check && !aovs.needs_rays()) {
     throw InputError("--check compares depth and normal with the reference; add one of them to --aov");
   }
+}
+
+// png16 holds depths up to 65535 steps: say how many lay past (stored as 0, as misses are).
+void print_png16_note(size_t pixels, uint32_t views, double depth_step) {
+  std::printf("vkray: note: %zu depth sample%s%s lay past 65535 steps of --depth-step %g (depths beyond %g) and hold 0, as "
+              "misses do: a larger --depth-step holds them\n",
+              pixels, pixels == 1 ? "" : "s", views > 1 ? (" in " + std::to_string(views) + " views").c_str() : "", depth_step,
+              65535.0 * depth_step);
 }
 
 // One line of --timings; `depth` 1 is a part of the total, 2 a part of the part above it.
@@ -164,6 +179,9 @@ int run_render_views(const RenderOptions& options, const AovSet& aovs) {
   Scene scene = load_scene_argument(options.scene_path, options.width, options.height, options.view);
   if (options.camera) apply_camera_option(*options.camera, scene.camera);
   if (!options.views.views_file) batch.cameras = batch_cameras(options.views, scene.camera);
+  for (size_t k = 0; k < batch.cameras.size(); ++k) {
+    check_camera_reach(batch.cameras[k], scene.width, scene.height, "view " + std::to_string(k) + "'s camera");
+  }
   batch.width = scene.width;
   batch.height = scene.height;
   batch.scene = geometry_hash(scene);
@@ -192,6 +210,9 @@ int run_render_views(const RenderOptions& options, const AovSet& aovs) {
   std::printf("vkray: %u views written, %u complete already (shard %u of %u, %zu views in all), to %s on %s; manifest %s\n",
               summary.rendered, summary.skipped, batch.shard.index, batch.shard.count, batch.cameras.size(),
               batch.exr.text().c_str(), device->info().name.c_str(), batch.manifest.c_str());
+  if (summary.beyond_png16_samples > 0) {
+    print_png16_note(summary.beyond_png16_samples, summary.beyond_png16_views, batch.output_settings.depth_step);
+  }
   if (options.timings && summary.rendered > 0) {
     std::printf("timings: %.2f s for %u views, %.2f views/s (%.1f ms a view); the device %.2f s of it, waiting for the "
                 "writers %.2f s\n",
@@ -278,8 +299,14 @@ int run_render(const RenderOptions& options) {
   const std::filesystem::path preview =
       options.preview.value_or(std::filesystem::path(options.output).replace_extension(".png").string());
   // Before any work: a render must not take minutes only to find it cannot be saved.
-  check_output_path(options.output);
-  if (!options.no_preview) check_output_path(preview);
+  const OutputSettings settings = output_settings(options, aovs);
+  std::vector<NamedFile> files;
+  for (const OutputFile& file : output_files(options.output, aovs, settings.format)) {
+    files.push_back({file.path, settings.format == FileFormat::exr ? "the EXR" : "the " + std::string(output_info(file.aov).name) + " output"});
+  }
+  if (!options.no_preview) files.push_back({preview, "the preview"});
+  refuse_one_file_twice(files);
+  for (const NamedFile& file : files) check_output_path(file.path);
   // The device opens on a second thread while the scene loads: neither needs the other, and each
   // takes 50-250 ms (the first device open after boot is the slowest). A failure surfaces at get(),
   // after the scene's own errors.
@@ -297,6 +324,7 @@ int run_render(const RenderOptions& options) {
   }
   Scene scene = load_scene_argument(options.scene_path, options.width, options.height, options.view);
   if (options.camera) apply_camera_option(*options.camera, scene.camera);
+  check_scene_camera(scene, options.camera.has_value(), options.scene_path);
   const double load_ms = stopwatch.lap_ms();
 
   Frame frame;
@@ -362,8 +390,7 @@ int run_render(const RenderOptions& options) {
   }
   stopwatch.lap_ms();
 
-  const OutputSettings settings = output_settings(options, aovs);
-  write_outputs(options.output, options.no_preview ? nullptr : &preview, frame, settings);
+  const size_t beyond_png16 = write_outputs(options.output, options.no_preview ? nullptr : &preview, frame, settings);
   std::string written;
   for (const OutputFile& file : output_files(options.output, frame.aovs, settings.format)) {
     written += (written.empty() ? "" : ", ") + file.path.string();
@@ -379,6 +406,7 @@ int run_render(const RenderOptions& options) {
   }
   // A model is framed by vkray: say from where, ready to paste (to render it again, or a neighbour).
   if (is_model_extension(lower_extension(options.scene_path)) || options.view) std::printf("camera: %s\n", camera_option(scene.camera).c_str());
+  if (beyond_png16 > 0) print_png16_note(beyond_png16, 1, settings.depth_step);
   if (error) std::printf("error vs. double-precision reference: %s\n", error->summary().c_str());
   if (stored_error) std::printf("as stored, with --half %s: %s\n", options.half.c_str(), stored_error->summary().c_str());
   if (float32_ray_error) {

@@ -299,7 +299,7 @@ Action add_report_command(CLI::App& app) {
   command->add_option("--models", options->models, "Folder holding stanford-bunny.obj and stanford-dragon-100k.obj")
       ->capture_default_str();
   command->add_flag("--reduced", options->reduced,
-                    "Small sizes (320x180 and 640x360, 64k rays, 8 views): a few minutes on lavapipe, as CI runs it");
+                    "Small sizes (320x180, 640x360 and 1280x720, 64k rays, 8 views): a few minutes on lavapipe, as CI runs it");
   command->add_option("--minutes", options->minutes, "Time for the whole report (default 8, or 3 with --reduced)")
       ->check(CLI::Range(0.1, 1e4));
   command->add_option("--only", options->only, "Only these sections (and the device): checks, bench, rays, views, transfer")

@@ -176,6 +176,11 @@ void apply_camera_option(const std::string& text, Camera& camera) {
   camera = parse_camera_override(given.starts_with("{") ? given : camera_json(given), "--camera", camera);
 }
 
+void check_scene_camera(const Scene& scene, bool camera_option_given, const std::string& scene_path) {
+  const std::string source = camera_option_given ? "--camera" : scene_path.empty() ? "the built-in scene's camera" : scene_path + ": its camera";
+  check_camera_reach(scene.camera, scene.width, scene.height, source);
+}
+
 std::string camera_option(const Camera& camera) {
   auto number = [](double value) {
     char text[32];

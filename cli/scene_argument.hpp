@@ -29,6 +29,10 @@ std::pair<uint32_t, uint32_t> parse_size(const std::string& text);
 // that work when the text has none of them.
 void apply_camera_option(const std::string& text, Camera& camera);
 
+// Throws InputError, naming --camera or the scene file, where the scene's camera cannot render at
+// the scene's size (check_camera_reach).
+void check_scene_camera(const Scene& scene, bool camera_option_given, const std::string& scene_path);
+
 // The camera as a --camera option, "--camera 'from=X,Y,Z to=X,Y,Z up=X,Y,Z fovy=DEGREES'", each
 // number in the fewest digits that read back as the same double: pasted, it renders the same pixels.
 std::string camera_option(const Camera& camera);

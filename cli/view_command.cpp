@@ -43,6 +43,7 @@ int run_view(const ViewCommandOptions& options) {
   viewer.load_scene = [options, width, height] {
     Scene scene = load_scene_argument(options.scene_path, width, height, options.view);
     if (options.camera) apply_camera_option(*options.camera, scene.camera);
+    check_scene_camera(scene, options.camera.has_value(), options.scene_path);
     if (scene.camera.projection != Projection::perspective) {
       throw InputError(std::string("the viewer draws perspective cameras; `vkray render` writes ") +
                        projection_name(scene.camera.projection) + " ones");

@@ -1490,7 +1490,7 @@ TEST_F(CliTest, OutputsThatAreNotRegularFilesAreRefusedAndKept) {
   const auto target = write("target.exr", "older contents\n");
   fs::create_symlink(target, dir_ / "link.exr");
   ASSERT_EQ(::mkfifo((dir_ / "fifo.exr").c_str(), 0600), 0);
-  write("part.jsonl", "");
+  write("part.jsonl", "{\"index\": 0, \"views\": 1, \"exr\": \"v.exr\"}\n");
   for (const auto& [name, kind] : {std::pair{"link.exr", "a symbolic link"}, std::pair{"fifo.exr", "a FIFO"}}) {
     for (const std::vector<std::string>& arguments :
          {std::vector<std::string>{"render", "--width", "8", "--height", "8", "-o", name, "--no-preview"},
@@ -1506,13 +1506,13 @@ TEST_F(CliTest, OutputsThatAreNotRegularFilesAreRefusedAndKept) {
   EXPECT_EQ(read_text(target), "older contents\n");
 }
 
-// In a many-view run, a link at a later view's name is refused before the first view renders: no
-// view is written, and the link stays.
+// In a many-view run, a link at a later view's name is refused before the first view renders, as
+// bad input (exit 2): no view is written, and the link stays.
 TEST_F(CliTest, ALinkAmongLaterViewsIsRefusedBeforeAnyViewRenders) {
   fs::create_directory(path("out"));
   fs::create_symlink("/dev/null", dir_ / "out" / "v-2.exr");
   const RunResult run = vkray({"render", "--width", "8", "--height", "8", "--orbit", "4", "-o", "out/v-{index}.exr"});
-  EXPECT_EQ(run.exit_code, 1);
+  EXPECT_EQ(run.exit_code, 2);
   EXPECT_EQ(count_lines(run.err), 1u) << run.err;
   EXPECT_NE(run.err.find("v-2.exr: cannot write: it is a symbolic link"), std::string::npos) << run.err;
   EXPECT_FALSE(fs::exists(path("out/v-0.exr")));

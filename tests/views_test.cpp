@@ -134,6 +134,7 @@ class ManifestTest : public test::TempDirTest {};
 ViewRecord record(uint32_t index, const std::filesystem::path& folder) {
   ViewRecord view;
   view.index = index;
+  view.views = 3;
   view.exr = folder / ("v" + std::to_string(index) + ".exr");
   view.camera.from = {0, 0, 5.0 + index};
   view.width = 8;

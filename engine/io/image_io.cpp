@@ -3,6 +3,7 @@
 #include "engine/io/array_files.hpp"
 #include "engine/io/preview.hpp"
 #include "engine/scene/camera_description.hpp"
+#include "engine/scene/scene.hpp"
 
 #include <Imath/half.h>
 #include <png.h>
@@ -202,7 +203,7 @@ void write_png(const std::filesystem::path& path, size_t width, size_t height, c
 void write_exr_to(const PartialFile& file, const std::filesystem::path& target, const Frame& frame,
                   const OutputSettings& settings);
 void write_preview_png_to(const PartialFile& file, const std::filesystem::path& target, const Frame& frame);
-void write_output_file_to(const PartialFile& partial, const OutputFile& file, const Frame& frame, const OutputSettings& settings);
+size_t write_output_file_to(const PartialFile& partial, const OutputFile& file, const Frame& frame, const OutputSettings& settings);
 
 }  // namespace
 
@@ -240,6 +241,19 @@ void check_output_path(const std::filesystem::path& path) {
   const PartialFile probe(path);
   if (probe.creation_errno() != 0) {
     throw std::runtime_error(path.string() + ": cannot write in folder '" + folder.string() + "': " + std::strerror(probe.creation_errno()));
+  }
+}
+
+void refuse_one_file_twice(const std::vector<NamedFile>& files) {
+  const std::filesystem::path working = std::filesystem::current_path();
+  std::vector<std::filesystem::path> normal;
+  for (const NamedFile& file : files) {
+    normal.push_back((working / file.path).lexically_normal());
+    for (size_t other = 0; other + 1 < normal.size(); ++other) {
+      if (normal[other] != normal.back()) continue;
+      throw InputError(file.path.string() + ": " + files[other].role + " and " + file.role +
+                       " would write this one file: give them names of their own (-o, --preview, --manifest)");
+    }
   }
 }
 
@@ -356,15 +370,19 @@ void write_exr_to(const PartialFile& file, const std::filesystem::path& path, co
   }
 }
 
-// One of output_files' files: the EXR, or one output's .npy or 16-bit PNG.
-void write_output_file_to(const PartialFile& partial, const OutputFile& file, const Frame& frame, const OutputSettings& settings) {
-  if (settings.format == FileFormat::exr) return write_exr_to(partial, file.path, frame, settings);
+// One of output_files' files: the EXR, or one output's .npy or 16-bit PNG. Returns the depths a
+// 16-bit PNG could not hold (past 65535 steps).
+size_t write_output_file_to(const PartialFile& partial, const OutputFile& file, const Frame& frame, const OutputSettings& settings) {
+  if (settings.format == FileFormat::exr) {
+    write_exr_to(partial, file.path, frame, settings);
+    return 0;
+  }
   if (settings.format == FileFormat::npy) {
     const std::string bytes = npy_file(frame, file.aov, settings.miss, settings.half.has(file.aov));
     std::ofstream stream(partial.path(), std::ios::binary);
     stream.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
     if (!stream.flush()) throw std::runtime_error(file.path.string() + ": cannot write: " + std::strerror(errno));
-    return;
+    return 0;
   }
   size_t beyond = 0;
   const std::vector<uint8_t> samples = png16_samples(frame, file.aov, settings.depth_step, beyond);
@@ -373,6 +391,7 @@ void write_output_file_to(const PartialFile& partial, const OutputFile& file, co
   write_png(partial.path(), frame.width, frame.height, samples.data(), PngPixels::gray16, file.path,
             {{"Comment", "depth = value x " + step.str() + "; 0 where there is none (a miss, or past 65535 steps)"},
              {"vkray:depth_step", step.str()}});
+  return beyond;
 }
 
 void write_preview_png_to(const PartialFile& file, const std::filesystem::path& path, const Frame& frame) {
@@ -444,8 +463,8 @@ void remove_stale_partial_files(const std::vector<std::filesystem::path>& target
   }
 }
 
-void write_outputs(const std::filesystem::path& target, const std::filesystem::path* preview, const Frame& frame,
-                   const OutputSettings& settings) {
+size_t write_outputs(const std::filesystem::path& target, const std::filesystem::path* preview, const Frame& frame,
+                     const OutputSettings& settings) {
   const std::vector<OutputFile> files = output_files(target, frame.aovs, settings.format);
   std::list<PartialFile> partials;  // each stays where it is: its slot names it to the signal handler
   for (const OutputFile& file : files) partials.emplace_back(file.path);
@@ -454,9 +473,10 @@ void write_outputs(const std::filesystem::path& target, const std::filesystem::p
   std::future<void> png;
   if (preview) png = std::async(std::launch::async, [&] { write_preview_png_to(*png_file, *preview, frame); });
   std::exception_ptr output_failure;
+  size_t beyond_png16 = 0;
   try {
     auto partial = partials.begin();
-    for (const OutputFile& file : files) write_output_file_to(*partial++, file, frame, settings);
+    for (const OutputFile& file : files) beyond_png16 += write_output_file_to(*partial++, file, frame, settings);
   } catch (...) {
     output_failure = std::current_exception();
   }
@@ -475,6 +495,7 @@ void write_outputs(const std::filesystem::path& target, const std::filesystem::p
   if (preview) refuse_to_replace(*preview);
   for (PartialFile& partial : partials) partial.commit();
   if (png_file) png_file->commit();
+  return beyond_png16;
 }
 
 }  // namespace vkray

@@ -47,6 +47,16 @@ void check_output_path(const std::filesystem::path& path);
 // folder: throws when `path` is a link, a device, a FIFO, a socket or a read-only file.
 void refuse_to_replace(const std::filesystem::path& path);
 
+// A file a render writes, with what it holds as messages name it ("the preview", "view 3's depth").
+struct NamedFile {
+  std::filesystem::path path;
+  std::string role;
+};
+
+// Throws InputError where two of `files` are one file (compared as absolute, normal paths): one
+// would replace the other (a png16 depth and a preview both named r.depth.png).
+void refuse_one_file_twice(const std::vector<NamedFile>& files);
+
 // A text file (the bench's JSON and CSV), written the same way. Throws std::runtime_error.
 void write_text_file(const std::filesystem::path& path, std::string_view text);
 
@@ -83,8 +93,9 @@ void write_rgb_png(const std::filesystem::path& path, uint32_t width, uint32_t h
 // The preview is 8-bit RGB, one panel per output side by side in the order depth, normal, uv:
 // depth as grey (near bright, far dark, misses black), normals as (N+1)/2, uv as (u+1)/2, (v+1)/2
 // with the unit disk drawn brighter (it must touch the shorter borders).
-// Throws the outputs' failure, else the preview's.
-void write_outputs(const std::filesystem::path& target, const std::filesystem::path* preview, const Frame& frame,
-                   const OutputSettings& settings = {});
+// Throws the outputs' failure, else the preview's. Returns the depth samples of 16-bit PNGs that lie
+// past 65535 steps (stored as 0, as a miss): 0 for the other formats.
+size_t write_outputs(const std::filesystem::path& target, const std::filesystem::path* preview, const Frame& frame,
+                     const OutputSettings& settings = {});
 
 }  // namespace vkray

@@ -12,6 +12,8 @@
 #include <nlohmann/json.hpp>
 
 #include <cerrno>
+#include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <fstream>
 #include <map>
@@ -29,6 +31,15 @@ std::string relative_name(const std::filesystem::path& file, const std::filesyst
   return relative.empty() ? file.string() : relative.string();
 }
 
+// A miss value as --miss takes it: "nan", "-inf", or the number.
+std::string miss_text(float miss) {
+  if (std::isnan(miss)) return "nan";
+  if (std::isinf(miss)) return miss > 0 ? "inf" : "-inf";
+  char text[32];
+  std::snprintf(text, sizeof text, "%.9g", miss);
+  return text;
+}
+
 std::string read_file(const std::filesystem::path& path) {
   std::ifstream file(path, std::ios::binary);
   std::ostringstream contents;
@@ -36,7 +47,40 @@ std::string read_file(const std::filesystem::path& path) {
   return contents.str();
 }
 
+// The records of a manifest's text, and whether anything else was there (a line cut off, or one
+// that is no record).
+struct ManifestText {
+  std::map<uint32_t, std::string> records;
+  bool dropped = false;
+};
+
+ManifestText read_manifest_text(const std::string& text) {
+  ManifestText read;
+  for (size_t start = 0; start < text.size();) {
+    const size_t end = text.find('\n', start);
+    if (end == std::string::npos) {
+      read.dropped = true;
+      break;
+    }
+    const std::string line = text.substr(start, end - start);
+    start = end + 1;
+    if (const auto index = manifest_line_index(line)) {
+      read.records[*index] = line;
+    } else {
+      read.dropped = read.dropped || !line.empty();
+    }
+  }
+  return read;
+}
+
 }  // namespace
+
+std::map<uint32_t, std::string> read_manifest_records(const std::filesystem::path& path) {
+  check_is_a_manifest(path);
+  std::error_code error;
+  if (!std::filesystem::exists(path, error)) return {};
+  return read_manifest_text(read_file(path)).records;
+}
 
 std::string manifest_line(const ViewRecord& record, const std::filesystem::path& folder) {
   nlohmann::ordered_json line;  // keys in this order, the index first
@@ -54,6 +98,9 @@ std::string manifest_line(const ViewRecord& record, const std::filesystem::path&
   line["outputs"] = record.outputs;
   line["scene"] = record.scene;
   if (!record.objects.empty()) line["objects"] = record.objects;
+  if (!record.half.empty()) line["half"] = record.half;
+  if (record.miss) line["miss"] = miss_text(*record.miss);
+  if (record.depth_step) line["depth_step"] = *record.depth_step;
   const nlohmann::ordered_json camera = camera_description(record.camera, record.width, record.height);
   for (auto key = camera.begin(); key != camera.end(); ++key) line[key.key()] = key.value();
   return line.dump();
@@ -97,26 +144,14 @@ ManifestWriter::ManifestWriter(const std::filesystem::path& path, bool fresh) : 
     rewrite("");
   } else {
     // Keep the whole records; a line an interruption cut off (no newline, or no record) goes. A
-    // crash while rewriting loses records, not views: their files are found and recorded again.
-    const std::string text = read_file(path);
-    std::string kept;
-    bool dropped = false;
-    for (size_t start = 0; start < text.size();) {
-      const size_t end = text.find('\n', start);
-      if (end == std::string::npos) {
-        dropped = true;
-        break;
-      }
-      const std::string line = text.substr(start, end - start);
-      start = end + 1;
-      if (const auto index = manifest_line_index(line)) {
-        recorded_[*index] = line;
-        kept += line + '\n';
-      } else {
-        dropped = dropped || !line.empty();
-      }
+    // crash while rewriting loses records, not views: they are rendered and recorded again.
+    const ManifestText text = read_manifest_text(read_file(path));
+    recorded_ = text.records;
+    if (text.dropped) {
+      std::string kept;
+      for (const auto& [index, line] : recorded_) kept += line + '\n';
+      rewrite(kept);
     }
-    if (dropped) rewrite(kept);
   }
 }
 
@@ -167,6 +202,13 @@ std::string record_changes(const std::string& recorded, const std::string& now) 
     changes += (changes.empty() ? "" : "; ") + std::string(what);
     if (std::string(what) != "the camera") changes += ": " + shown(before, keys) + " then, " + shown(after, keys) + " now";
   }
+  // How values are stored: a key left out holds its default.
+  const std::pair<const char*, const char*> storage[] = {{"half", "none"}, {"miss", "inf"}, {"depth_step", "none"}};
+  for (const auto& [key, default_value] : storage) {
+    const std::string then = before.contains(key) ? shown(before, {key}) : default_value;
+    const std::string now_value = after.contains(key) ? shown(after, {key}) : default_value;
+    if (then != now_value) changes += (changes.empty() ? "" : "; ") + std::string(key) + ": " + then + " then, " + now_value + " now";
+  }
   // The kind of files: one EXR, or one file an output (--format), by the extension of the first.
   const auto format = [](const nlohmann::json& record) {
     const bool files = record.contains("files") && record["files"].is_object() && !record["files"].empty() &&
@@ -211,6 +253,11 @@ void refuse_a_short_set(const std::map<uint32_t, std::pair<std::string, std::str
     const nlohmann::json parsed = nlohmann::json::parse(record.first);
     if (!parsed.contains("views") || !parsed["views"].is_number_unsigned()) continue;
     const uint64_t count = parsed["views"].get<uint64_t>();
+    // Indices are 32-bit: a run has at most 2^32 views, and each record's index lies within its run.
+    if (count <= index || count > uint64_t{UINT32_MAX} + 1) {
+      throw InputError(record.second + ": view " + std::to_string(index) + " of a run of " + std::to_string(count) +
+                       " views: no run of vkray has such a view (the record was changed?)");
+    }
     if (!views) views.emplace(count, record.second);
     if (count != views->first) {
       throw InputError(record.second + ": a record of a run of " + std::to_string(count) + " views, where " + views->second +
@@ -218,17 +265,21 @@ void refuse_a_short_set(const std::map<uint32_t, std::pair<std::string, std::str
     }
   }
   if (!views) return;
+  // The gaps between the records' indices, in order: as many steps as records, however large the run.
+  const uint64_t missing_count = views->first - records.size();
+  if (missing_count == 0) return;
   std::string missing;
-  uint64_t missing_count = 0;
-  for (uint64_t index = 0; index < views->first; ++index) {
-    if (records.contains(static_cast<uint32_t>(index))) continue;
-    if (++missing_count <= 10) missing += (missing.empty() ? "" : ", ") + std::to_string(index);
-  }
+  size_t listed = 0;
+  uint64_t next = 0;
+  const auto list_up_to = [&](uint64_t end) {
+    for (; next < end && listed < 10; ++next, ++listed) missing += (missing.empty() ? "" : ", ") + std::to_string(next);
+    next = end + 1;
+  };
+  for (const auto& [index, record] : records) list_up_to(index);
+  list_up_to(views->first);
   if (missing_count > 10) missing += ", ...";
-  if (missing_count > 0) {
-    throw InputError("the parts hold " + std::to_string(views->first - missing_count) + " of the run's " + std::to_string(views->first) +
-                     " views; missing: " + missing + " (a shard that failed or was not given: render it, then merge again)");
-  }
+  throw InputError("the parts hold " + std::to_string(records.size()) + " of the run's " + std::to_string(views->first) +
+                   " views; missing: " + missing + " (a shard that failed or was not given: render it, then merge again)");
 }
 
 }  // namespace
@@ -237,8 +288,10 @@ std::string merge_manifests(const std::vector<std::filesystem::path>& parts, con
   std::map<uint32_t, std::pair<std::string, std::string>> records;  // index -> line, where it came from
   for (const auto& part : parts) {
     std::error_code error;
-    if (std::filesystem::is_directory(part, error)) throw InputError(part.string() + ": is a folder, not a manifest");
-    if (!std::filesystem::is_regular_file(part, error)) throw InputError(part.string() + ": no such manifest");
+    const std::filesystem::file_status status = std::filesystem::status(part, error);
+    if (std::filesystem::is_directory(status)) throw InputError(part.string() + ": is a folder, not a manifest");
+    if (!std::filesystem::exists(status)) throw InputError(part.string() + ": no such manifest");
+    if (!std::filesystem::is_regular_file(status)) throw InputError(part.string() + ": is not a regular file, so no manifest");
     const std::string text = read_file(part);
     size_t line_number = 0;
     for (size_t start = 0; start < text.size();) {
@@ -259,6 +312,12 @@ std::string merge_manifests(const std::vector<std::filesystem::path>& parts, con
         throw InputError(where + ": view " + std::to_string(*index) + " differs from its record at " + found->second.second);
       }
     }
+  }
+  // Parts without a record (a shard that wrote nothing yet) are fine beside others, whose run's view
+  // count names every view missing; alone they would merge into an empty manifest.
+  if (records.empty()) {
+    throw InputError(parts.front().string() + (parts.size() > 1 ? " and the other parts hold" : " holds") +
+                     " no view record (empty, or the only line cut off): no view to merge");
   }
   refuse_a_short_set(records);
   std::string merged;

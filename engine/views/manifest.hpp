@@ -37,6 +37,11 @@ struct ViewRecord {
   std::string outputs;  // AovSet::names(): "depth,normal"
   std::string scene;    // geometry_hash of the scene: a resumed run on another scene is refused
   std::vector<std::string> objects;  // what each mesh_id stands for (object_names), with that output
+  // How the values are stored, each only where it is not the default: a resumed run that stored
+  // them otherwise would mix two encodings in one dataset.
+  std::string half;                  // AovSet::names() of --half
+  std::optional<float> miss;         // --miss, where not +inf
+  std::optional<double> depth_step;  // --depth-step, with png16 files
 };
 
 // One line, without its newline; file names relative to `folder`.
@@ -47,6 +52,10 @@ std::string manifest_line(const ViewRecord& record, const std::filesystem::path&
 // named by mistake (the views file, a model, a device node, a FIFO) is refused before a byte of it
 // is read past its first line or written.
 void check_is_a_manifest(const std::filesystem::path& path);
+
+// The whole records of the manifest at `path`, by index (none where there is no file yet); a line cut
+// off by an interruption is left out. Throws InputError as check_is_a_manifest does.
+std::map<uint32_t, std::string> read_manifest_records(const std::filesystem::path& path);
 
 // A manifest being written: opened, it keeps the complete records already there (a line cut off by
 // an interruption is dropped) unless `fresh`, which starts it empty. It is held under an exclusive
@@ -66,6 +75,7 @@ class ManifestWriter {
     const auto found = recorded_.find(index);
     return found == recorded_.end() ? nullptr : &found->second;
   }
+  const std::map<uint32_t, std::string>& records() const { return recorded_; }
   void append(const ViewRecord& record);
   const std::filesystem::path& path() const { return path_; }
 
@@ -79,8 +89,9 @@ class ManifestWriter {
 
 // What differs between a view's record from an earlier run and the record this run would write:
 // "" where they agree, else each change ("the size: 64x48 then, 128x96 now"). The size, the outputs,
-// the scene and the camera count; the file names do not (the same pattern gives the same ones). A key
-// an older vkray did not write is not compared.
+// the scene, the camera and how values are stored (half, miss, depth_step) count; the file names do
+// not (the same pattern gives the same ones). A size, outputs, scene or camera key an older vkray did
+// not write is not compared.
 std::string record_changes(const std::string& recorded, const std::string& now);
 
 // The parts' records in index order, each index once (identical copies of a record merge; two

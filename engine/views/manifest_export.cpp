@@ -36,15 +36,38 @@ void read_pinhole(const Json& record, const std::filesystem::path& manifest, Pin
   }
   // The view's image: its EXR, or its first file of one output (--format npy, png16).
   view.image = record.contains("exr") ? record.at("exr").get<std::string>() : record.at("files").begin()->get<std::string>();
+  const std::string where = manifest.string() + ": view " + std::to_string(view.index) + ": ";
+  for (const char* side : {"width", "height"}) {
+    const Json& pixels = record.at(side);
+    if (!pixels.is_number_unsigned() || pixels.get<uint64_t>() == 0 || pixels.get<uint64_t>() > max_image_side) {
+      throw InputError(where + side + " is " + pixels.dump() + ", not a side of 1 to " + std::to_string(max_image_side) + " pixels");
+    }
+  }
   view.width = record.at("width").get<uint32_t>();
   view.height = record.at("height").get<uint32_t>();
   const Json& intrinsics = record.at("intrinsics");
   view.fx = intrinsics.at("fx").get<double>(), view.fy = intrinsics.at("fy").get<double>();
   view.cx = intrinsics.at("cx").get<double>(), view.cy = intrinsics.at("cy").get<double>();
+  if (!(view.fx > 0.0 && view.fy > 0.0 && std::isfinite(view.fx) && std::isfinite(view.fy) && std::isfinite(view.cx) &&
+        std::isfinite(view.cy))) {
+    throw InputError(where + "intrinsics " + intrinsics.dump() + " are not a pinhole's (fx and fy positive, all finite)");
+  }
   const Json& rows = record.at("world_to_camera");
   for (int row = 0; row < 4; ++row) {
     for (int column = 0; column < 4; ++column) view.world_to_camera[column][row] = rows.at(row).at(column).get<double>();
   }
+  // A camera's pose: a rotation and a translation, which is what NeRF's and COLMAP's readers take
+  // (a singular matrix would be written as null and nan). vkray writes rotations orthonormal to
+  // double's rounding; 1e-6 still takes a record rounded to 7 digits by another program.
+  const glm::dmat3 rotation(view.world_to_camera);
+  const glm::dmat3 drift = glm::transpose(rotation) * rotation - glm::dmat3(1.0);
+  bool pose = glm::determinant(rotation) > 0.0 && view.world_to_camera[0][3] == 0.0 && view.world_to_camera[1][3] == 0.0 &&
+              view.world_to_camera[2][3] == 0.0 && view.world_to_camera[3][3] == 1.0 &&
+              std::isfinite(view.world_to_camera[3].x) && std::isfinite(view.world_to_camera[3].y) && std::isfinite(view.world_to_camera[3].z);
+  for (int c = 0; c < 3; ++c) {
+    for (int r = 0; r < 3; ++r) pose = pose && std::abs(drift[c][r]) <= 1e-6;
+  }
+  if (!pose) throw InputError(where + "world_to_camera is no camera pose (a rotation and a translation, last row 0 0 0 1)");
 }
 
 std::vector<PinholeView> pinhole_views(const std::filesystem::path& manifest, const std::filesystem::path& folder) {

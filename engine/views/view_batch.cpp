@@ -5,11 +5,13 @@
 #include "engine/views/manifest.hpp"
 
 #include <chrono>
+#include <cmath>
 #include <condition_variable>
 #include <deque>
 #include <exception>
 #include <mutex>
 #include <algorithm>
+#include <map>
 #include <set>
 #include <thread>
 
@@ -80,22 +82,36 @@ class WriteQueue {
   std::exception_ptr failure_;
 };
 
-// The files of view `index`: its outputs' (one EXR, or one an output) and its preview.
-std::vector<std::filesystem::path> view_files(const ViewBatch& batch, uint32_t index) {
-  std::vector<std::filesystem::path> files;
-  for (const OutputFile& file : output_files(batch.exr.path(index), batch.aovs, batch.output_settings.format)) files.push_back(file.path);
-  if (batch.png) files.push_back(batch.png->path(index));
+// The files of view `index`, each named for messages: its outputs' (one EXR, or one an output) and
+// its preview.
+std::vector<NamedFile> view_outputs(const ViewBatch& batch, uint32_t index) {
+  std::vector<NamedFile> files;
+  const std::string view = "view " + std::to_string(index) + "'s ";
+  for (const OutputFile& file : output_files(batch.exr.path(index), batch.aovs, batch.output_settings.format)) {
+    files.push_back({file.path, view + (batch.output_settings.format == FileFormat::exr ? "EXR" : output_info(file.aov).name)});
+  }
+  if (batch.png) files.push_back({batch.png->path(index), view + "preview"});
   return files;
 }
 
-bool complete(const ViewBatch& batch, uint32_t index) {
+std::vector<std::filesystem::path> view_files(const ViewBatch& batch, uint32_t index) {
+  std::vector<std::filesystem::path> files;
+  for (NamedFile& file : view_outputs(batch, index)) files.push_back(std::move(file.path));
+  return files;
+}
+
+// A view is complete once the manifest records it and its files are in place. Files alone are not
+// enough: a stray file at a view's name, or one whose record a kill kept from being written, would
+// stand for a view this run never wrote.
+bool complete(const ViewBatch& batch, uint32_t index, const std::map<uint32_t, std::string>& records) {
   std::error_code error;
-  return std::ranges::all_of(view_files(batch, index), [&](const auto& file) { return std::filesystem::is_regular_file(file, error); });
+  return records.contains(index) &&
+         std::ranges::all_of(view_files(batch, index), [&](const auto& file) { return std::filesystem::is_regular_file(file, error); });
 }
 
 // The views this run renders: its shard's, less those complete unless it overwrites.
-bool to_be_rendered(const ViewBatch& batch, uint32_t index) {
-  return batch.shard.holds(index) && (batch.overwrite || !complete(batch, index));
+bool to_be_rendered(const ViewBatch& batch, uint32_t index, const std::map<uint32_t, std::string>& records) {
+  return batch.shard.holds(index) && (batch.overwrite || !complete(batch, index, records));
 }
 
 ViewRecord record_of(const ViewBatch& batch, uint32_t index) {
@@ -111,6 +127,10 @@ ViewRecord record_of(const ViewBatch& batch, uint32_t index) {
   record.outputs = batch.aovs.names();
   record.scene = batch.scene;
   record.objects = batch.objects;
+  const OutputSettings& stored = batch.output_settings;
+  record.half = stored.half.names();
+  if (!(std::isinf(stored.miss) && stored.miss > 0)) record.miss = stored.miss;
+  if (stored.format == FileFormat::png16) record.depth_step = stored.depth_step;
   return record;
 }
 
@@ -134,7 +154,7 @@ void prepare_folders(const ViewBatch& batch, const std::vector<uint32_t>& views)
 }  // namespace
 
 void check_view_names(const ViewBatch& batch) {
-  check_is_a_manifest(batch.manifest);
+  const std::map<uint32_t, std::string> records = read_manifest_records(batch.manifest);
   // Checked without a list of every name (a run may have millions): from the patterns' structure.
   const std::filesystem::path working = std::filesystem::current_path();
   auto normal = [&](const std::filesystem::path& file) { return (working / file).lexically_normal(); };
@@ -160,20 +180,21 @@ void check_view_names(const ViewBatch& batch) {
       refuse(pattern->path(1), "view 0's " + kind, "view 1's " + kind);
     }
   }
-  // A manifest named as a view's file would count that view complete before it rendered. (An EXR
-  // and a preview never meet: the front end gives them the extensions .exr and .png.)
-  // A link, a device or a read-only file at a view's name is refused now, not when that view comes
-  // to be written after the ones before it.
-  const std::string manifest_name = batch.manifest.filename().string();
-  const std::filesystem::path manifest = normal(batch.manifest);
+  // Within each view, its files and the manifest must be apart: a manifest named as a view's file
+  // would count that view complete before it rendered; a png16 depth and a preview of one name
+  // would replace each other. A link, a device or a read-only file at a view's name is refused now,
+  // not when that view comes to be written after the ones before it.
   for (uint32_t index = 0; index < views; ++index) {
-    const bool rendered = to_be_rendered(batch, index);
-    for (const auto& [pattern, kind] : patterns) {
-      const std::filesystem::path file = pattern->path(index);
-      if (file.filename() == manifest_name && normal(file) == manifest) {
-        refuse(file, "the manifest", "view " + std::to_string(index) + "'s " + kind);
+    std::vector<NamedFile> files = view_outputs(batch, index);
+    files.push_back({batch.manifest, "the manifest"});
+    refuse_one_file_twice(files);
+    if (!to_be_rendered(batch, index, records)) continue;
+    for (size_t k = 0; k + 1 < files.size(); ++k) {
+      try {
+        refuse_to_replace(files[k].path);
+      } catch (const std::runtime_error& error) {
+        throw InputError(error.what());
       }
-      if (rendered) refuse_to_replace(file);
     }
   }
 }
@@ -205,9 +226,8 @@ ViewBatchSummary render_views(Renderer& renderer, const ViewBatch& batch,
                          changes + "): --overwrite renders every view again, or write to another folder");
       }
     }
-    if (!to_be_rendered(batch, index)) {
+    if (!to_be_rendered(batch, index, manifest.records())) {
       ++summary.skipped;
-      if (!recorded) manifest.append(record_of(batch, index));  // its files were in place before an interruption could record them
       continue;
     }
     for (std::filesystem::path& file : view_files(batch, index)) to_write.push_back(std::move(file));
@@ -231,8 +251,10 @@ ViewBatchSummary render_views(Renderer& renderer, const ViewBatch& batch,
           const std::filesystem::path exr = batch.exr.path(job->index);
           const std::optional<std::filesystem::path> png =
               batch.png ? std::optional(batch.png->path(job->index)) : std::nullopt;
-          write_outputs(exr, png ? &*png : nullptr, job->frame, batch.output_settings);
+          const size_t beyond_png16 = write_outputs(exr, png ? &*png : nullptr, job->frame, batch.output_settings);
           const std::lock_guard lock(progress_mutex);
+          summary.beyond_png16_samples += beyond_png16;
+          summary.beyond_png16_views += beyond_png16 > 0;
           manifest.append(record_of(batch, job->index));
           ++done.done;
           done.seconds = seconds_since(start);

@@ -52,19 +52,21 @@ struct ViewBatchProgress {
 
 struct ViewBatchSummary {
   uint32_t rendered = 0;
-  uint32_t skipped = 0;   // complete already (files in place): left alone
+  uint32_t skipped = 0;   // complete already (recorded in the manifest, files in place): left alone
   double seconds = 0.0;   // from the first render to the last file in place
   double render_seconds = 0.0;      // the device's part: renders and readbacks
   double queue_wait_seconds = 0.0;  // the device waiting for a writer (the writing took longer)
+  size_t beyond_png16_samples = 0;  // png16 depths past 65535 steps (stored as 0), and their views
+  uint32_t beyond_png16_views = 0;
 };
 
-// Throws InputError where the batch's names would have two views, or a view and the manifest,
-// write one file ("d{index}/../v.exr", a manifest named like a view's EXR: views overwritten, or a
-// view counted complete that never rendered), or where its manifest is a file that is no manifest
-// (check_is_a_manifest), or a name over 255 bytes. Every view of every shard is checked. Throws
-// std::runtime_error where a view this run would render has a link, a device, a FIFO or a read-only
-// file at its name (refuse_to_replace). render_views checks this first; a front end calls it before
-// it opens a device.
+// Throws InputError where the batch's names would have two views, two files of one view, or a view
+// and the manifest write one file ("d{index}/../v.exr", a png16 depth named as the preview, a
+// manifest named like a view's file: views overwritten, or a view counted complete that never
+// rendered), or where its manifest is a file that is no manifest (check_is_a_manifest), or a name
+// over 255 bytes, or where a view this run would render has a link, a device, a FIFO or a read-only
+// file at one of its names (refuse_to_replace). Every view of every shard is checked. render_views
+// checks this first; a front end calls it before it opens a device.
 void check_view_names(const ViewBatch& batch);
 
 // Creates the output folders, checks that they take files, then renders and writes the shard's
