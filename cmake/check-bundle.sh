@@ -24,9 +24,9 @@ cleanup() {
   rm -rf "$root"
 }
 trap cleanup EXIT
-mirror=$(awk '/^URIs:/ {print $2; exit}' /etc/apt/sources.list.d/debian.sources 2>/dev/null || true)
-echo "vkray: making a fresh Debian 12 root in $root"
-debootstrap --variant=minbase bookworm "$root" "${mirror:-http://deb.debian.org/debian}" >"$root.debootstrap.log" 2>&1 ||
+archive=$(sh cmake/debian-archive.sh)
+echo "vkray: making a fresh Debian 12 root in $root from $archive"
+debootstrap --variant=minbase bookworm "$root" "$archive" >"$root.debootstrap.log" 2>&1 ||
   { tail -n 20 "$root.debootstrap.log"; exit 1; }
 rm -f "$root.debootstrap.log"
 cp /etc/resolv.conf "$root/etc/resolv.conf"
@@ -56,6 +56,17 @@ if as_newcomer "$vkray info" >"$root/tmp/no-loader.log" 2>&1; then
 fi
 cat "$root/tmp/no-loader.log"
 grep -q "no Vulkan driver found by the Vulkan loader .*(the bundle's: this machine has none)" "$root/tmp/no-loader.log" || { echo "vkray: not the one line expected" >&2; exit 1; }
+# A multiarch machine lists an i386 loader beside (or without) its own: that one is not the machine's
+# loader for vkray, in ldconfig's cache or on LD_LIBRARY_PATH. An i386 ELF of that name stands for it.
+mkdir -p "$root/usr/lib/i386-linux-gnu"
+echo 'int not_a_vulkan_loader;' | gcc -m32 -shared -nostdlib -x c - -Wl,-soname,libvulkan.so.1 -o "$root/usr/lib/i386-linux-gnu/libvulkan.so.1"
+chroot "$root" ldconfig
+chroot "$root" ldconfig -p | grep -q 'libvulkan\.so\.1 (libc6)' || { echo "vkray: ldconfig does not list the i386 stand-in" >&2; exit 1; }
+for path in "" /usr/lib/i386-linux-gnu; do
+  as_newcomer "LD_LIBRARY_PATH=$path $vkray info" >"$root/tmp/i386.log" 2>&1 || true
+  grep -q "(the bundle's: this machine has none)" "$root/tmp/i386.log" ||
+    { cat "$root/tmp/i386.log"; echo "vkray: an i386 libvulkan.so.1 (LD_LIBRARY_PATH='$path') was taken for the machine's loader" >&2; exit 1; }
+done
 
 echo "vkray: 2. with libvulkan1, mesa-vulkan-drivers and python3-numpy"
 chroot "$root" sh -c 'DEBIAN_FRONTEND=noninteractive apt-get install -y -q --no-install-recommends libvulkan1 mesa-vulkan-drivers python3-numpy' \

@@ -35,8 +35,10 @@ for entry in $from_release; do
   release="${entry#*:}"
   source_list="/etc/apt/sources.list.d/vkray-$release.list"
   if [ ! -f "$source_list" ]; then
-    echo "vkray: adding Debian's $release to apt's sources ($source_list)"
-    echo "deb http://deb.debian.org/debian $release main" | $sudo tee "$source_list" >/dev/null
+    # From the archive the machine already takes Debian 12 from (its own sources: a site's mirror).
+    archive=$(sh "$(dirname "$0")/debian-archive.sh")
+    echo "vkray: adding Debian's $release from $archive to apt's sources ($source_list)"
+    echo "deb $archive $release main" | $sudo tee "$source_list" >/dev/null
   fi
 done
 $sudo apt-get update -q

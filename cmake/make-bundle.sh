@@ -67,15 +67,24 @@ cat >"$stage/bin/vkray" <<'LAUNCHER'
 # and layers); where it finds none, the bundle's copy in ../lib/vulkan. The GPU driver is always the
 # machine's: with none, vkray says which to install.
 top=$(CDPATH='' cd -- "$(dirname -- "$(readlink -f -- "$0")")/.." && pwd)
+# Only an x86-64 loader can be the machine's: a multiarch machine lists its i386 one too.
+is_x86_64_elf() {
+  # The first 20 bytes: ELF's magic, class 2 (64-bit) and data 1 (little-endian), then at byte 18
+  # the machine, 0x3e (x86-64).
+  case "$(od -An -tx1 -N20 "$1" 2>/dev/null | tr -d ' \n')" in
+    7f454c460201*3e00) return 0 ;;
+  esac
+  return 1
+}
 machine_has_loader() {
   old_ifs=$IFS
   IFS=:
   for dir in ${LD_LIBRARY_PATH:-}; do
-    [ -n "$dir" ] && [ -e "$dir/libvulkan.so.1" ] && { IFS=$old_ifs; return 0; }
+    [ -n "$dir" ] && is_x86_64_elf "$dir/libvulkan.so.1" && { IFS=$old_ifs; return 0; }
   done
   IFS=$old_ifs
   for ldconfig in /sbin/ldconfig /usr/sbin/ldconfig; do
-    [ -x "$ldconfig" ] && { "$ldconfig" -p 2>/dev/null | grep -q 'libvulkan\.so\.1 '; return; }
+    [ -x "$ldconfig" ] && { "$ldconfig" -p 2>/dev/null | grep -q 'libvulkan\.so\.1 (libc6,x86-64)'; return; }
   done
   return 1
 }
