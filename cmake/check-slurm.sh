@@ -49,6 +49,7 @@ stage="starting"
 munged_pid=""
 slurmctld_pid=""
 slurmd_pid=""
+mounted=""  # file systems mounted for the check (below)
 failure=""
 
 stop() {  # PID...: SIGTERM, then SIGKILL after 10 s; only the processes this script started
@@ -82,6 +83,7 @@ finish() {
     while [ -n "$(timeout 10 squeue -h -o %A 2>/dev/null)" ] && [ $tries -lt 100 ]; do sleep 0.1; tries=$((tries + 1)); done
   fi
   stop "$slurmd_pid" "$slurmctld_pid" "$munged_pid"
+  for place in $mounted; do umount "$place" 2>/dev/null || true; done
   rm -rf "$work"
   if [ $status -eq 0 ]; then
     say "passed in $(at) ($(( $(date +%s) - installed )) s after the package install), the cluster stopped and removed"
@@ -168,6 +170,14 @@ NodeName=$host CPUs=$cpus RealMemory=$memory State=UNKNOWN
 PartitionName=check Nodes=$host Default=YES MaxTime=10 State=UP OverSubscribe=FORCE:4
 EOF
 : >"$work/slurm/plugstack.conf"
+# Slurm 22.05's slurmd starts its cgroup plugin whatever the proctrack and task plugins (23.02 added
+# CgroupPlugin=disabled): a machine without a cgroup file system mounted (a chroot: CI's fresh
+# Debian) gets one for the check's time, unmounted at its end.
+mounted=""
+if ! grep -q ' /sys/fs/cgroup ' /proc/mounts; then
+  if ! grep -q ' /sys ' /proc/mounts; then mount -t sysfs sysfs /sys && mounted="/sys"; fi
+  mount -t cgroup2 cgroup2 /sys/fs/cgroup && mounted="/sys/fs/cgroup $mounted"
+fi
 slurmctld -D -i >"$work/slurm/slurmctld.out" 2>&1 &
 slurmctld_pid=$!
 slurmd -D >"$work/slurm/slurmd.out" 2>&1 &
