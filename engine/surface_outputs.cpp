@@ -51,18 +51,11 @@ bool corners_given(const std::vector<std::array<uint32_t, 3>>& corners, uint32_t
          corners[triangle][2] != no_attribute;
 }
 
-struct Surface {
-  glm::dvec2 barycentric{0.0};
-  glm::dvec3 shading_normal{0.0};
-  glm::dvec2 texcoord{0.0};
-  bool front = false;
-};
-
-Surface triangle_surface(const Mesh& mesh, uint32_t triangle, const glm::dvec3& origin, const glm::dvec3& dir, double t) {
+SurfaceAt triangle_surface(const Mesh& mesh, uint32_t triangle, const glm::dvec3& origin, const glm::dvec3& dir, double t) {
   const auto& corners = mesh.triangles[triangle];
   const glm::dvec3 &a = mesh.positions[corners[0]], &b = mesh.positions[corners[1]], &c = mesh.positions[corners[2]];
   const std::optional<glm::dvec2> crossing = ray_weights(a, b, c, origin, dir);
-  Surface surface;
+  SurfaceAt surface;
   surface.barycentric = clamped_to_triangle(crossing ? *crossing : projected_weights(a, b, c, origin + t * dir));
   const double w1 = surface.barycentric.x, w2 = surface.barycentric.y, w0 = 1.0 - w1 - w2;
   const glm::dvec3 face = unit_vector(glm::cross(b - a, c - a));
@@ -87,6 +80,24 @@ glm::dvec3 facing(const glm::dvec3& normal, const glm::dvec3& dir) { return glm:
 
 }  // namespace
 
+SurfaceAt surface_at(const Scene& scene, ObjectPrimitive hit, const glm::dvec3& origin, const glm::dvec3& dir, double t) {
+  const size_t meshes = scene.meshes.size(), spheres = scene.spheres.size();
+  SurfaceAt surface;
+  if (hit.object < meshes) return triangle_surface(scene.meshes[hit.object], hit.primitive, origin, dir, t);
+  if (hit.object < meshes + spheres) {
+    // A sphere's front is its outside: the ray starts outside it.
+    const Sphere& sphere = scene.spheres[hit.object - meshes];
+    surface.shading_normal = facing(unit_vector(origin + t * dir - sphere.center), dir);
+    surface.front = glm::length(origin - sphere.center) >= sphere.radius;
+  } else if (hit.object < meshes + spheres + scene.planes.size()) {
+    // A plane's front is the side its normal points to.
+    const glm::dvec3& normal = scene.planes[hit.object - meshes - spheres].normal;
+    surface.shading_normal = facing(normal, dir);
+    surface.front = glm::dot(normal, dir) < 0.0;
+  }
+  return surface;
+}
+
 void add_surface_outputs(Frame& frame, const Scene& scene) {
   if (!frame.aovs.has_surface_outputs()) return;
   if (!frame.camera || frame.depth.empty() || frame.mesh_id.empty() || frame.primitive_id.empty()) {
@@ -94,7 +105,6 @@ void add_surface_outputs(Frame& frame, const Scene& scene) {
   }
   const CameraBasis basis = make_camera_basis(*frame.camera, frame.width, frame.height);
   const size_t pixels = frame.pixel_count();
-  const size_t meshes = scene.meshes.size(), spheres = scene.spheres.size();
   parallel_for_chunks(frame.height, [&](size_t first_row, size_t end_row) {
     for (auto j = static_cast<uint32_t>(first_row); j < end_row; ++j) {
       for (uint32_t i = 0; i < frame.width; ++i) {
@@ -102,22 +112,8 @@ void add_surface_outputs(Frame& frame, const Scene& scene) {
         const uint32_t object = frame.mesh_id[p], primitive = frame.primitive_id[p];
         if (object == no_object) continue;  // the outputs stay 0
         const PixelRay ray = pixel_ray(*frame.camera, basis, i, j, frame.width, frame.height);
-        const glm::dvec3& dir = ray.direction;
         const double t = frame.depth64.empty() ? double{frame.depth[p]} : frame.depth64[p];
-        Surface surface;
-        if (object < meshes) {
-          surface = triangle_surface(scene.meshes[object], primitive, ray.origin, dir, t);
-        } else if (object < meshes + spheres) {
-          // A sphere's front is its outside: the ray starts outside it.
-          const Sphere& sphere = scene.spheres[object - meshes];
-          surface.shading_normal = facing(unit_vector(ray.origin + t * dir - sphere.center), dir);
-          surface.front = glm::length(ray.origin - sphere.center) >= sphere.radius;
-        } else {
-          // A plane's front is the side its normal points to.
-          const glm::dvec3& normal = scene.planes[object - meshes - spheres].normal;
-          surface.shading_normal = facing(normal, dir);
-          surface.front = glm::dot(normal, dir) < 0.0;
-        }
+        const SurfaceAt surface = surface_at(scene, {object, primitive}, ray.origin, ray.direction, t);
         for (int c = 0; c < 2; ++c) {
           if (!frame.barycentric.empty()) frame.barycentric[c * pixels + p] = static_cast<float>(surface.barycentric[c]);
           if (!frame.texcoord.empty()) frame.texcoord[c * pixels + p] = static_cast<float>(surface.texcoord[c]);

@@ -26,4 +26,14 @@ namespace vkray {
 //   normal points to; 0 elsewhere and on a miss.
 void add_surface_outputs(Frame& frame, const Scene& scene);
 
+// What `hit` gives where the ray (origin, unit direction dir) meets it at distance t, as the
+// outputs above describe each: a camera's pixels and given rays (the C API's cast_rays) alike.
+struct SurfaceAt {
+  glm::dvec2 barycentric{0.0};
+  glm::dvec3 shading_normal{0.0};
+  glm::dvec2 texcoord{0.0};
+  bool front = false;
+};
+SurfaceAt surface_at(const Scene& scene, ObjectPrimitive hit, const glm::dvec3& origin, const glm::dvec3& dir, double t);
+
 }  // namespace vkray

@@ -75,6 +75,66 @@ Renderer::Renderer(GpuDevice& device, const Scene& scene, RendererOptions option
 
 Renderer::~Renderer() = default;
 
+void Renderer::prepare_pipelines(const Camera& camera, uint32_t width, uint32_t height) {
+  Impl& r = *impl_;
+  const auto start = Clock::now();
+  const RenderTimings constructor = r.timings;
+  with_vulkan_errors("making the pipelines", [&] {
+    struct Wanted {
+      AovSet aovs;
+      bool lo_parts;
+      RaycastMode mode;
+      HitQuery query;
+    };
+    // What render() asks for of a perspective camera (begin_render), and what cast_rays and
+    // occluded ask for (Impl::cast_rays, cast_given).
+    std::vector<Wanted> wanted{{AovSet{Aov::depth, Aov::normal}.on_device(), needs_lo_parts(r.anchor, r.scene_radius, camera.from),
+                                RaycastMode::image_buffers, HitQuery::nearest}};
+    std::vector<RaycastMode> given_modes{RaycastMode::given_rays};
+    if (r.stats.search == PrimitiveSearch::bvh_packet && r.precision() == Precision::float32) {
+      given_modes.push_back(RaycastMode::given_directions);
+    }
+    for (const RaycastMode mode : given_modes) {
+      for (const bool lo_parts : {false, true}) {
+        for (const HitQuery query : {HitQuery::nearest, HitQuery::any}) wanted.push_back({AovSet{Aov::depth, Aov::normal}, lo_parts, mode, query});
+      }
+    }
+    std::vector<std::future<void>> made;
+    for (const Wanted& pipeline : wanted) {
+      made.push_back(std::async(std::launch::async, [&r, pipeline] {
+        double created_ms = 0.0;
+        r.pipeline->pipeline(pipeline.aovs, pipeline.lo_parts, pipeline.mode, created_ms, pipeline.query);
+      }));
+    }
+    for (std::future<void>& pipeline : made) pipeline.get();
+  });
+  // lavapipe compiles a pipeline's code at its first dispatch, not when it is made: a small call of
+  // each kind runs each pipeline once (a first occlusion query took 5 times its tenth's time). The
+  // lo parts of positions follow the rays' origins: near the scene (its anchor) and 4 radii away.
+  render(camera, width, height, AovSet{Aov::depth, Aov::normal});  // its buffers made at the size too
+  const glm::dvec3 near = r.anchor, far = r.anchor + glm::dvec3(0.0, 0.0, 4.0 * r.scene_radius);
+  for (const glm::dvec3& origin : {near, far}) {
+    std::vector<GivenRay> one_origin, two_origins;
+    for (int k = 0; k < 64; ++k) {
+      const double angle = 0.1 * k;
+      const GivenRay ray{origin.x, origin.y, origin.z, std::cos(angle), std::sin(angle), 0.5};
+      one_origin.push_back(ray);
+      two_origins.push_back(ray);
+      two_origins.back()[2] += k % 2 == 0 ? 0.0 : 1e-3 * r.scene_radius + 1e-9;  // two origins: one by one
+    }
+    cast_rays(one_origin);
+    occluded(one_origin);
+    cast_rays(two_origins);
+    occluded(two_origins);
+  }
+  r.timings = RenderTimings{};
+  r.timings.upload_ms = constructor.upload_ms;
+  r.timings.bvh_build_ms = constructor.bvh_build_ms;
+  r.timings.structures_ms = constructor.structures_ms;
+  r.timings.pipeline_beside_upload_ms = constructor.pipeline_beside_upload_ms;
+  r.timings.pipeline_ms = elapsed_ms(start);
+}
+
 const RenderTimings& Renderer::timings() const { return impl_->timings; }
 
 const SceneStats& Renderer::scene_stats() const { return impl_->stats; }

@@ -149,6 +149,14 @@ class Renderer {
   // stops at the first hit it meets. The same rays, ranges and precision contract as cast_rays.
   std::vector<uint8_t> occluded(std::span<const GivenRay> rays, const RayRanges& ranges = {});
 
+  // Makes, side by side, every pipeline that render of `camera` at width x height with depth and
+  // normal, cast_rays and occluded can take (one by one and, where the packet walk runs, in packets
+  // from one origin; with and without the lo parts of positions), and runs each once (the render at
+  // its size, so its buffers are made too; the rays a few), so that no later call pays for a first
+  // use: lavapipe makes each in 0.2 to 0.6 s and compiles it at its first dispatch. Its time goes to
+  // timings().pipeline_ms; the call timings its runs left are cleared.
+  void prepare_pipelines(const Camera& camera, uint32_t width, uint32_t height);
+
   // Timings of the last render (upload_ms and bvh_build_ms are the constructor's).
   const RenderTimings& timings() const;
   const SceneStats& scene_stats() const;

@@ -182,26 +182,49 @@ GivenRay range_start_ray(const GivenRay& ray, double t_min) {
   return {start.x, start.y, start.z, direction.x, direction.y, direction.z};
 }
 
-void check_ray_ranges(std::span<const GivenRay> rays, const RayRanges& ranges) {
+namespace {
+
+// What is wrong with ray k's range; null for nothing.
+const char* ray_range_fault(std::span<const GivenRay> rays, const RayRanges& ranges, size_t k) {
+  const double t_min = ranges.start(k), t_max = ranges.end(k);
+  if (!std::isfinite(t_min) || t_min < 0.0) return "t_min is negative or not finite";
+  if (std::isnan(t_max) || t_max < t_min) return "t_max is NaN or below t_min";
+  if (t_min > 0.0) {
+    const GivenRay start = range_start_ray(rays[k], t_min);
+    if (std::any_of(start.begin(), start.begin() + 3, [](double v) { return !(std::abs(v) <= max_coordinate); })) {
+      return "the range starts farther than 1e15 from the world origin on some axis";
+    }
+  }
+  return nullptr;
+}
+
+void check_range_sizes(std::span<const GivenRay> rays, const RayRanges& ranges) {
   for (const auto& [span, name] : {std::pair{ranges.t_min, "t_min"}, std::pair{ranges.t_max, "t_max"}}) {
     if (!span.empty() && span.size() != rays.size()) {
       throw InputError(std::string(name) + ": " + std::to_string(span.size()) + " values for " +
                        std::to_string(rays.size()) + " rays (one a ray, or none)");
     }
   }
+}
+
+}  // namespace
+
+void check_ray_ranges(std::span<const GivenRay> rays, const RayRanges& ranges) {
+  check_range_sizes(rays, ranges);
   if (ranges.t_min.empty() && ranges.t_max.empty()) return;
-  check_each_ray(rays.size(), [&](size_t k) -> const char* {
-    const double t_min = ranges.start(k), t_max = ranges.end(k);
-    if (!std::isfinite(t_min) || t_min < 0.0) return "t_min is negative or not finite";
-    if (std::isnan(t_max) || t_max < t_min) return "t_max is NaN or below t_min";
-    if (t_min > 0.0) {
-      const GivenRay start = range_start_ray(rays[k], t_min);
-      if (std::any_of(start.begin(), start.begin() + 3, [](double v) { return !(std::abs(v) <= max_coordinate); })) {
-        return "the range starts farther than 1e15 from the world origin on some axis";
-      }
+  check_each_ray(rays.size(), [&](size_t k) { return ray_range_fault(rays, ranges, k); });
+}
+
+std::vector<uint8_t> refused_rays(std::span<const GivenRay> rays, const RayRanges& ranges) {
+  check_range_sizes(rays, ranges);
+  std::vector<uint8_t> refused(rays.size());
+  const bool ranged = !ranges.t_min.empty() || !ranges.t_max.empty();
+  parallel_for_chunks(rays.size(), [&](size_t begin, size_t end) {
+    for (size_t k = begin; k < end; ++k) {
+      refused[k] = given_ray_fault(rays[k]) || (ranged && ray_range_fault(rays, ranges, k)) ? 1 : 0;
     }
-    return nullptr;
   });
+  return refused;
 }
 
 Bounds finite_bounds(const Scene& scene) {

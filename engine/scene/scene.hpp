@@ -185,6 +185,11 @@ GivenRay range_start_ray(const GivenRay& ray, double t_min);
 // whose length is not `rays`'.
 void check_ray_ranges(std::span<const GivenRay> rays, const RayRanges& ranges);
 
+// Which of `rays` check_given_rays or check_ray_ranges would refuse (1), in one pass: the rays a
+// caller that takes bad rays as misses leaves out (the C API's default). Throws InputError where a
+// range's length is not `rays`'.
+std::vector<uint8_t> refused_rays(std::span<const GivenRay> rays, const RayRanges& ranges);
+
 // Throws InputError unless 1 <= side <= max_image_side and the pixel count is within the limit.
 void check_image_size(uint32_t width, uint32_t height);
 

@@ -56,7 +56,10 @@ const vk::raii::Pipeline& RaycastPipeline::pipeline(AovSet aovs, bool lo_parts, 
   // output's bit (Aov::hit is 256, where the lo parts once were: two different pipelines shared a key).
   const uint64_t key = uint64_t{aovs.bits()} | (uint64_t{lo_parts} << 32) | (uint64_t{static_cast<uint32_t>(mode)} << 33) |
                        (uint64_t{static_cast<uint32_t>(query)} << 35);
-  if (auto found = pipelines_.find(key); found != pipelines_.end()) return found->second;
+  {
+    const std::lock_guard lock(*pipelines_lock_);
+    if (auto found = pipelines_.find(key); found != pipelines_.end()) return found->second;
+  }
 
   const auto start = Clock::now();
   // One 32-bit value per VKRAY_SPEC_* id (SPIR-V booleans are 32-bit), stored at the id's index.
@@ -92,9 +95,11 @@ const vk::raii::Pipeline& RaycastPipeline::pipeline(AovSet aovs, bool lo_parts, 
   for (uint32_t id = 0; id < entries.size(); ++id) entries[id] = vk::SpecializationMapEntry(id, id * 4u, 4u);
   const vk::SpecializationInfo specialization(entries, vk::ArrayProxyNoTemporaries<const uint32_t>(values));
   const vk::PipelineShaderStageCreateInfo stage({}, vk::ShaderStageFlagBits::eCompute, *shader_->module, "main", &specialization);
-  auto [entry, inserted] = pipelines_.emplace(
-      key, vk::raii::Pipeline(context_.device, context_.pipeline_cache->handle(),
-                              vk::ComputePipelineCreateInfo({}, stage, *layout_)));
+  // Vulkan synchronizes a pipeline cache within the implementation (it is no externally synchronized
+  // parameter of vkCreateComputePipelines): pipelines are compiled side by side.
+  vk::raii::Pipeline created(context_.device, context_.pipeline_cache->handle(), vk::ComputePipelineCreateInfo({}, stage, *layout_));
+  const std::lock_guard lock(*pipelines_lock_);
+  auto [entry, inserted] = pipelines_.emplace(key, std::move(created));
   context_.pipeline_cache->save();
   created_ms = elapsed_ms(start);
   return entry->second;

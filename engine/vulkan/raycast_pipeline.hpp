@@ -10,6 +10,8 @@
 
 #include <array>
 #include <map>
+#include <memory>
+#include <mutex>
 #include <optional>
 
 namespace vkray {
@@ -50,7 +52,8 @@ class RaycastPipeline {
 
   // The pipeline for this set of outputs, with or without the lo parts of positions
   // (VKRAY_SPEC_LO_PARTS), in `mode`, for `query`, created on first request. `created_ms` receives
-  // the creation time, 0 when it was already there.
+  // the creation time, 0 when it was already there. Threads may ask for different pipelines at once
+  // (Renderer::prepare_pipelines makes several together); each is compiled outside the lock.
   const vk::raii::Pipeline& pipeline(AovSet aovs, bool lo_parts, RaycastMode mode, double& created_ms,
                                      HitQuery query = HitQuery::nearest);
 
@@ -80,6 +83,7 @@ class RaycastPipeline {
   std::optional<ShaderBindings> shader_;  // the module and its descriptor set
   vk::raii::PipelineLayout layout_{nullptr};
   std::map<uint64_t, vk::raii::Pipeline> pipelines_;  // by AovSet bits, bit 32 the lo parts, the mode from bit 33
+  std::unique_ptr<std::mutex> pipelines_lock_ = std::make_unique<std::mutex>();  // a pointer: the class moves
 };
 
 }  // namespace vkray

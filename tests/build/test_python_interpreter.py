@@ -1,6 +1,6 @@
-"""The Python module is built for one interpreter: configuring for one that cannot import numpy stops
-with one line that names it and the way out, instead of building a module that fails at `import
-vkray`. ctest runs this with pytest (VKRAY_SOURCE_DIR from tests/CMakeLists.txt); the build folder is
+"""The Python tests run one interpreter: configuring for one that cannot import numpy stops with one
+line that names it and the way out, instead of a suite whose Python tests all fail at `import
+numpy`. ctest runs this with pytest (VKRAY_SOURCE_DIR from tests/CMakeLists.txt); the build folder is
 a temporary one."""
 import os
 import stat
@@ -22,5 +22,5 @@ def test_an_interpreter_without_numpy_is_refused_when_configuring(tmp_path):
                             capture_output=True, text=True)
     assert result.returncode != 0
     said = " ".join(result.stderr.split())  # CMake wraps its messages
-    assert f"vkray: the Python module is built for {python}, which cannot import numpy" in said, result.stderr
+    assert f"vkray: the Python tests run {python}, which cannot import numpy" in said, result.stderr
     assert "-DPython3_EXECUTABLE=" in said

@@ -40,8 +40,8 @@ def test_every_python_example_in_the_readme_runs():
 
 
 def test_the_one_line_import_in_the_readme_runs():
-    """The README's `PYTHONPATH=build/python /usr/bin/python3 -c ...` line, with this build's module
-    (and the interpreter it was built for, the one this test runs under)."""
+    """The README's `PYTHONPATH=build/python /usr/bin/python3 -c ...` line, with this build's package
+    (under the interpreter this test runs under): it prints the version and the built-in scene's size."""
     lines = [line for line in (ROOT / "README.md").read_text().splitlines()
              if line.startswith("PYTHONPATH=build/python /usr/bin/python3 -c ")]
     assert lines, "the README shows no one-line import"
@@ -49,7 +49,12 @@ def test_the_one_line_import_in_the_readme_runs():
         code = line.split(" -c ", 1)[1].strip().strip("'")
         result = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True, env=os.environ)
         assert result.returncode == 0, f"{line}\n{result.stderr}"
-        assert result.stdout.strip() == "(600, 800)", result.stdout
+        assert result.stdout.strip() == f"{vkray_version()} (600, 800)", result.stdout
+
+
+def vkray_version():
+    import vkray
+    return vkray.__version__
 
 
 def github_anchor(title):

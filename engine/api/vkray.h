@@ -1,0 +1,139 @@
+/* vkray's C API, version 1: the engine's one outward boundary, libvkray.so. Python's `vkray`
+ * package is written over it (ctypes, any CPython 3.9 or later, any numpy 1.22 to 2.x); C, Rust and
+ * Julia callers use it as it is.
+ *
+ * Conventions:
+ * - Every call that can fail returns a vkray_status; on failure vkray_last_error() gives the one
+ *   line saying why (naming the file, key or ray at fault), kept per thread until its next failure.
+ * - Arrays are the caller's, C order: vkray reads rays and writes results in place, each output one
+ *   value a pixel or ray and its components last (H x W x C for an image). Nothing the caller passes
+ *   is kept after a call returns.
+ * - A scene is built (vkray_scene_new, then meshes, spheres, planes and a camera, then
+ *   vkray_scene_finish) or loaded, and read-only from then on. A renderer copies what it needs of
+ *   its scene. A renderer serves one call at a time: calls from several threads wait their turn.
+ * - Distances along a ray are along its unit direction unless the call's flags say
+ *   VKRAY_T_ALONG_DIRECTION (then in units of the direction as given: Embree's and Open3D's t).
+ * - Strings returned are owned by the object they come from, valid until its next call or its end.
+ */
+#ifndef VKRAY_H
+#define VKRAY_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define VKRAY_API_VERSION 1
+#define VKRAY_API __attribute__((visibility("default")))
+
+/* mesh_id and primitive_id of a ray that hit nothing. */
+#define VKRAY_NO_HIT 0xffffffffu
+
+typedef enum vkray_status {
+  VKRAY_OK = 0,
+  VKRAY_INPUT_ERROR = 1,     /* bad input: a file, an array, an argument (Python's ValueError) */
+  VKRAY_DEVICE_ERROR = 2,    /* no device, a device lost or out of its memory (Python's vkray.Error) */
+  VKRAY_OUT_OF_MEMORY = 3,   /* the host's memory */
+  VKRAY_INTERNAL_ERROR = 4,  /* a fault of vkray's own */
+} vkray_status;
+
+typedef struct vkray_scene vkray_scene;
+typedef struct vkray_renderer vkray_renderer;
+
+VKRAY_API uint32_t vkray_api_version(void);
+VKRAY_API const char* vkray_version(void);
+VKRAY_API const char* vkray_last_error(void);
+
+/* The outputs a render gives, by index from 0: returns 0 past the last. An output's values are
+ * float32, or uint32 where is_integer (ids, flags); depth and normal are float64 from a renderer
+ * whose vkray_renderer_doubles() is 1. */
+typedef struct vkray_output_info {
+  const char* name;         /* as `vkray render --aov` takes it: "depth", "mesh-id", ... */
+  const char* description;
+  uint32_t components;
+  uint32_t is_integer;
+  const char* channels[3];  /* the EXR channel `vkray render` writes each component to */
+} vkray_output_info;
+VKRAY_API int vkray_output(uint32_t index, vkray_output_info* info);
+
+/* The traversals vkray_renderer_new takes besides "auto", by index from 0; NULL past the last. */
+VKRAY_API const char* vkray_traversal(uint32_t index);
+
+/* --- Scenes --- */
+
+/* A scene file (.json) or a model (.obj, .ply, .gltf, .glb). width, height: 0 for the file's.
+ * view: NULL, or a side ("front", "back", "left", "right", "top", "bottom") to frame it from;
+ * view_direction: NULL, or 3 numbers, the direction from the scene's centre to the eye. */
+VKRAY_API vkray_status vkray_scene_load(const char* path, uint32_t width, uint32_t height, const char* view,
+                                        const double* view_direction, vkray_scene** scene);
+/* An empty scene of width x height pixels, to which meshes, spheres, planes and a camera are added. */
+VKRAY_API vkray_status vkray_scene_new(uint32_t width, uint32_t height, vkray_scene** scene);
+/* A mesh: vertices vertex_count x 3; triangles triangle_count x 3 vertex indices, int64 (or uint64
+ * where triangles_unsigned); transform NULL or a 4 x 4 affine matrix, row-major (last row 0 0 0 1). */
+VKRAY_API vkray_status vkray_scene_add_mesh(vkray_scene* scene, const double* vertices, uint64_t vertex_count,
+                                            const void* triangles, int triangles_unsigned, uint64_t triangle_count,
+                                            const double* transform);
+/* count x 4: centre, radius. */
+VKRAY_API vkray_status vkray_scene_add_spheres(vkray_scene* scene, const double* spheres, uint64_t count);
+/* count x 6: a point, the normal. */
+VKRAY_API vkray_status vkray_scene_add_planes(vkray_scene* scene, const double* planes, uint64_t count);
+/* The camera in the scene file's form, as JSON: {"from": [0, 1, 5], "to": [0, 0, 0], "fovy": 40}. */
+VKRAY_API vkray_status vkray_scene_set_camera(vkray_scene* scene, const char* camera_json);
+/* Checks the scene as a scene file is checked; frames the geometry where no camera was set. */
+VKRAY_API vkray_status vkray_scene_finish(vkray_scene* scene);
+/* The finished scene as JSON: {"width", "height", "meshes", "triangles", "spheres", "planes",
+ * "camera" (the scene file's form), "object_names" (what each mesh_id stands for)}. */
+VKRAY_API const char* vkray_scene_describe(vkray_scene* scene);
+VKRAY_API void vkray_scene_free(vkray_scene* scene);
+
+/* --- Renderers --- */
+
+/* Opens the device, uploads the scene and makes every pipeline its calls will take (render of the
+ * scene's camera, cast_rays and occluded), so that no call pays for a first use. device: NULL or
+ * part of a device name (`vkray info`); precision: "float" or "double"; traversal: "auto" or one of
+ * vkray_traversal(). */
+VKRAY_API vkray_status vkray_renderer_new(const vkray_scene* scene, const char* device, const char* precision,
+                                          const char* traversal, vkray_renderer** renderer);
+/* The double-precision CPU reference, with the renderer's calls (every float output in float64). */
+VKRAY_API vkray_status vkray_reference_new(const vkray_scene* scene, vkray_renderer** renderer);
+/* Whether depth, normal and t come in float64 (the float64 shader, the reference). */
+VKRAY_API int vkray_renderer_doubles(const vkray_renderer* renderer);
+VKRAY_API const char* vkray_renderer_device_name(const vkray_renderer* renderer);
+/* What the last call's time went to, as JSON ({"dispatch_gpu_ms": ..., ...}, milliseconds); the
+ * constructor's own (upload, BVH build, pipelines) under "setup". */
+VKRAY_API const char* vkray_renderer_timings(vkray_renderer* renderer);
+VKRAY_API void vkray_renderer_free(vkray_renderer* renderer);
+
+/* Renders the scene's camera, or camera_json (its keys over the scene's camera), at width x height
+ * (0: the scene's): the outputs named in aovs, aovs[k] into results[k], H x W x components of its type. */
+VKRAY_API vkray_status vkray_render(vkray_renderer* renderer, const char* camera_json, uint32_t width, uint32_t height,
+                                    uint32_t aov_count, const char* const* aovs, void* const* results);
+
+/* What a given ray is traced for. */
+typedef enum vkray_ray_flags {
+  VKRAY_T_ALONG_DIRECTION = 1,  /* t, t_min and t_max in units of the direction as given */
+  VKRAY_BAD_RAYS_FAIL = 2,      /* a ray with a zero or non-finite direction, or a bad range, fails the call
+                                   (by default it is a miss) */
+} vkray_ray_flags;
+
+/* Traces rays (count x 6: origin, direction) to their nearest hits at t_min < t < t_max (each NULL,
+ * for 0 and +inf, or count values). outputs[k] into results[k], count x components: "t" (float32 or
+ * float64, +inf on a miss), "normal" (3, the geometric normal facing the ray; 0 on a miss),
+ * "primitive-id" and "mesh-id" (uint32, VKRAY_NO_HIT on a miss), and the surface outputs render
+ * gives: "position" (3), "barycentric" (2), "front-facing" (uint32), "shading-normal" (3),
+ * "texcoord" (2). */
+VKRAY_API vkray_status vkray_cast_rays(vkray_renderer* renderer, const double* rays, uint64_t count, const double* t_min,
+                                       const double* t_max, uint32_t flags, uint32_t output_count,
+                                       const char* const* outputs, void* const* results);
+/* Occlusion queries: whether each ray hits anything at t_min < t < t_max (1) or not (0), into
+ * occluded (count bytes). The same rays, ranges and flags as vkray_cast_rays. */
+VKRAY_API vkray_status vkray_occluded(vkray_renderer* renderer, const double* rays, uint64_t count, const double* t_min,
+                                      const double* t_max, uint32_t flags, uint8_t* occluded);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* VKRAY_H */

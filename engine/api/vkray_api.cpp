@@ -1,0 +1,716 @@
+// vkray.h over the engine: arguments checked and converted, the engine called, results written into
+// the caller's arrays, every exception turned into a status and a message. A front end as thin as the
+// CLI: scenes are checked, rendered and traced by the engine.
+#include "engine/api/vkray.h"
+
+#include "engine/device/gpu_device.hpp"
+#include "engine/reference/reference.hpp"
+#include "engine/render/renderer.hpp"
+#include "engine/render/search.hpp"
+#include "engine/scene/camera_description.hpp"
+#include "engine/scene/framing.hpp"
+#include "engine/scene/scene_loader.hpp"
+#include "engine/scene/scene_or_model.hpp"
+#include "engine/surface_outputs.hpp"
+#include "engine/typed_names.hpp"
+#include "engine/unit_vector.hpp"
+
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <memory>
+#include <mutex>
+#include <new>
+#include <optional>
+#include <string>
+#include <vector>
+
+#ifndef VKRAY_VERSION
+#error "VKRAY_VERSION comes from CMake"
+#endif
+
+using namespace vkray;
+
+struct vkray_scene {
+  Scene scene;
+  bool camera_given = false;
+  bool finished = false;
+  std::string description;  // vkray_scene_describe's
+};
+
+struct vkray_renderer {
+  Scene scene;  // the surface outputs of given rays read its meshes
+  std::unique_ptr<GpuDevice> device;
+  std::unique_ptr<Renderer> renderer;
+  std::unique_ptr<ReferenceScene> reference;  // the reference's, where renderer is none
+  bool doubles = false;
+  std::string device_name;
+  std::string timings;  // vkray_renderer_timings'
+  RenderTimings setup;  // the constructor's
+  RenderTimings last_call;  // the last call's: the engine's, summed over the engine calls it made
+  double reference_ms = 0.0;  // the reference's last call
+  bool called = false;        // a render, cast or occlusion call was made: timings has a last call
+  // The engine's Renderer serves one call at a time; callers' threads wait their turn here.
+  std::mutex busy;
+};
+
+namespace {
+
+thread_local std::string last_error;
+
+// Runs `work`, turning what it throws into a status and the thread's message.
+template <typename Work>
+vkray_status guarded(Work&& work) {
+  try {
+    work();
+    return VKRAY_OK;
+  } catch (const InputError& error) {
+    last_error = error.what();
+    return VKRAY_INPUT_ERROR;
+  } catch (const GpuError& error) {
+    last_error = error.what();
+    return VKRAY_DEVICE_ERROR;
+  } catch (const std::bad_alloc&) {
+    last_error = "out of memory";
+    return VKRAY_OUT_OF_MEMORY;
+  } catch (const std::exception& error) {
+    last_error = error.what();
+    return VKRAY_INTERNAL_ERROR;
+  }
+}
+
+void require(const void* pointer, const char* what) {
+  if (!pointer) throw InputError(std::string(what) + ": NULL");
+}
+
+std::optional<uint32_t> size_or_default(uint32_t given, const char* what) {
+  if (given == 0) return std::nullopt;
+  if (given > max_image_side) {
+    throw InputError(std::string(what) + ": must be in 1 .. " + std::to_string(max_image_side) + ", got " + std::to_string(given));
+  }
+  return given;
+}
+
+glm::dvec3 vec3_at(const double* values, size_t row, size_t columns, size_t first = 0) {
+  const double* at = values + row * columns + first;
+  return {at[0], at[1], at[2]};
+}
+
+// An output asked for by name, known (render's aovs, or given rays' outputs: "t" for the depth).
+const OutputInfo& output_named(const char* name, bool rays) {
+  const char* what = rays ? "outputs" : "aovs";
+  require(name, what);
+  const std::string_view given(name);
+  const auto aov = aov_from_name(rays && given == "t" ? "depth" : given);
+  if (!aov) throw InputError(std::string(what) + ": " + unknown_output_message(std::string(given)));
+  const OutputInfo& output = output_info(*aov);
+  if (rays && (output.source == OutputSource::camera && output.aov != Aov::position)) {
+    throw InputError(std::string("outputs: '") + name + "' belongs to a camera's image; given rays have t, normal, primitive-id, mesh-id, "
+                     "position, barycentric, front-facing, shading-normal and texcoord");
+  }
+  if (rays && (output.aov == Aov::uv || output.aov == Aov::depth) && given != "t") {
+    throw InputError(std::string("outputs: '") + name + "' belongs to a camera's image; a given ray's distance is 't'");
+  }
+  return output;
+}
+
+// Writes `planes` (components planes of `count` values, the engine's layout) into `result`,
+// count x components, converted to T.
+template <typename T, typename Planes>
+void interleave(const Planes& planes, size_t count, uint32_t components, void* result) {
+  T* out = static_cast<T*>(result);
+  for (size_t k = 0; k < count; ++k) {
+    for (uint32_t c = 0; c < components; ++c) out[k * components + c] = static_cast<T>(planes[c * count + k]);
+  }
+}
+
+Camera camera_over(const char* camera_json, const Camera& base) {
+  return camera_json ? parse_camera_override(camera_json, "camera", base) : base;
+}
+
+// The rays a call traces, with their ranges in the engine's convention (along the unit direction).
+// A bad ray (a zero or non-finite direction, an origin beyond max_coordinate, a range the engine
+// refuses: refused_rays) fails the call where the flags ask for that; else it is left out of what is
+// traced and comes back as a miss.
+struct CallRays {
+  std::span<const GivenRay> rays;
+  std::vector<double> t_min, t_max;
+  std::vector<double> length;  // each direction's length, where t is along the direction as given
+  bool filtered = false;       // some rays were bad: the good ones below are traced
+  std::vector<size_t> good;    // their indices among the given rays
+  std::vector<GivenRay> good_rays;
+  std::vector<double> good_t_min, good_t_max;
+
+  CallRays(const double* given, uint64_t count, const double* t_min_given, const double* t_max_given, uint32_t flags) {
+    if (count > 0) require(given, "rays");
+    static_assert(sizeof(GivenRay) == 6 * sizeof(double));
+    rays = {reinterpret_cast<const GivenRay*>(given), static_cast<size_t>(count)};
+    const bool along_direction = (flags & VKRAY_T_ALONG_DIRECTION) != 0;
+    if (along_direction) {
+      length.resize(rays.size());
+      for (size_t k = 0; k < rays.size(); ++k) length[k] = glm::length(vec3_at(given, k, 6, 3));
+    }
+    // t along the direction as given is t along the unit direction over the direction's length.
+    const auto range = [&](const double* values, std::vector<double>& into) {
+      if (!values) return;
+      into.assign(values, values + rays.size());
+      if (along_direction) {
+        for (size_t k = 0; k < rays.size(); ++k) into[k] *= length[k];
+      }
+    };
+    range(t_min_given, t_min);
+    range(t_max_given, t_max);
+    if (flags & VKRAY_BAD_RAYS_FAIL) {
+      check_given_rays(rays);
+      check_ray_ranges(rays, {t_min, t_max});
+      return;
+    }
+    const std::vector<uint8_t> bad = refused_rays(rays, {t_min, t_max});
+    filtered = std::find(bad.begin(), bad.end(), 1) != bad.end();
+    if (!filtered) return;
+    for (size_t k = 0; k < rays.size(); ++k) {
+      if (bad[k]) continue;
+      good.push_back(k);
+      good_rays.push_back(rays[k]);
+      if (!t_min.empty()) good_t_min.push_back(t_min[k]);
+      if (!t_max.empty()) good_t_max.push_back(t_max[k]);
+    }
+  }
+
+  std::span<const GivenRay> traced() const { return filtered ? std::span<const GivenRay>(good_rays) : rays; }
+  RayRanges traced_ranges() const { return filtered ? RayRanges{good_t_min, good_t_max} : RayRanges{t_min, t_max}; }
+};
+
+// Hits of the traced rays, spread over every given ray, misses where a ray was bad; `store(given,
+// traced)` copies traced hit `traced` to given ray `given`.
+template <typename Store, typename Miss>
+void spread(const CallRays& call, size_t traced_count, Store&& store, Miss&& miss) {
+  if (!call.filtered) {
+    for (size_t k = 0; k < traced_count; ++k) store(k, k);
+    return;
+  }
+  std::vector<uint8_t> hit_given(call.rays.size(), 0);
+  for (size_t k = 0; k < traced_count; ++k) {
+    store(call.good[k], k);
+    hit_given[call.good[k]] = 1;
+  }
+  for (size_t k = 0; k < call.rays.size(); ++k) {
+    if (!hit_given[k]) miss(k);
+  }
+}
+
+// What the engine or the reference found for the traced rays, in one form.
+struct TracedHits {
+  size_t count = 0;
+  std::vector<double> t;       // along the unit direction, +inf on a miss
+  std::vector<double> normal;  // 3 planes
+  std::vector<uint32_t> object, primitive;
+};
+
+// The runs of consecutive rays from one origin, where the rays hold a few large ones and start at
+// their origins: a batch of sensor poses, each run of which the engine walks in packets as it walks a
+// single pose (one call of them all would walk one by one, the rays not sharing one origin). None
+// where they do not.
+std::vector<std::pair<size_t, size_t>> pose_runs(std::span<const GivenRay> rays, const RayRanges& ranges) {
+  constexpr size_t least_run = 4096, most_runs = 256;  // fewer rays walk as fast one by one
+  if (!std::all_of(ranges.t_min.begin(), ranges.t_min.end(), [](double t) { return t == 0.0; })) return {};
+  std::vector<std::pair<size_t, size_t>> runs;  // first, end
+  for (size_t k = 0; k < rays.size(); ++k) {
+    const bool same = k > 0 && std::equal(rays[k].begin(), rays[k].begin() + 3, rays[k - 1].begin());
+    if (!same) {
+      if (!runs.empty() && runs.back().second - runs.back().first < least_run) return {};
+      if (runs.size() == most_runs) return {};
+      runs.emplace_back(k, k);
+    }
+    runs.back().second = k + 1;
+  }
+  if (runs.size() < 2 || runs.back().second - runs.back().first < least_run) return {};
+  return runs;
+}
+
+// One engine call's timings into a C API call's: the first replaces, the later ones add.
+void add_timings(RenderTimings& call, const RenderTimings& engine, bool first) {
+  if (first) {
+    call = engine;
+    return;
+  }
+  call.pipeline_ms += engine.pipeline_ms;
+  call.dispatch_gpu_ms += engine.dispatch_gpu_ms;
+  call.readback_ms += engine.readback_ms;
+  call.readback_bytes += engine.readback_bytes;
+  call.rays_ms += engine.rays_ms;
+  call.tiles += engine.tiles;
+  call.unfinished_rays += engine.unfinished_rays;
+  call.cpu_finish_ms += engine.cpu_finish_ms;
+  call.given_walk = engine.given_walk;
+}
+
+// Calls trace(first, count, rays, ranges) for each pose run of the traced rays (pose_runs), or once
+// for them all, each engine call's timings added to the call's.
+template <typename Trace>
+void over_runs(vkray_renderer& r, const CallRays& call, Trace&& trace) {
+  const std::span<const GivenRay> rays = call.traced();
+  const RayRanges ranges = call.traced_ranges();
+  std::vector<std::pair<size_t, size_t>> runs = pose_runs(rays, ranges);
+  if (runs.empty()) runs.emplace_back(0, rays.size());
+  for (const auto& [first, end] : runs) {
+    const size_t n = end - first;
+    const auto part = [&](std::span<const double> values) { return values.empty() ? values : values.subspan(first, n); };
+    trace(first, n, rays.subspan(first, n), RayRanges{part(ranges.t_min), part(ranges.t_max)});
+    add_timings(r.last_call, r.renderer->timings(), first == 0);
+  }
+}
+
+TracedHits traced_hits(vkray_renderer& r, const CallRays& call) {
+  TracedHits traced;
+  const std::span<const GivenRay> rays = call.traced();
+  const RayRanges ranges = call.traced_ranges();
+  traced.count = rays.size();
+  if (r.renderer) {
+    traced.t.assign(traced.count, 0.0);
+    traced.normal.assign(3 * traced.count, 0.0);
+    traced.object.assign(traced.count, no_object);
+    traced.primitive.assign(traced.count, no_object);
+    over_runs(r, call, [&](size_t first, size_t n, std::span<const GivenRay> run, const RayRanges& run_ranges) {
+      RayHits hits = r.renderer->cast_rays(run, run_ranges);
+      const bool doubles = !hits.t64.empty();
+      for (size_t k = 0; k < n; ++k) {
+        traced.t[first + k] = doubles ? hits.t64[k] : hits.t[k];
+        for (size_t c = 0; c < 3; ++c) traced.normal[c * traced.count + first + k] = doubles ? hits.normal64[c * n + k] : hits.normal[c * n + k];
+        traced.object[first + k] = hits.object[k];
+        traced.primitive[first + k] = hits.primitive[k];
+      }
+    });
+    return traced;
+  }
+  const auto start = std::chrono::steady_clock::now();
+  const std::vector<ReferenceHit> hits = trace_reference_rays(*r.reference, rays, ranges);
+  traced.t.resize(traced.count);
+  traced.normal.resize(3 * traced.count);
+  traced.object.resize(traced.count);
+  traced.primitive.resize(traced.count);
+  for (size_t k = 0; k < traced.count; ++k) {
+    traced.t[k] = hits[k].t;
+    for (size_t c = 0; c < 3; ++c) traced.normal[c * traced.count + k] = hits[k].normal[static_cast<int>(c)];
+    const ObjectPrimitive source = r.reference->source(hits[k]);
+    traced.object[k] = source.object;
+    traced.primitive[k] = source.primitive;
+  }
+  r.reference_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  return traced;
+}
+
+nlohmann::json timings_json(const RenderTimings& t, bool constructor) {
+  nlohmann::json json;
+  if (constructor) {
+    json["upload_ms"] = t.upload_ms;
+    json["bvh_build_ms"] = t.bvh_build_ms;
+    json["pipeline_ms"] = t.pipeline_ms;  // after the upload (one made beside it is in upload_ms)
+    return json;
+  }
+  json["pipeline_ms"] = t.pipeline_ms;
+  if (t.has_gpu_times) json["dispatch_gpu_ms"] = t.dispatch_gpu_ms;
+  json["readback_ms"] = t.readback_ms;
+  json["rays_ms"] = t.rays_ms;
+  if (t.given_walk != GivenRayWalk::none) json["rays_walk"] = given_ray_walk_name(t.given_walk);
+  json["dispatches"] = t.tiles;
+  json["cpu_finished_rays"] = t.unfinished_rays;
+  return json;
+}
+
+}  // namespace
+
+extern "C" {
+
+uint32_t vkray_api_version(void) { return VKRAY_API_VERSION; }
+
+const char* vkray_version(void) { return VKRAY_VERSION; }
+
+const char* vkray_last_error(void) { return last_error.c_str(); }
+
+int vkray_output(uint32_t index, vkray_output_info* info) {
+  const auto all = outputs();
+  if (index >= all.size() || !info) return 0;
+  const OutputInfo& output = all[index];
+  info->name = output.name;
+  info->description = output.description;
+  info->components = output.components;
+  info->is_integer = output.integer ? 1 : 0;
+  for (size_t c = 0; c < 3; ++c) info->channels[c] = c < output.components ? output.channels[c] : nullptr;
+  return 1;
+}
+
+const char* vkray_traversal(uint32_t index) {
+  const auto all = searches();
+  return index < all.size() ? all[index].name : nullptr;
+}
+
+vkray_status vkray_scene_load(const char* path, uint32_t width, uint32_t height, const char* view, const double* view_direction,
+                              vkray_scene** scene) {
+  return guarded([&] {
+    require(path, "path");
+    require(scene, "scene");
+    *scene = nullptr;
+    std::optional<FramingView> side;
+    if (view) {
+      side = framing_view_from_name(view);
+      if (!side) throw InputError("view: unknown side '" + std::string(view) + "' (" + framing_view_names + ")");
+    } else if (view_direction) {
+      const glm::dvec3 direction(view_direction[0], view_direction[1], view_direction[2]);
+      if (direction == glm::dvec3(0.0) || !std::isfinite(glm::length(direction))) {
+        throw InputError("view: the direction from the centre to the eye must be finite and not 0");
+      }
+      side = FramingView{direction, {0.0, 1.0, 0.0}};
+    }
+    auto made = std::make_unique<vkray_scene>();
+    made->scene = load_scene_or_model(path, size_or_default(width, "width"), size_or_default(height, "height"));
+    if (side) made->scene.camera = frame_scene(made->scene, made->scene.width, made->scene.height, *side);
+    made->camera_given = made->finished = true;
+    *scene = made.release();
+  });
+}
+
+vkray_status vkray_scene_new(uint32_t width, uint32_t height, vkray_scene** scene) {
+  return guarded([&] {
+    require(scene, "scene");
+    *scene = nullptr;
+    auto made = std::make_unique<vkray_scene>();
+    made->scene.width = width;
+    made->scene.height = height;
+    *scene = made.release();
+  });
+}
+
+vkray_status vkray_scene_add_mesh(vkray_scene* scene, const double* vertices, uint64_t vertex_count, const void* triangles,
+                                  int triangles_unsigned, uint64_t triangle_count, const double* transform) {
+  return guarded([&] {
+    require(scene, "scene");
+    if (scene->finished) throw InputError("the scene is finished: meshes are added before vkray_scene_finish");
+    const std::string path = "meshes[" + std::to_string(scene->scene.meshes.size()) + "]";
+    if (vertex_count > 0) require(vertices, (path + ".vertices").c_str());
+    if (triangle_count > 0) require(triangles, (path + ".triangles").c_str());
+    Mesh mesh;
+    mesh.source = path;
+    mesh.positions.reserve(vertex_count);
+    for (size_t v = 0; v < vertex_count; ++v) {
+      mesh.positions.push_back(vec3_at(vertices, v, 3));
+      check_coordinates(mesh.positions.back(), path + ".vertices[" + std::to_string(v) + "]");
+    }
+    mesh.triangles.reserve(triangle_count);
+    for (size_t t = 0; t < triangle_count; ++t) {
+      std::array<uint32_t, 3> triangle{};
+      for (size_t c = 0; c < 3; ++c) {
+        // Signed and unsigned indices each in their own width: an unsigned index past 2^63 must not wrap.
+        const bool in_range = triangles_unsigned ? static_cast<const uint64_t*>(triangles)[3 * t + c] < vertex_count
+                                                 : static_cast<const int64_t*>(triangles)[3 * t + c] >= 0 &&
+                                                       static_cast<uint64_t>(static_cast<const int64_t*>(triangles)[3 * t + c]) < vertex_count;
+        if (!in_range) {
+          const std::string index = triangles_unsigned ? std::to_string(static_cast<const uint64_t*>(triangles)[3 * t + c])
+                                                       : std::to_string(static_cast<const int64_t*>(triangles)[3 * t + c]);
+          throw InputError(path + ".triangles[" + std::to_string(t) + "][" + std::to_string(c) + "]: vertex index " + index +
+                           " is out of range (the mesh has " + std::to_string(vertex_count) + " vertices)");
+        }
+        triangle[c] = static_cast<uint32_t>(triangles_unsigned ? static_cast<const uint64_t*>(triangles)[3 * t + c]
+                                                               : static_cast<uint64_t>(static_cast<const int64_t*>(triangles)[3 * t + c]));
+      }
+      mesh.triangles.push_back(triangle);
+    }
+    if (transform) {
+      const std::string affine = path + ".transform: expected a 4 x 4 affine matrix of finite numbers (last row 0, 0, 0, 1)";
+      if (!std::all_of(transform, transform + 16, [](double v) { return std::isfinite(v); })) throw InputError(affine);
+      if (transform[12] != 0.0 || transform[13] != 0.0 || transform[14] != 0.0 || transform[15] != 1.0) throw InputError(affine);
+      for (glm::dvec3& p : mesh.positions) {
+        p = glm::dvec3(transform[0] * p.x + transform[1] * p.y + transform[2] * p.z + transform[3],
+                       transform[4] * p.x + transform[5] * p.y + transform[6] * p.z + transform[7],
+                       transform[8] * p.x + transform[9] * p.y + transform[10] * p.z + transform[11]);
+      }
+    }
+    scene->scene.meshes.push_back(std::move(mesh));
+  });
+}
+
+vkray_status vkray_scene_add_spheres(vkray_scene* scene, const double* spheres, uint64_t count) {
+  return guarded([&] {
+    require(scene, "scene");
+    if (count > 0) require(spheres, "spheres");
+    for (size_t k = 0; k < count; ++k) scene->scene.spheres.push_back({vec3_at(spheres, k, 4), spheres[4 * k + 3]});
+  });
+}
+
+vkray_status vkray_scene_add_planes(vkray_scene* scene, const double* planes, uint64_t count) {
+  return guarded([&] {
+    require(scene, "scene");
+    if (count > 0) require(planes, "planes");
+    for (size_t k = 0; k < count; ++k) scene->scene.planes.push_back({vec3_at(planes, k, 6), vec3_at(planes, k, 6, 3)});
+  });
+}
+
+vkray_status vkray_scene_set_camera(vkray_scene* scene, const char* camera_json) {
+  return guarded([&] {
+    require(scene, "scene");
+    require(camera_json, "camera");
+    scene->scene.camera = parse_camera_override(camera_json, "camera", Camera{});
+    scene->camera_given = true;
+  });
+}
+
+vkray_status vkray_scene_finish(vkray_scene* scene) {
+  return guarded([&] {
+    require(scene, "scene");
+    if (scene->finished) return;
+    check_scene(scene->scene);
+    if (!scene->camera_given) scene->scene.camera = frame_scene(scene->scene, scene->scene.width, scene->scene.height);
+    scene->finished = true;
+  });
+}
+
+const char* vkray_scene_describe(vkray_scene* scene) {
+  if (!scene) return "";
+  const Scene& s = scene->scene;
+  nlohmann::ordered_json json;
+  json["width"] = s.width;
+  json["height"] = s.height;
+  json["meshes"] = s.meshes.size();
+  json["triangles"] = s.triangle_count();
+  json["spheres"] = s.spheres.size();
+  json["planes"] = s.planes.size();
+  json["camera"] = camera_description(s.camera, s.width, s.height)["camera"];
+  json["object_names"] = object_names(s);
+  scene->description = json.dump();
+  return scene->description.c_str();
+}
+
+void vkray_scene_free(vkray_scene* scene) { delete scene; }
+
+vkray_status vkray_renderer_new(const vkray_scene* scene, const char* device, const char* precision, const char* traversal,
+                                vkray_renderer** renderer) {
+  return guarded([&] {
+    require(scene, "scene");
+    require(renderer, "renderer");
+    *renderer = nullptr;
+    if (!scene->finished) throw InputError("scene: not finished (vkray_scene_finish)");
+    RendererOptions options;
+    const std::string chosen_precision = precision ? precision : "float";
+    if (chosen_precision == "double") {
+      options.shader.precision = Precision::float64;
+    } else if (chosen_precision != "float") {
+      throw InputError("precision: 'float' or 'double', got '" + chosen_precision + "'");
+    }
+    const std::string chosen_traversal = traversal ? traversal : "auto";
+    const std::optional<PrimitiveSearch> search = traversal_from_name(chosen_traversal);
+    if (!search) throw InputError("traversal: one of " + traversal_names() + ", got '" + chosen_traversal + "'");
+    options.scene.search = *search;
+    options.first_aovs = AovSet{Aov::depth, Aov::normal};
+    auto made = std::make_unique<vkray_renderer>();
+    made->scene = scene->scene;
+    made->doubles = options.shader.precision == Precision::float64;
+    made->device = std::make_unique<GpuDevice>(device ? device : "");
+    made->device_name = made->device->info().name;
+    made->renderer = std::make_unique<Renderer>(*made->device, made->scene, options);
+    made->renderer->prepare_pipelines(made->scene.camera, made->scene.width, made->scene.height);
+    made->setup = made->renderer->timings();
+    *renderer = made.release();
+  });
+}
+
+vkray_status vkray_reference_new(const vkray_scene* scene, vkray_renderer** renderer) {
+  return guarded([&] {
+    require(scene, "scene");
+    require(renderer, "renderer");
+    *renderer = nullptr;
+    if (!scene->finished) throw InputError("scene: not finished (vkray_scene_finish)");
+    auto made = std::make_unique<vkray_renderer>();
+    made->scene = scene->scene;
+    made->doubles = true;
+    made->device_name = "CPU reference (double precision)";
+    made->reference = std::make_unique<ReferenceScene>(made->scene);
+    *renderer = made.release();
+  });
+}
+
+int vkray_renderer_doubles(const vkray_renderer* renderer) { return renderer && renderer->doubles ? 1 : 0; }
+
+const char* vkray_renderer_device_name(const vkray_renderer* renderer) { return renderer ? renderer->device_name.c_str() : ""; }
+
+const char* vkray_renderer_timings(vkray_renderer* renderer) {
+  if (!renderer) return "{}";
+  const std::lock_guard one_call_at_a_time(renderer->busy);
+  nlohmann::json json = nlohmann::json::object();
+  if (renderer->renderer) {
+    if (renderer->called) json = timings_json(renderer->last_call, false);
+    json["setup"] = timings_json(renderer->setup, true);
+  } else if (renderer->called) {
+    json["reference_ms"] = renderer->reference_ms;
+  }
+  renderer->timings = json.dump();
+  return renderer->timings.c_str();
+}
+
+void vkray_renderer_free(vkray_renderer* renderer) { delete renderer; }
+
+vkray_status vkray_render(vkray_renderer* renderer, const char* camera_json, uint32_t width, uint32_t height, uint32_t aov_count,
+                          const char* const* aov_names, void* const* results) {
+  return guarded([&] {
+    require(renderer, "renderer");
+    if (aov_count == 0) throw InputError("aovs: name at least one output (" + output_names() + ")");
+    require(aov_names, "aovs");
+    require(results, "results");
+    AovSet aovs;
+    std::vector<const OutputInfo*> asked;
+    for (uint32_t k = 0; k < aov_count; ++k) {
+      asked.push_back(&output_named(aov_names[k], false));
+      aovs.add(asked.back()->aov);
+      require(results[k], aov_names[k]);
+    }
+    const Scene& scene = renderer->scene;
+    const Camera camera = camera_over(camera_json, scene.camera);
+    const uint32_t w = size_or_default(width, "width").value_or(scene.width);
+    const uint32_t h = size_or_default(height, "height").value_or(scene.height);
+    check_image_size(w, h);
+    check_camera_reach(camera, w, h, "camera");
+    Frame frame;
+    {
+      const std::lock_guard one_call_at_a_time(renderer->busy);
+      renderer->called = true;
+      if (renderer->renderer) {
+        frame = renderer->renderer->render(camera, w, h, aovs);
+        renderer->last_call = renderer->renderer->timings();
+      } else {
+        const auto start = std::chrono::steady_clock::now();
+        const std::vector<ReferenceHit> hits = render_reference_hits(*renderer->reference, camera, w, h);
+        // Depth and normal in double, the reference's own; the other outputs as `vkray render
+        // --reference` writes them.
+        frame = reference_frame(*renderer->reference, scene, hits, camera, w, h, aovs, true);
+        renderer->reference_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+      }
+    }
+    const size_t pixels = frame.pixel_count();
+    for (uint32_t k = 0; k < aov_count; ++k) {
+      const OutputInfo& output = *asked[k];
+      if (output.aov == Aov::depth && !frame.depth64.empty()) {
+        interleave<double>(frame.depth64, pixels, 1, results[k]);
+      } else if (output.aov == Aov::normal && !frame.normal64.empty()) {
+        interleave<double>(frame.normal64, pixels, 3, results[k]);
+      } else if (output.integers) {
+        interleave<uint32_t>(frame.*output.integers, pixels, output.components, results[k]);
+      } else {
+        interleave<float>(frame.*output.floats, pixels, output.components, results[k]);
+      }
+    }
+  });
+}
+
+vkray_status vkray_cast_rays(vkray_renderer* renderer, const double* rays, uint64_t count, const double* t_min, const double* t_max,
+                             uint32_t flags, uint32_t output_count, const char* const* outputs, void* const* results) {
+  return guarded([&] {
+    require(renderer, "renderer");
+    if (output_count > 0) {
+      require(outputs, "outputs");
+      require(results, "results");
+    }
+    std::vector<const OutputInfo*> asked;
+    bool surface = false;
+    for (uint32_t k = 0; k < output_count; ++k) {
+      asked.push_back(&output_named(outputs[k], true));
+      surface = surface || asked.back()->source == OutputSource::surface;
+      if (count > 0) require(results[k], outputs[k]);
+    }
+    const CallRays call(rays, count, t_min, t_max, flags);
+    TracedHits traced;
+    {
+      const std::lock_guard one_call_at_a_time(renderer->busy);
+      renderer->called = true;
+      traced = traced_hits(*renderer, call);
+    }
+    const size_t n = call.rays.size();
+    const bool along_direction = (flags & VKRAY_T_ALONG_DIRECTION) != 0;
+    // Every output a ray, in double, in the engine's planar layout; a miss is +inf and zeros.
+    std::vector<double> t(n, INFINITY), normal(3 * n, 0.0);
+    std::vector<uint32_t> object(n, no_object), primitive(n, no_object);
+    spread(call, traced.count, [&](size_t given, size_t k) {
+      t[given] = traced.t[k];
+      for (size_t c = 0; c < 3; ++c) normal[c * n + given] = traced.normal[c * traced.count + k];
+      object[given] = traced.object[k];
+      primitive[given] = traced.primitive[k];
+    }, [](size_t) {});
+    // The surface outputs, from the hit in double (surface_at), as render derives them.
+    std::vector<double> position, barycentric, shading_normal, texcoord;
+    std::vector<uint32_t> front;
+    const auto want = [&](Aov aov) {
+      return std::any_of(asked.begin(), asked.end(), [&](const OutputInfo* output) { return output->aov == aov; });
+    };
+    if (want(Aov::position)) position.assign(3 * n, 0.0);
+    if (surface) {
+      barycentric.assign(2 * n, 0.0), shading_normal.assign(3 * n, 0.0), texcoord.assign(2 * n, 0.0), front.assign(n, 0u);
+    }
+    if (want(Aov::position) || surface) {
+      for (size_t k = 0; k < n; ++k) {
+        if (object[k] == no_object) continue;
+        const glm::dvec3 origin = vec3_at(rays, k, 6), direction = unit_vector(vec3_at(rays, k, 6, 3));
+        if (!position.empty()) {
+          const glm::dvec3 p = origin + t[k] * direction;
+          for (size_t c = 0; c < 3; ++c) position[c * n + k] = p[static_cast<int>(c)];
+        }
+        if (!surface) continue;
+        const SurfaceAt at = surface_at(renderer->scene, {object[k], primitive[k]}, origin, direction, t[k]);
+        for (size_t c = 0; c < 2; ++c) barycentric[c * n + k] = at.barycentric[static_cast<int>(c)];
+        for (size_t c = 0; c < 3; ++c) shading_normal[c * n + k] = at.shading_normal[static_cast<int>(c)];
+        for (size_t c = 0; c < 2; ++c) texcoord[c * n + k] = at.texcoord[static_cast<int>(c)];
+        front[k] = at.front ? 1u : 0u;
+      }
+    }
+    if (along_direction) {
+      for (size_t k = 0; k < n; ++k) t[k] /= call.length[k];
+    }
+    // Float outputs in float32, but t and normal in float64 from a renderer of doubles.
+    const auto write = [&](const std::vector<double>& planes, uint32_t components, bool doubles, void* result) {
+      if (doubles) interleave<double>(planes, n, components, result);
+      else interleave<float>(planes, n, components, result);
+    };
+    for (uint32_t k = 0; k < output_count; ++k) {
+      switch (asked[k]->aov) {
+        case Aov::depth: write(t, 1, renderer->doubles, results[k]); break;
+        case Aov::normal: write(normal, 3, renderer->doubles, results[k]); break;
+        case Aov::mesh_id: interleave<uint32_t>(object, n, 1, results[k]); break;
+        case Aov::primitive_id: interleave<uint32_t>(primitive, n, 1, results[k]); break;
+        case Aov::position: write(position, 3, false, results[k]); break;
+        case Aov::barycentric: write(barycentric, 2, false, results[k]); break;
+        case Aov::shading_normal: write(shading_normal, 3, false, results[k]); break;
+        case Aov::texcoord: write(texcoord, 2, false, results[k]); break;
+        case Aov::front_facing: interleave<uint32_t>(front, n, 1, results[k]); break;
+        default: throw InputError(std::string("outputs: '") + asked[k]->name + "' is not an output of given rays");
+      }
+    }
+  });
+}
+
+vkray_status vkray_occluded(vkray_renderer* renderer, const double* rays, uint64_t count, const double* t_min, const double* t_max,
+                            uint32_t flags, uint8_t* occluded) {
+  return guarded([&] {
+    require(renderer, "renderer");
+    if (count > 0) require(occluded, "occluded");
+    const CallRays call(rays, count, t_min, t_max, flags);
+    std::vector<uint8_t> blocked;
+    {
+      const std::lock_guard one_call_at_a_time(renderer->busy);
+      renderer->called = true;
+      if (renderer->renderer) {
+        blocked.resize(call.traced().size());
+        over_runs(*renderer, call, [&](size_t first, size_t, std::span<const GivenRay> run, const RayRanges& run_ranges) {
+          const std::vector<uint8_t> part = renderer->renderer->occluded(run, run_ranges);
+          std::copy(part.begin(), part.end(), blocked.begin() + static_cast<std::ptrdiff_t>(first));
+        });
+      } else {
+        // The nearest hit decides: exactly whether any hit lies in the range.
+        const std::vector<ReferenceHit> hits = trace_reference_rays(*renderer->reference, call.traced(), call.traced_ranges());
+        blocked.resize(hits.size());
+        for (size_t k = 0; k < hits.size(); ++k) blocked[k] = hits[k].kind != PrimitiveKind::none ? 1 : 0;
+      }
+    }
+    spread(call, blocked.size(), [&](size_t given, size_t k) { occluded[given] = blocked[k]; }, [&](size_t given) { occluded[given] = 0; });
+  });
+}
+
+}  // extern "C"

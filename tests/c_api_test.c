@@ -1,0 +1,53 @@
+/* vkray.h from C (a C compiler, no C++): the built-in scene loaded and rendered, rays cast from its
+ * camera through the image's centre, a bad call answered with a status and a message. Exits 0 when
+ * every check holds, else prints the first that failed. */
+#include "engine/api/vkray.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#define CHECK(condition)                                                        \
+  do {                                                                          \
+    if (!(condition)) {                                                         \
+      fprintf(stderr, "c_api_test: %s failed (%s)\n", #condition, vkray_last_error()); \
+      return 1;                                                                 \
+    }                                                                           \
+  } while (0)
+
+int main(void) {
+  CHECK(vkray_api_version() == VKRAY_API_VERSION);
+  vkray_output_info output;
+  CHECK(vkray_output(0, &output) == 1 && strcmp(output.name, "depth") == 0 && output.components == 1);
+
+  vkray_scene* scene = NULL;
+  CHECK(vkray_scene_load("", 32, 24, NULL, NULL, &scene) == VKRAY_OK);
+  CHECK(strstr(vkray_scene_describe(scene), "\"width\":32") != NULL);
+  vkray_renderer* renderer = NULL;
+  CHECK(vkray_renderer_new(scene, NULL, "float", "auto", &renderer) == VKRAY_OK);
+
+  static float depth[24][32], normal[24][32][3];
+  const char* aovs[] = {"depth", "normal"};
+  void* results[] = {depth, normal};
+  CHECK(vkray_render(renderer, NULL, 0, 0, 2, aovs, results) == VKRAY_OK);
+  CHECK(isfinite(depth[12][16]) && depth[12][16] > 0.0f);
+
+  /* The scene's camera is at (0, 1.8, 6) looking at (0, 0.7, 0): a ray there, and a dead one. */
+  const double rays[2][6] = {{0.0, 1.8, 6.0, 0.0, -1.1, -6.0}, {0.0, 1.8, 6.0, 0.0, 0.0, 0.0}};
+  float t[2];
+  uint32_t mesh[2];
+  const char* outputs[] = {"t", "mesh-id"};
+  void* hits[] = {t, mesh};
+  CHECK(vkray_cast_rays(renderer, &rays[0][0], 2, NULL, NULL, 0, 2, outputs, hits) == VKRAY_OK);
+  CHECK(isfinite(t[0]) && isinf(t[1]) && mesh[1] == VKRAY_NO_HIT);
+  CHECK(vkray_cast_rays(renderer, &rays[0][0], 2, NULL, NULL, VKRAY_BAD_RAYS_FAIL, 2, outputs, hits) == VKRAY_INPUT_ERROR);
+  CHECK(strstr(vkray_last_error(), "ray 1: the direction is 0") != NULL);
+  uint8_t blocked[2];
+  CHECK(vkray_occluded(renderer, &rays[0][0], 2, NULL, NULL, 0, blocked) == VKRAY_OK && blocked[0] == 1 && blocked[1] == 0);
+
+  CHECK(vkray_scene_load("/nonexistent/scene.json", 0, 0, NULL, NULL, &scene) == VKRAY_INPUT_ERROR && scene == NULL);
+  CHECK(strstr(vkray_last_error(), "/nonexistent/scene.json") != NULL);
+  vkray_renderer_free(renderer);
+  printf("c_api_test: vkray %s through its C API on %s\n", vkray_version(), "the default device");
+  return 0;
+}
