@@ -7,30 +7,22 @@
 # 2. with only what a user would install (libvulkan1 and mesa-vulkan-drivers for lavapipe,
 #    python3-numpy for Python) it lists the device on the machine's loader, renders the bunny (the
 #    built-in scene where ../shared/models is absent), passes the report's checks at reduced sizes
-#    (`vkray report --reduced`: every row ran, every check passed) and renders from Python.
+#    (`vkray report --reduced`: every row ran, every check passed) and renders from Python;
+# 3. the wheel, installed by a user into a venv, runs the README's quick start (cmake/try-wheel.sh).
 # CI runs it after the suite (.ci/run). Usage: sh cmake/check-bundle.sh [BUILD_DIR], as root, after
-# sh cmake/make-bundle.sh; it installs debootstrap (cmake/debian-packages-bundle.txt).
+# sh cmake/make-bundle.sh and building the wheel (README, "Python"); it installs debootstrap
+# (cmake/debian-packages-bundle.txt).
 set -eu
 cd "$(dirname "$0")/.."
 build="${1:-build}"
 bundle=$(ls "$build"/vkray-*-linux-*.tar.gz 2>/dev/null | head -n 1)
 [ -n "$bundle" ] || { echo "vkray: no bundle in $build: sh cmake/make-bundle.sh $build first" >&2; exit 2; }
+wheel=$(ls "$build"/dist/vkray-*.whl 2>/dev/null | head -n 1)
+[ -n "$wheel" ] || { echo "vkray: no wheel in $build/dist: python3 -m build --wheel --no-isolation --outdir $build/dist first" >&2; exit 2; }
 sh cmake/install-deps.sh cmake/debian-packages-bundle.txt
 
-root=$(mktemp -d)
-chmod 755 "$root"  # the root of the new system: every user walks through it
-cleanup() {
-  umount "$root/proc" 2>/dev/null || true
-  rm -rf "$root"
-}
-trap cleanup EXIT
-archive=$(sh cmake/debian-archive.sh)
-echo "vkray: making a fresh Debian 12 root in $root from $archive"
-debootstrap --variant=minbase bookworm "$root" "$archive" >"$root.debootstrap.log" 2>&1 ||
-  { tail -n 20 "$root.debootstrap.log"; exit 1; }
-rm -f "$root.debootstrap.log"
-cp /etc/resolv.conf "$root/etc/resolv.conf"
-mount -t proc proc "$root/proc"
+. cmake/fresh-root.sh
+make_fresh_root bookworm
 chroot "$root" useradd --create-home newcomer
 cp "$bundle" "$root/tmp/vkray.tar.gz"
 model=/tmp/models/stanford-bunny.obj
@@ -79,3 +71,5 @@ models="--models /tmp/models"
 as_newcomer "$vkray report report $models --reduced && cat report/report.md | head -n 12"
 as_newcomer "PYTHONPATH=\$(echo ../tools/vkray-*/python) python3 -c 'import vkray, numpy; r = vkray.Renderer(vkray.load(\"\", 64, 48)); d = r.render()[\"depth\"]; assert d.shape == (48, 64) and numpy.isfinite(d).any(); print(\"python: rendered on\", r.device_name)'"
 echo "vkray: the bundle works in a fresh Debian 12"
+echo "vkray: 3. the wheel, installed by a user into a venv"
+sh cmake/try-wheel.sh "$root" "$wheel"

@@ -3,61 +3,36 @@
 # BUILD/vkray-VERSION-linux-ARCH.tar.gz holding
 #   bin/vkray          a launcher: the machine's Vulkan loader where it has one, lib/vulkan/'s otherwise
 #   libexec/vkray      the executable, RUNPATH $ORIGIN/../lib
-#   python/vkray.*.so  the Python module (for the CPython it was built for), RUNPATH $ORIGIN/../lib
+#   python/vkray/      the Python package (any CPython 3.9 or later), as the wheel holds it
+#   lib/libvkray.so    the C API, which the package loads, RUNPATH $ORIGIN
 #   lib/               the shared libraries both need (Embree, OpenEXR, GLFW, ...), RUNPATH $ORIGIN
-#   lib/vulkan/        a Vulkan loader for machines without one (found by bin/vkray and the module)
+#   lib/vulkan/        a Vulkan loader for machines without one (found by bin/vkray and libvkray.so)
 #   share/doc/vkray/   README.md, LICENSE, and the copyright file of every library carried
-# Left out: glibc and its parts, the C++ runtime (libstdc++ and libgcc_s of GCC 12 or newer) and
-# zlib, which every Linux with glibc 2.36 or newer has, and the GPU driver, which must be the
-# machine's. Usage, from the repository root after building: sh cmake/make-bundle.sh [BUILD_DIR]
+# What is left out for the machine to have: cmake/carry-libraries.sh. Usage, from the repository root
+# after building: sh cmake/make-bundle.sh [BUILD_DIR]
 set -eu
 cd "$(dirname "$0")/.."
 build="${1:-build}"
 version=$(sed -n 's/^project(vkray VERSION \([0-9.]*\).*/\1/p' CMakeLists.txt)
 name="vkray-$version-linux-$(uname -m)"
 stage="$build/bundle/$name"
-for built in "$build/vkray" "$build"/python/vkray.*.so; do
+for built in "$build/vkray" "$build/python/vkray/lib/libvkray.so" "$build/python/vkray/__init__.py"; do
   [ -f "$built" ] || { echo "vkray: $built is missing: build first (README, 'Two commands')" >&2; exit 2; }
 done
 command -v patchelf >/dev/null || { echo "vkray: patchelf is missing: sh cmake/install-deps.sh installs it" >&2; exit 2; }
 
 rm -rf "$build/bundle"
-mkdir -p "$stage/bin" "$stage/libexec" "$stage/lib/vulkan" "$stage/python" "$stage/share/doc/vkray/third-party"
+mkdir -p "$stage/bin" "$stage/libexec" "$stage/lib" "$stage/python/vkray" "$stage/share/doc/vkray/third-party"
 cp "$build/vkray" "$stage/libexec/vkray"
-cp "$build"/python/vkray.*.so "$stage/python/"
+cp "$build/python/vkray/lib/libvkray.so" "$stage/lib/"
+# The Python package, the wheel's own files: it finds libvkray.so in ../../lib.
+cp "$build"/python/vkray/*.py "$build/python/vkray/py.typed" "$stage/python/vkray/"
 
-# Every library the executable and the module load, but what the machine must have.
-carried() {
-  case "$(basename "$1")" in
-    ld-linux*|libc.so*|libm.so*|libdl.so*|libpthread.so*|librt.so*|libresolv.so*|libutil.so*) return 1 ;;
-    libstdc++.so*|libgcc_s.so*|libz.so*|libvulkan.so*) return 1 ;;
-  esac
-}
-loader=""
-for object in "$stage/libexec/vkray" "$stage"/python/vkray.*.so; do
-  if ldd "$object" | grep -q 'not found'; then
-    echo "vkray: $object needs a library this machine lacks:" >&2
-    ldd "$object" | grep 'not found' >&2
-    exit 1
-  fi
-  for library in $(ldd "$object" | awk '/=> \// {print $3}'); do
-    case "$(basename "$library")" in libvulkan.so.1) loader="$library" ;; esac
-    carried "$library" && cp -L "$library" "$stage/lib/"
-  done
-done
-[ -n "$loader" ] || loader=$(/sbin/ldconfig -p | awk '/libvulkan\.so\.1 .*x86-64/ {print $NF; exit}')
-cp -L "$loader" "$stage/lib/vulkan/libvulkan.so.1"
-
-patchelf --set-rpath '$ORIGIN/../lib' "$stage/libexec/vkray" "$stage"/python/vkray.*.so
-for library in "$stage"/lib/*.so* "$stage/lib/vulkan/libvulkan.so.1"; do patchelf --set-rpath '$ORIGIN' "$library"; done
-strip --strip-unneeded "$stage/libexec/vkray" "$stage"/python/vkray.*.so
-
-# The copyright file of each library's Debian package: their licences travel with them.
-for library in "$stage"/lib/*.so* "$stage/lib/vulkan/libvulkan.so.1"; do
-  file=$(basename "$library")
-  package=$(dpkg -S "*/$file" 2>/dev/null | head -n 1 | cut -d: -f1)
-  [ -n "$package" ] && cp "/usr/share/doc/$package/copyright" "$stage/share/doc/vkray/third-party/$package.copyright"
-done
+# Every library the executable and libvkray.so load (cmake/carry-libraries.sh), with their licences.
+sh cmake/carry-libraries.sh "$stage/lib" "$stage/share/doc/vkray/third-party" "$stage/libexec/vkray" "$stage/lib/libvkray.so"
+patchelf --set-rpath '$ORIGIN/../lib' "$stage/libexec/vkray"
+patchelf --set-rpath '$ORIGIN' "$stage/lib/libvkray.so"
+strip --strip-unneeded "$stage/libexec/vkray" "$stage/lib/libvkray.so"
 cp README.md LICENSE "$stage/share/doc/vkray/"
 
 cat >"$stage/bin/vkray" <<'LAUNCHER'
