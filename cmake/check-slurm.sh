@@ -129,6 +129,8 @@ waitfor 10 "munged's socket" munged_up
 munge -n -S "$socket" | unmunge -S "$socket" >/dev/null || fail "a MUNGE credential did not decode"
 
 stage="starting slurmctld and slurmd"
+# The node and the controller are this machine, reached on the loopback address: a machine whose
+# name resolves nowhere (a chroot without it in /etc/hosts) runs the cluster too.
 host="$(hostname -s)"
 cpus="$(nproc)"
 memory=$(( $(awk '/^MemTotal:/ { print $2 }' /proc/meminfo) / 1024 / 4 ))  # MB, a quarter of the machine's
@@ -139,7 +141,7 @@ mkdir -p "$work/slurm/state" "$work/slurm/spool"
 # main one by default) before it starts again.
 cat >"$SLURM_CONF" <<EOF
 ClusterName=vkray-check
-SlurmctldHost=$host
+SlurmctldHost=$host(127.0.0.1)
 SlurmctldPort=16817
 SlurmdPort=16818
 SlurmUser=root
@@ -166,17 +168,27 @@ JobAcctGatherType=jobacct_gather/none
 JobCompType=jobcomp/none
 KillWait=5
 SchedulerParameters=bf_interval=1,sched_interval=1
-NodeName=$host CPUs=$cpus RealMemory=$memory State=UNKNOWN
+NodeName=$host NodeAddr=127.0.0.1 CPUs=$cpus RealMemory=$memory State=UNKNOWN
 PartitionName=check Nodes=$host Default=YES MaxTime=10 State=UP OverSubscribe=FORCE:4
 EOF
 : >"$work/slurm/plugstack.conf"
 # Slurm 22.05's slurmd starts its cgroup plugin whatever the proctrack and task plugins (23.02 added
-# CgroupPlugin=disabled): a machine without a cgroup file system mounted (a chroot: CI's fresh
-# Debian) gets one for the check's time, unmounted at its end.
+# CgroupPlugin=disabled), on the cgroup version the process is in: a machine without the cgroup file
+# systems mounted (a chroot: CI's fresh Debian) gets them for the check's time, as /proc/self/cgroup
+# names them (one unified hierarchy, or v1 controllers), unmounted at its end, last first.
 mounted=""
-if ! grep -q ' /sys/fs/cgroup ' /proc/mounts; then
+if ! grep -q ' /sys/fs/cgroup' /proc/mounts; then
   if ! grep -q ' /sys ' /proc/mounts; then mount -t sysfs sysfs /sys && mounted="/sys"; fi
-  mount -t cgroup2 cgroup2 /sys/fs/cgroup && mounted="/sys/fs/cgroup $mounted"
+  if [ "$(grep -cv '^0::' /proc/self/cgroup)" -eq 0 ]; then
+    mount -t cgroup2 cgroup2 /sys/fs/cgroup && mounted="/sys/fs/cgroup $mounted"
+  else
+    mount -t tmpfs cgroups /sys/fs/cgroup && mounted="/sys/fs/cgroup $mounted"
+    for hierarchy in $(cut -d: -f2 /proc/self/cgroup | grep -v '^$'); do
+      case "$hierarchy" in name=*) options="none,$hierarchy" ;; *) options="$hierarchy" ;; esac
+      folder="/sys/fs/cgroup/${hierarchy#name=}"
+      mkdir -p "$folder" && mount -t cgroup -o "$options" cgroup "$folder" && mounted="$folder $mounted"
+    done
+  fi
 fi
 slurmctld -D -i >"$work/slurm/slurmctld.out" 2>&1 &
 slurmctld_pid=$!
