@@ -4,6 +4,7 @@
 #include "engine/api/vkray.h"
 
 #include "engine/device/gpu_device.hpp"
+#include "engine/parallel.hpp"
 #include "engine/reference/reference.hpp"
 #include "engine/render/renderer.hpp"
 #include "engine/render/search.hpp"
@@ -18,6 +19,7 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstring>
 #include <memory>
@@ -132,81 +134,55 @@ Camera camera_over(const char* camera_json, const Camera& base) {
 
 // The rays a call traces, with their ranges in the engine's convention (along the unit direction).
 // A bad ray (a zero or non-finite direction, an origin beyond max_coordinate, a range the engine
-// refuses: refused_rays) fails the call where the flags ask for that; else it is left out of what is
-// traced and comes back as a miss.
+// refuses) fails the call where the flags ask for that; else, once the engine has refused one, the
+// bad rays are found in one pass (refused_rays), left out of what is traced, and come back as misses.
+// The rays are the caller's memory, read in place.
 struct CallRays {
   std::span<const GivenRay> rays;
-  std::vector<double> t_min, t_max;
-  std::vector<double> length;  // each direction's length, where t is along the direction as given
-  bool filtered = false;       // some rays were bad: the good ones below are traced
-  std::vector<size_t> good;    // their indices among the given rays
+  std::vector<double> t_min, t_max;  // none where the caller gave none
+  std::vector<double> length;        // each direction's length, where t is along the direction as given
+  bool bad_rays_fail = false;
+  bool filtered = false;             // some rays were bad: the good ones below are traced
+  std::vector<uint8_t> refused;
+  std::vector<size_t> good;          // their indices among the given rays
   std::vector<GivenRay> good_rays;
   std::vector<double> good_t_min, good_t_max;
 
-  CallRays(const double* given, uint64_t count, const double* t_min_given, const double* t_max_given, uint32_t flags) {
+  CallRays(const double* given, uint64_t count, const double* t_min_given, const double* t_max_given, uint32_t flags)
+      : bad_rays_fail((flags & VKRAY_BAD_RAYS_FAIL) != 0) {
     if (count > 0) require(given, "rays");
     static_assert(sizeof(GivenRay) == 6 * sizeof(double));
     rays = {reinterpret_cast<const GivenRay*>(given), static_cast<size_t>(count)};
-    const bool along_direction = (flags & VKRAY_T_ALONG_DIRECTION) != 0;
-    if (along_direction) {
+    if (flags & VKRAY_T_ALONG_DIRECTION) {
       length.resize(rays.size());
-      for (size_t k = 0; k < rays.size(); ++k) length[k] = glm::length(vec3_at(given, k, 6, 3));
+      parallel_for_chunks(rays.size(), [&](size_t begin, size_t end) {
+        for (size_t k = begin; k < end; ++k) length[k] = glm::length(vec3_at(given, k, 6, 3));
+      });
     }
     // t along the direction as given is t along the unit direction over the direction's length.
     const auto range = [&](const double* values, std::vector<double>& into) {
       if (!values) return;
       into.assign(values, values + rays.size());
-      if (along_direction) {
-        for (size_t k = 0; k < rays.size(); ++k) into[k] *= length[k];
-      }
+      for (size_t k = 0; k < length.size(); ++k) into[k] *= length[k];
     };
     range(t_min_given, t_min);
     range(t_max_given, t_max);
-    if (flags & VKRAY_BAD_RAYS_FAIL) {
-      check_given_rays(rays);
-      check_ray_ranges(rays, {t_min, t_max});
-      return;
-    }
-    const std::vector<uint8_t> bad = refused_rays(rays, {t_min, t_max});
-    filtered = std::find(bad.begin(), bad.end(), 1) != bad.end();
-    if (!filtered) return;
+  }
+
+  void filter() {
+    refused = refused_rays(rays, {t_min, t_max});
+    filtered = true;
     for (size_t k = 0; k < rays.size(); ++k) {
-      if (bad[k]) continue;
+      if (refused[k]) continue;
       good.push_back(k);
       good_rays.push_back(rays[k]);
       if (!t_min.empty()) good_t_min.push_back(t_min[k]);
       if (!t_max.empty()) good_t_max.push_back(t_max[k]);
     }
   }
-
   std::span<const GivenRay> traced() const { return filtered ? std::span<const GivenRay>(good_rays) : rays; }
   RayRanges traced_ranges() const { return filtered ? RayRanges{good_t_min, good_t_max} : RayRanges{t_min, t_max}; }
-};
-
-// Hits of the traced rays, spread over every given ray, misses where a ray was bad; `store(given,
-// traced)` copies traced hit `traced` to given ray `given`.
-template <typename Store, typename Miss>
-void spread(const CallRays& call, size_t traced_count, Store&& store, Miss&& miss) {
-  if (!call.filtered) {
-    for (size_t k = 0; k < traced_count; ++k) store(k, k);
-    return;
-  }
-  std::vector<uint8_t> hit_given(call.rays.size(), 0);
-  for (size_t k = 0; k < traced_count; ++k) {
-    store(call.good[k], k);
-    hit_given[call.good[k]] = 1;
-  }
-  for (size_t k = 0; k < call.rays.size(); ++k) {
-    if (!hit_given[k]) miss(k);
-  }
-}
-
-// What the engine or the reference found for the traced rays, in one form.
-struct TracedHits {
-  size_t count = 0;
-  std::vector<double> t;       // along the unit direction, +inf on a miss
-  std::vector<double> normal;  // 3 planes
-  std::vector<uint32_t> object, primitive;
+  size_t given_index(size_t traced_index) const { return filtered ? good[traced_index] : traced_index; }
 };
 
 // The runs of consecutive rays from one origin, where the rays hold a few large ones and start at
@@ -247,60 +223,89 @@ void add_timings(RenderTimings& call, const RenderTimings& engine, bool first) {
   call.given_walk = engine.given_walk;
 }
 
-// Calls trace(first, count, rays, ranges) for each pose run of the traced rays (pose_runs), or once
-// for them all, each engine call's timings added to the call's.
-template <typename Trace>
-void over_runs(vkray_renderer& r, const CallRays& call, Trace&& trace) {
-  const std::span<const GivenRay> rays = call.traced();
-  const RayRanges ranges = call.traced_ranges();
-  std::vector<std::pair<size_t, size_t>> runs = pose_runs(rays, ranges);
-  if (runs.empty()) runs.emplace_back(0, rays.size());
-  for (const auto& [first, end] : runs) {
-    const size_t n = end - first;
-    const auto part = [&](std::span<const double> values) { return values.empty() ? values : values.subspan(first, n); };
-    trace(first, n, rays.subspan(first, n), RayRanges{part(ranges.t_min), part(ranges.t_max)});
-    add_timings(r.last_call, r.renderer->timings(), first == 0);
+// Traces the call's rays: trace(first, rays, ranges) for each pose run of them (pose_runs), or once
+// for all, each engine call's timings added to the call's; where the engine refuses a bad ray and
+// the call takes bad rays as misses, again without the bad ones. `bad(given)` is called for each.
+template <typename Trace, typename Bad>
+void trace_call(vkray_renderer& r, CallRays& call, Trace&& trace, Bad&& bad) {
+  const auto all_runs = [&] {
+    const std::span<const GivenRay> rays = call.traced();
+    const RayRanges ranges = call.traced_ranges();
+    std::vector<std::pair<size_t, size_t>> runs = r.renderer ? pose_runs(rays, ranges) : std::vector<std::pair<size_t, size_t>>{};
+    if (runs.empty()) runs.emplace_back(0, rays.size());
+    for (const auto& [first, end] : runs) {
+      const size_t n = end - first;
+      const auto part = [&](std::span<const double> values) { return values.empty() ? values : values.subspan(first, n); };
+      trace(first, rays.subspan(first, n), RayRanges{part(ranges.t_min), part(ranges.t_max)});
+      if (r.renderer) add_timings(r.last_call, r.renderer->timings(), first == 0);
+    }
+  };
+  try {
+    all_runs();
+  } catch (const InputError&) {
+    if (call.bad_rays_fail || call.filtered) throw;
+    call.filter();
+    all_runs();
+    for (size_t k = 0; k < call.rays.size(); ++k) {
+      if (call.refused[k]) bad(k);
+    }
   }
 }
 
-TracedHits traced_hits(vkray_renderer& r, const CallRays& call) {
-  TracedHits traced;
-  const std::span<const GivenRay> rays = call.traced();
-  const RayRanges ranges = call.traced_ranges();
-  traced.count = rays.size();
-  if (r.renderer) {
-    traced.t.assign(traced.count, 0.0);
-    traced.normal.assign(3 * traced.count, 0.0);
-    traced.object.assign(traced.count, no_object);
-    traced.primitive.assign(traced.count, no_object);
-    over_runs(r, call, [&](size_t first, size_t n, std::span<const GivenRay> run, const RayRanges& run_ranges) {
-      RayHits hits = r.renderer->cast_rays(run, run_ranges);
-      const bool doubles = !hits.t64.empty();
-      for (size_t k = 0; k < n; ++k) {
-        traced.t[first + k] = doubles ? hits.t64[k] : hits.t[k];
-        for (size_t c = 0; c < 3; ++c) traced.normal[c * traced.count + first + k] = doubles ? hits.normal64[c * n + k] : hits.normal[c * n + k];
-        traced.object[first + k] = hits.object[k];
-        traced.primitive[first + k] = hits.primitive[k];
+// The caller's arrays of a cast_rays call, written ray by ray from a hit in the engine's terms (t
+// along the unit direction, the unit normal facing the ray, the object and primitive).
+class RayOutputs {
+ public:
+  RayOutputs(const std::vector<const OutputInfo*>& asked, void* const* results, bool doubles, const CallRays& call, const Scene& scene)
+      : asked_(asked), results_(results), doubles_(doubles), call_(call), scene_(scene) {
+    for (const OutputInfo* output : asked) surface_ = surface_ || output->source == OutputSource::surface;
+  }
+
+  void miss(size_t k) const { hit(k, INFINITY, glm::dvec3(0.0), {no_object, no_object}); }
+
+  void hit(size_t k, double t, const glm::dvec3& normal, ObjectPrimitive source) const {
+    const bool missed = source.object == no_object;
+    const glm::dvec3 origin = vec3_at(call_.rays[k].data(), 0, 6);
+    const glm::dvec3 direction = missed ? glm::dvec3(0.0) : unit_vector(vec3_at(call_.rays[k].data(), 0, 6, 3));
+    SurfaceAt surface;
+    if (surface_ && !missed) surface = surface_at(scene_, source, origin, direction, t);
+    for (size_t n = 0; n < asked_.size(); ++n) {
+      void* result = results_[n];
+      switch (asked_[n]->aov) {
+        case Aov::depth: put(result, k, 1, &t, doubles_, call_.length.empty() ? 1.0 : call_.length[k]); break;
+        case Aov::normal: put(result, k, 3, &normal[0], doubles_); break;
+        case Aov::mesh_id: static_cast<uint32_t*>(result)[k] = source.object; break;
+        case Aov::primitive_id: static_cast<uint32_t*>(result)[k] = source.primitive; break;
+        case Aov::position: {
+          const glm::dvec3 p = missed ? glm::dvec3(0.0) : origin + t * direction;
+          put(result, k, 3, &p[0], false);
+          break;
+        }
+        case Aov::barycentric: put(result, k, 2, &surface.barycentric[0], false); break;
+        case Aov::shading_normal: put(result, k, 3, &surface.shading_normal[0], false); break;
+        case Aov::texcoord: put(result, k, 2, &surface.texcoord[0], false); break;
+        case Aov::front_facing: static_cast<uint32_t*>(result)[k] = surface.front ? 1u : 0u; break;
+        default: break;  // output_named let no other through
       }
-    });
-    return traced;
+    }
   }
-  const auto start = std::chrono::steady_clock::now();
-  const std::vector<ReferenceHit> hits = trace_reference_rays(*r.reference, rays, ranges);
-  traced.t.resize(traced.count);
-  traced.normal.resize(3 * traced.count);
-  traced.object.resize(traced.count);
-  traced.primitive.resize(traced.count);
-  for (size_t k = 0; k < traced.count; ++k) {
-    traced.t[k] = hits[k].t;
-    for (size_t c = 0; c < 3; ++c) traced.normal[c * traced.count + k] = hits[k].normal[static_cast<int>(c)];
-    const ObjectPrimitive source = r.reference->source(hits[k]);
-    traced.object[k] = source.object;
-    traced.primitive[k] = source.primitive;
+
+ private:
+  // components values of ray k, over `scale`, as float32 or float64.
+  static void put(void* result, size_t k, uint32_t components, const double* values, bool doubles, double scale = 1.0) {
+    for (uint32_t c = 0; c < components; ++c) {
+      if (doubles) static_cast<double*>(result)[k * components + c] = values[c] / scale;
+      else static_cast<float*>(result)[k * components + c] = static_cast<float>(values[c] / scale);
+    }
   }
-  r.reference_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
-  return traced;
-}
+
+  const std::vector<const OutputInfo*>& asked_;
+  void* const* results_;
+  bool doubles_;
+  const CallRays& call_;
+  const Scene& scene_;
+  bool surface_ = false;
+};
 
 nlohmann::json timings_json(const RenderTimings& t, bool constructor) {
   nlohmann::json json;
@@ -611,78 +616,37 @@ vkray_status vkray_cast_rays(vkray_renderer* renderer, const double* rays, uint6
       require(results, "results");
     }
     std::vector<const OutputInfo*> asked;
-    bool surface = false;
     for (uint32_t k = 0; k < output_count; ++k) {
       asked.push_back(&output_named(outputs[k], true));
-      surface = surface || asked.back()->source == OutputSource::surface;
       if (count > 0) require(results[k], outputs[k]);
     }
-    const CallRays call(rays, count, t_min, t_max, flags);
-    TracedHits traced;
-    {
-      const std::lock_guard one_call_at_a_time(renderer->busy);
-      renderer->called = true;
-      traced = traced_hits(*renderer, call);
-    }
-    const size_t n = call.rays.size();
-    const bool along_direction = (flags & VKRAY_T_ALONG_DIRECTION) != 0;
-    // Every output a ray, in double, in the engine's planar layout; a miss is +inf and zeros.
-    std::vector<double> t(n, INFINITY), normal(3 * n, 0.0);
-    std::vector<uint32_t> object(n, no_object), primitive(n, no_object);
-    spread(call, traced.count, [&](size_t given, size_t k) {
-      t[given] = traced.t[k];
-      for (size_t c = 0; c < 3; ++c) normal[c * n + given] = traced.normal[c * traced.count + k];
-      object[given] = traced.object[k];
-      primitive[given] = traced.primitive[k];
-    }, [](size_t) {});
-    // The surface outputs, from the hit in double (surface_at), as render derives them.
-    std::vector<double> position, barycentric, shading_normal, texcoord;
-    std::vector<uint32_t> front;
-    const auto want = [&](Aov aov) {
-      return std::any_of(asked.begin(), asked.end(), [&](const OutputInfo* output) { return output->aov == aov; });
-    };
-    if (want(Aov::position)) position.assign(3 * n, 0.0);
-    if (surface) {
-      barycentric.assign(2 * n, 0.0), shading_normal.assign(3 * n, 0.0), texcoord.assign(2 * n, 0.0), front.assign(n, 0u);
-    }
-    if (want(Aov::position) || surface) {
-      for (size_t k = 0; k < n; ++k) {
-        if (object[k] == no_object) continue;
-        const glm::dvec3 origin = vec3_at(rays, k, 6), direction = unit_vector(vec3_at(rays, k, 6, 3));
-        if (!position.empty()) {
-          const glm::dvec3 p = origin + t[k] * direction;
-          for (size_t c = 0; c < 3; ++c) position[c * n + k] = p[static_cast<int>(c)];
+    CallRays call(rays, count, t_min, t_max, flags);
+    const RayOutputs written(asked, results, renderer->doubles, call, renderer->scene);
+    const std::lock_guard one_call_at_a_time(renderer->busy);
+    renderer->called = true;
+    // Each traced hit straight into the caller's arrays.
+    trace_call(*renderer, call, [&](size_t first, std::span<const GivenRay> run, const RayRanges& run_ranges) {
+      if (renderer->renderer) {
+        const RayHits hits = renderer->renderer->cast_rays(run, run_ranges);
+        const bool doubles = !hits.t64.empty();
+        parallel_for_chunks(hits.count, [&](size_t begin, size_t end) {
+          for (size_t k = begin; k < end; ++k) {
+            const auto normal = [&](size_t c) { return doubles ? hits.normal64[c * hits.count + k] : double{hits.normal[c * hits.count + k]}; };
+            written.hit(call.given_index(first + k), doubles ? hits.t64[k] : hits.t[k], {normal(0), normal(1), normal(2)},
+                        {hits.object[k], hits.primitive[k]});
+          }
+        });
+        return;
+      }
+      const auto start = std::chrono::steady_clock::now();
+      const std::vector<ReferenceHit> hits = trace_reference_rays(*renderer->reference, run, run_ranges);
+      parallel_for_chunks(hits.size(), [&](size_t begin, size_t end) {
+        for (size_t k = begin; k < end; ++k) {
+          written.hit(call.given_index(first + k), hits[k].t, hits[k].normal, renderer->reference->source(hits[k]));
         }
-        if (!surface) continue;
-        const SurfaceAt at = surface_at(renderer->scene, {object[k], primitive[k]}, origin, direction, t[k]);
-        for (size_t c = 0; c < 2; ++c) barycentric[c * n + k] = at.barycentric[static_cast<int>(c)];
-        for (size_t c = 0; c < 3; ++c) shading_normal[c * n + k] = at.shading_normal[static_cast<int>(c)];
-        for (size_t c = 0; c < 2; ++c) texcoord[c * n + k] = at.texcoord[static_cast<int>(c)];
-        front[k] = at.front ? 1u : 0u;
-      }
-    }
-    if (along_direction) {
-      for (size_t k = 0; k < n; ++k) t[k] /= call.length[k];
-    }
-    // Float outputs in float32, but t and normal in float64 from a renderer of doubles.
-    const auto write = [&](const std::vector<double>& planes, uint32_t components, bool doubles, void* result) {
-      if (doubles) interleave<double>(planes, n, components, result);
-      else interleave<float>(planes, n, components, result);
-    };
-    for (uint32_t k = 0; k < output_count; ++k) {
-      switch (asked[k]->aov) {
-        case Aov::depth: write(t, 1, renderer->doubles, results[k]); break;
-        case Aov::normal: write(normal, 3, renderer->doubles, results[k]); break;
-        case Aov::mesh_id: interleave<uint32_t>(object, n, 1, results[k]); break;
-        case Aov::primitive_id: interleave<uint32_t>(primitive, n, 1, results[k]); break;
-        case Aov::position: write(position, 3, false, results[k]); break;
-        case Aov::barycentric: write(barycentric, 2, false, results[k]); break;
-        case Aov::shading_normal: write(shading_normal, 3, false, results[k]); break;
-        case Aov::texcoord: write(texcoord, 2, false, results[k]); break;
-        case Aov::front_facing: interleave<uint32_t>(front, n, 1, results[k]); break;
-        default: throw InputError(std::string("outputs: '") + asked[k]->name + "' is not an output of given rays");
-      }
-    }
+      });
+      renderer->reference_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    }, [&](size_t given) { written.miss(given); });
   });
 }
 
@@ -691,25 +655,21 @@ vkray_status vkray_occluded(vkray_renderer* renderer, const double* rays, uint64
   return guarded([&] {
     require(renderer, "renderer");
     if (count > 0) require(occluded, "occluded");
-    const CallRays call(rays, count, t_min, t_max, flags);
-    std::vector<uint8_t> blocked;
-    {
-      const std::lock_guard one_call_at_a_time(renderer->busy);
-      renderer->called = true;
+    CallRays call(rays, count, t_min, t_max, flags);
+    const std::lock_guard one_call_at_a_time(renderer->busy);
+    renderer->called = true;
+    trace_call(*renderer, call, [&](size_t first, std::span<const GivenRay> run, const RayRanges& run_ranges) {
+      std::vector<uint8_t> blocked;
       if (renderer->renderer) {
-        blocked.resize(call.traced().size());
-        over_runs(*renderer, call, [&](size_t first, size_t, std::span<const GivenRay> run, const RayRanges& run_ranges) {
-          const std::vector<uint8_t> part = renderer->renderer->occluded(run, run_ranges);
-          std::copy(part.begin(), part.end(), blocked.begin() + static_cast<std::ptrdiff_t>(first));
-        });
+        blocked = renderer->renderer->occluded(run, run_ranges);
       } else {
         // The nearest hit decides: exactly whether any hit lies in the range.
-        const std::vector<ReferenceHit> hits = trace_reference_rays(*renderer->reference, call.traced(), call.traced_ranges());
+        const std::vector<ReferenceHit> hits = trace_reference_rays(*renderer->reference, run, run_ranges);
         blocked.resize(hits.size());
         for (size_t k = 0; k < hits.size(); ++k) blocked[k] = hits[k].kind != PrimitiveKind::none ? 1 : 0;
       }
-    }
-    spread(call, blocked.size(), [&](size_t given, size_t k) { occluded[given] = blocked[k]; }, [&](size_t given) { occluded[given] = 0; });
+      for (size_t k = 0; k < blocked.size(); ++k) occluded[call.given_index(first + k)] = blocked[k];
+    }, [&](size_t given) { occluded[given] = 0; });
   });
 }
 
