@@ -8,6 +8,7 @@
 #include "engine/bench/bench_report.hpp"
 #include "engine/bench/bench_suites.hpp"
 #include "engine/bench/given_rays_bench.hpp"
+#include "engine/bench/host_bench.hpp"
 #include "engine/io/image_io.hpp"
 #include "engine/typed_names.hpp"
 
@@ -83,8 +84,21 @@ int run_given_rays(const BenchOptions& options, const std::vector<BenchScene>& s
   return 0;
 }
 
+// --suite host: the host's stages alone on a frame made on the host, at --size: no device is opened.
+int run_host_stages(const BenchOptions& options) {
+  for (const auto& [value, name] : {std::pair{options.variants, "--variants"}, std::pair{options.markdown, "--markdown"},
+                                    std::pair{options.plot, "--plot"}, std::pair{options.json, "--json"}, std::pair{options.csv, "--csv"}}) {
+    if (!value.empty()) throw InputError(std::string(name) + ": not for --suite host, whose rows are the host's stages");
+  }
+  if (!options.scenes.empty()) throw InputError("--suite host makes its own frame: leave out the scenes");
+  const auto [width, height] = parse_size(options.size);
+  std::fputs(host_stages_table(bench_host_stages(width, height, options.frames), width, height).c_str(), stdout);
+  return 0;
+}
+
 int run_bench(const BenchOptions& options) {
   if (!options.compare.empty()) return run_compare(options);
+  if (options.suite == host_suite) return run_host_stages(options);
   if (options.suite == given_rays_suite) {
     for (const auto& [value, name] : {std::pair{options.variants, "--variants"},
                                       std::pair{options.markdown, "--markdown"}, std::pair{options.plot, "--plot"}}) {

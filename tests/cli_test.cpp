@@ -29,6 +29,7 @@
 #include <set>
 #include <sstream>
 #include <string>
+#include <thread>
 #include <string_view>
 #include <vector>
 
@@ -1122,6 +1123,25 @@ TEST_F(CliTest, BenchPrintsTimesBesideErrors) {
 // The rays suite on the one of its models a folder holds (the teapot, linked): a row per kind of
 // rays, each with no flips against the reference, in the table and in the JSON and CSV files; the
 // two models it lacks are named. Options that only make sense for variants are refused.
+// The host's stages alone, on a frame the host makes: a row each, the EXR with one thread and with
+// every core, and what more threads did for it; no device opened, so no lavapipe note.
+TEST_F(CliTest, BenchHostSuiteTimesTheHostsStagesAlone) {
+  const RunResult run = vkray({"bench", "--suite", "host", "--size", "320x240", "--frames", "1"});
+  ASSERT_EQ(run.exit_code, 0) << run.out << run.err;
+  EXPECT_NE(run.out.find("host stages on a 320x240 frame of depth and normal"), std::string::npos) << run.out;
+  for (const char* stage : {"EXR (zip:1), depth and normal                  1", "PNG preview, depth and normal panels",
+                            "npy files, depth and normal", "host copy of the frame's planes", "disk: 256 MiB written and flushed"}) {
+    EXPECT_NE(run.out.find(stage), std::string::npos) << stage << "\n" << run.out;
+  }
+  if (std::thread::hardware_concurrency() > 1) {
+    EXPECT_NE(run.out.find("of one thread's time"), std::string::npos) << run.out;
+  }
+  EXPECT_EQ(run.err.find("lavapipe"), std::string::npos) << run.err;
+  const RunResult refused = vkray({"bench", "--suite", "host", "--json", "host.json"});
+  EXPECT_EQ(refused.exit_code, 2);
+  EXPECT_NE(refused.err.find("--json: not for --suite host"), std::string::npos) << refused.err;
+}
+
 TEST_F(CliTest, BenchRaysSuitePrintsARowPerKindOfRays) {
   const fs::path teapot = fs::path(VKRAY_MODELS_DIR) / "teapot.obj";
   if (!fs::exists(teapot)) GTEST_SKIP() << teapot << " is absent: the shared models folder is not beside the project";

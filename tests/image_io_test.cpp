@@ -1,8 +1,10 @@
 // Output files are replaced only by complete ones: written under a temporary name, renamed into
 // place when done (engine/io/image_io.cpp).
 #include "engine/io/image_io.hpp"
+#include "engine/io/preview.hpp"
 #include "tests/temp_dir_test.hpp"
 
+#include <OpenImageIO/imageio.h>
 #include <gtest/gtest.h>
 
 #include <fcntl.h>
@@ -98,6 +100,48 @@ TEST_F(ImageIoTest, StaleTemporaryFilesOfTheTargetsGoInOneCall) {
   EXPECT_FALSE(std::filesystem::exists(stale_long));
   EXPECT_FALSE(std::filesystem::exists(left_by_a_reused_pid));
   for (const auto& kept : {other_target, other_kind, in_progress}) EXPECT_TRUE(std::filesystem::exists(kept)) << kept;
+}
+
+// A frame larger than 1920x1080 is previewed at a whole fraction of its size: a 3840x2160 frame's
+// panels at 1920x1080, each pixel the rounded mean of its 2x2 block's bytes (it was written whole:
+// two 3840x2160 panels took longer to make and deflate than the EXR).
+TEST_F(ImageIoTest, ALargeFramesPreviewIsItsBlocksMeans) {
+  Frame large(3840, 2160, {Aov::depth, Aov::normal});
+  large.allocate();
+  const size_t pixels = large.pixel_count();
+  for (size_t p = 0; p < pixels; ++p) {
+    const double x = static_cast<double>(p % 3840) / 3840, y = static_cast<double>(p / 3840) / 2160;
+    large.depth[p] = (p % 7 == 0) ? INFINITY : static_cast<float>(1.0 + x + 2.0 * y);
+    const double n[3] = {x - 0.5, y - 0.5, 0.7};
+    for (size_t c = 0; c < 3; ++c) large.normal[c * pixels + p] = static_cast<float>(n[c]);
+  }
+  ASSERT_EQ(preview_scale(3840, 2160), 2u);
+  EXPECT_EQ(preview_scale(1920, 1080), 1u);
+  EXPECT_EQ(preview_scale(1921, 10), 2u);
+  write_preview(dir_ / "large.png", large);
+  auto input = OIIO::ImageInput::open((dir_ / "large.png").string());
+  ASSERT_TRUE(input);
+  ASSERT_EQ(input->spec().width, 2 * 1920);
+  ASSERT_EQ(input->spec().height, 1080);
+  std::vector<uint8_t> png(size_t{2 * 1920} * 1080 * 3);
+  ASSERT_TRUE(input->read_image(0, 0, 0, 3, OIIO::TypeDesc::UINT8, png.data()));
+  input->close();
+  size_t checked = 0;
+  for (const auto& [panel, aov] : {std::pair{0, Aov::depth}, std::pair{1, Aov::normal}}) {
+    const std::vector<uint8_t> whole = preview_rgb(large, aov);
+    for (uint32_t y = 0; y < 1080; y += 37) {
+      for (uint32_t x = 0; x < 1920; x += 41, ++checked) {
+        for (size_t c = 0; c < 3; ++c) {
+          uint32_t sum = 0;
+          for (uint32_t j = 2 * y; j < 2 * y + 2; ++j) {
+            for (uint32_t i = 2 * x; i < 2 * x + 2; ++i) sum += whole[(size_t{j} * 3840 + i) * 3 + c];
+          }
+          ASSERT_EQ(png[(size_t{y} * 2 * 1920 + panel * 1920 + x) * 3 + c], (sum + 2) / 4) << x << ", " << y;
+        }
+      }
+    }
+  }
+  EXPECT_GT(checked, 2000u);
 }
 
 TEST_F(ImageIoTest, TextFilesAreReplacedWhole) {

@@ -16,9 +16,12 @@ struct BenchScene {
 };
 
 // "basic, scaling, stiff, accuracy, models, rays": for help texts and error messages.
-inline constexpr const char* bench_suite_names = "basic, scaling, stiff, accuracy, models, rays";
+inline constexpr const char* bench_suite_names = "basic, scaling, stiff, accuracy, models, rays, host";
 // The suite whose rows are given rays (engine/bench/given_rays_bench.hpp), not a camera's variants.
 inline constexpr const char* given_rays_suite = "rays";
+// The suite whose rows are the host's stages on a frame made on the host (engine/bench/host_bench.hpp):
+// no device, no scene.
+inline constexpr const char* host_suite = "host";
 // The real mesh the accuracy suite adds from the models folder, when it is there.
 inline constexpr const char* accuracy_model = "stanford-bunny.obj";
 

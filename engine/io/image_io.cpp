@@ -278,6 +278,12 @@ void write_exr(const std::filesystem::path& path, const Frame& frame, const Outp
   file.commit();
 }
 
+void write_preview(const std::filesystem::path& path, const Frame& frame) {
+  PartialFile file(path);
+  write_preview_png_to(file, path, frame);
+  file.commit();
+}
+
 void write_rgb_png(const std::filesystem::path& path, uint32_t width, uint32_t height, const std::vector<uint8_t>& rgb) {
   PartialFile file(path);
   if (rgb.size() != size_t{width} * height * 3) throw std::invalid_argument("write_rgb_png: not width x height RGB pixels");
@@ -397,10 +403,12 @@ size_t write_output_file_to(const PartialFile& partial, const OutputFile& file, 
 void write_preview_png_to(const PartialFile& file, const std::filesystem::path& path, const Frame& frame) {
   const std::vector<Aov> shown = preview_panels(frame);
   if (shown.empty()) throw std::runtime_error(path.string() + ": no outputs to preview");
-  const size_t width = frame.width, height = frame.height, row_width = width * shown.size();
+  const uint32_t scale = preview_scale(frame.width, frame.height);
+  const size_t width = (frame.width + scale - 1) / scale, height = (frame.height + scale - 1) / scale;
+  const size_t row_width = width * shown.size();
   std::vector<uint8_t> rgb(row_width * height * 3);
   for (size_t panel = 0; panel < shown.size(); ++panel) {
-    const std::vector<uint8_t> panel_rgb = preview_rgb(frame, shown[panel]);
+    const std::vector<uint8_t> panel_rgb = preview_rgb(frame, shown[panel], scale);
     for (size_t row = 0; row < height; ++row) {
       std::copy_n(&panel_rgb[row * width * 3], width * 3, &rgb[(row * row_width + panel * width) * 3]);
     }

@@ -84,6 +84,10 @@ void write_exr(const std::filesystem::path& path, const Frame& frame, const Outp
 // (engine/io/preview.hpp) as its "Comment".
 std::vector<Aov> preview_panels(const Frame& frame);
 
+// The PNG preview of `frame` alone, as write_outputs writes it beside the outputs (the host bench
+// times it apart).
+void write_preview(const std::filesystem::path& path, const Frame& frame);
+
 // 8-bit RGB pixels, 3 bytes a pixel, rows from the top, as PNG (the viewer's screenshots).
 void write_rgb_png(const std::filesystem::path& path, uint32_t width, uint32_t height, const std::vector<uint8_t>& rgb);
 

@@ -1,5 +1,7 @@
 #include "engine/io/preview.hpp"
 
+#include "engine/parallel.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -73,41 +75,55 @@ bool inside_unit_disk(uint32_t i, uint32_t j, uint32_t width, uint32_t height) {
   return x * x + y * y <= shorter * shorter;
 }
 
-std::vector<uint8_t> preview_rgb(const Frame& frame, Aov aov) {
-  std::vector<uint8_t> rgb(frame.pixel_count() * 3, 0);
-  auto put = [&](size_t p, uint8_t r, uint8_t g, uint8_t b) {
-    uint8_t* out = &rgb[p * 3];
-    out[0] = r, out[1] = g, out[2] = b;
-  };
+uint32_t preview_scale(uint32_t width, uint32_t height) {
+  return std::max({1u, (width + max_preview_panel_width - 1) / max_preview_panel_width,
+                   (height + max_preview_panel_height - 1) / max_preview_panel_height});
+}
+
+std::vector<uint8_t> preview_rgb(const Frame& frame, Aov aov, uint32_t scale) {
+  const uint32_t width = (frame.width + scale - 1) / scale, height = (frame.height + scale - 1) / scale;
+  std::vector<uint8_t> rgb(size_t{width} * height * 3, 0);
   const auto ramps = preview_ramps(aov, aov == Aov::depth ? finite_depth_range(frame) : DepthRange{});
-  switch (aov) {
-    case Aov::depth:
-      for (size_t p = 0; p < frame.pixel_count(); ++p) {
+  // The bytes of frame pixel (i, j), black on a miss.
+  const auto bytes = [&](uint32_t i, uint32_t j) -> std::array<uint8_t, 3> {
+    const size_t p = size_t{j} * frame.width + i;
+    switch (aov) {
+      case Aov::depth: {
         const float z = frame.depth[p];
-        if (!std::isfinite(z)) continue;
+        if (!std::isfinite(z)) return {0, 0, 0};
         const uint8_t grey = ramps[0].byte(-z);
-        put(p, grey, grey, grey);
+        return {grey, grey, grey};
       }
-      break;
-    case Aov::normal:
-      for (size_t p = 0; p < frame.pixel_count(); ++p) {
-        if (!frame.hit(p)) continue;
+      case Aov::normal: {
+        if (!frame.hit(p)) return {0, 0, 0};
         const glm::vec3 n = frame.normal_at(p);
-        put(p, ramps[0].byte(n.x), ramps[0].byte(n.y), ramps[0].byte(n.z));
+        return {ramps[0].byte(n.x), ramps[0].byte(n.y), ramps[0].byte(n.z)};
       }
-      break;
-    case Aov::uv:
-      for (uint32_t j = 0; j < frame.height; ++j) {
-        for (uint32_t i = 0; i < frame.width; ++i) {
-          const size_t p = size_t{j} * frame.width + i;
-          const PreviewRamp& ramp = ramps[inside_unit_disk(i, j, frame.width, frame.height) ? 0 : 1];
-          const glm::vec2 uv = frame.uv_at(p);
-          put(p, ramp.byte(uv.x), ramp.byte(uv.y), ramp.byte(0.0f));
+      case Aov::uv: {
+        const PreviewRamp& ramp = ramps[inside_unit_disk(i, j, frame.width, frame.height) ? 0 : 1];
+        const glm::vec2 uv = frame.uv_at(p);
+        return {ramp.byte(uv.x), ramp.byte(uv.y), ramp.byte(0.0f)};
+      }
+      default: return {0, 0, 0};  // the other outputs: preview_ramps refused them
+    }
+  };
+  // Each preview pixel the rounded mean of its scale x scale block's (cut at the frame's edges).
+  parallel_for_chunks(height, [&](size_t first_row, size_t end_row) {
+    for (auto y = static_cast<uint32_t>(first_row); y < end_row; ++y) {
+      for (uint32_t x = 0; x < width; ++x) {
+        std::array<uint32_t, 3> sum{};
+        uint32_t count = 0;
+        for (uint32_t j = y * scale; j < std::min(frame.height, (y + 1) * scale); ++j) {
+          for (uint32_t i = x * scale; i < std::min(frame.width, (x + 1) * scale); ++i, ++count) {
+            const auto pixel = bytes(i, j);
+            for (size_t c = 0; c < 3; ++c) sum[c] += pixel[c];
+          }
         }
+        uint8_t* out = &rgb[(size_t{y} * width + x) * 3];
+        for (size_t c = 0; c < 3; ++c) out[c] = static_cast<uint8_t>((sum[c] + count / 2) / count);
       }
-      break;
-    default: break;  // the other outputs: preview_ramps refused them
-  }
+    }
+  }, 8);
   return rgb;
 }
 

@@ -35,7 +35,15 @@ std::string depth_legend(DepthRange depths);
 // of uv (see pixel_uv), exactly, so every device draws the same disk.
 bool inside_unit_disk(uint32_t i, uint32_t j, uint32_t width, uint32_t height);
 
-// `aov` of `frame` (which must hold it) as 8-bit RGB, 3 bytes a pixel, row-major from the top row.
-std::vector<uint8_t> preview_rgb(const Frame& frame, Aov aov);
+// A preview panel is at most this large: a larger frame is previewed at 1/scale of its size (each
+// side rounded up), scale the smallest whole number that fits it. A preview is for looking, the
+// EXR holds the values: a 3840x2160 frame's two full-size panels took longer to make and deflate
+// than its EXR.
+inline constexpr uint32_t max_preview_panel_width = 1920, max_preview_panel_height = 1080;
+uint32_t preview_scale(uint32_t width, uint32_t height);
+
+// `aov` of `frame` (which must hold it) as 8-bit RGB, 3 bytes a pixel, row-major from the top row,
+// at 1/scale of the frame's size: each pixel the rounded mean of its scale x scale block's bytes.
+std::vector<uint8_t> preview_rgb(const Frame& frame, Aov aov, uint32_t scale = 1);
 
 }  // namespace vkray

@@ -326,3 +326,7 @@ def test_python_loads_a_pathlib_path(tmp_path):
     import vkray
     write_ply_ascii(tmp_path / "t.ply", *TRIANGLE)
     assert vkray.load(pathlib.Path(tmp_path / "t.ply")).triangle_count == 1
+
+
+def test_a_typo_that_swaps_two_letters_suggests_the_name_meant(tmp_path):
+    refused(run_cli("render", "--camera", "fvoy=30", "-o", tmp_path / "x.exr"), "unknown key 'fvoy' (did you mean 'fovy'?)")
