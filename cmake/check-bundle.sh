@@ -51,9 +51,11 @@ grep -q "no Vulkan driver found by the Vulkan loader .*(the bundle's: this machi
 # A multiarch machine lists an i386 loader beside (or without) its own: that one is not the machine's
 # loader for vkray, in ldconfig's cache or on LD_LIBRARY_PATH. An i386 ELF of that name stands for it.
 mkdir -p "$root/usr/lib/i386-linux-gnu"
+echo /usr/lib/i386-linux-gnu >"$root/etc/ld.so.conf.d/i386-linux-gnu.conf"  # as libc6:i386 lists it
 echo 'int not_a_vulkan_loader;' | gcc -m32 -shared -nostdlib -x c - -Wl,-soname,libvulkan.so.1 -o "$root/usr/lib/i386-linux-gnu/libvulkan.so.1"
 chroot "$root" ldconfig
-chroot "$root" ldconfig -p | grep -q 'libvulkan\.so\.1 (libc6)' || { echo "vkray: ldconfig does not list the i386 stand-in" >&2; exit 1; }
+# ldconfig lists it as "(ELF)" (a real one, linked to i386's libc, as "(libc6)"): anything but x86-64.
+chroot "$root" ldconfig -p | grep 'libvulkan\.so\.1 (' | grep -qv 'x86-64' || { echo "vkray: ldconfig does not list the i386 stand-in" >&2; exit 1; }
 for path in "" /usr/lib/i386-linux-gnu; do
   as_newcomer "LD_LIBRARY_PATH=$path $vkray info" >"$root/tmp/i386.log" 2>&1 || true
   grep -q "(the bundle's: this machine has none)" "$root/tmp/i386.log" ||
