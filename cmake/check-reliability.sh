@@ -21,8 +21,14 @@ jobs="$(nproc)"
 # (tests/CMakeLists.txt, sized_by_scale_tests: the 7680x4320 renders, 14.7 GB at their peak under
 # ASan, the 120 random scenes, the camera inside a million triangles, the README's commands): the
 # README's test command runs them, and smaller tests of the same kind run their host code here.
+# A unity build: each target's sources compiled in batches (CMakeLists.txt, CMAKE_UNITY_BUILD). The
+# tests' cache is the suite's (build/test-cache, when there): the pipelines it compiled are taken from
+# there, not compiled again (tests/CMakeLists.txt, VKRAY_TEST_CACHE_HOME).
+cache_home="$PWD/build-sanitize/test-cache"
+[ -d build/test-cache ] && cache_home="$PWD/build/test-cache"
 step "sanitizer build" sh -c "cmake -S . -B build-sanitize -DVKRAY_SANITIZE=ON -DVKRAY_WERROR=ON -DVKRAY_TEST_STAGING=OFF \
-                                -DVKRAY_TEST_VALIDATION=0 -DVKRAY_TEST_SIZED=OFF &&
+                                -DVKRAY_TEST_VALIDATION=0 -DVKRAY_TEST_SIZED=OFF -DCMAKE_UNITY_BUILD=ON \
+                                -DVKRAY_TEST_CACHE_HOME=$cache_home &&
                               cmake --build build-sanitize -j$jobs"
 # LeakSanitizer checks the tests that run on the host alone. Where the Vulkan driver is loaded,
 # lavapipe and its LLVM keep allocations until exit, and LeakSanitizer cannot unwind

@@ -5,12 +5,6 @@
 namespace vkray {
 namespace {
 
-constexpr auto host_access = vk::MemoryPropertyFlagBits::eHostVisible | vk::MemoryPropertyFlagBits::eHostCoherent;
-
-}  // namespace
-
-namespace {
-
 // What a buffer is for: the shaders' (mapped only with TransferMode::direct) or the host's (always
 // mapped: uploads, readbacks).
 enum class Side { device, host };
@@ -29,7 +23,7 @@ GpuBuffer create_buffer(VulkanContext& context, vk::DeviceSize size, vk::BufferU
   result.memory = vk::raii::DeviceMemory(context.device,
                                          vk::MemoryAllocateInfo(requirements.size, type, by_address ? &addressable : nullptr));
   result.buffer.bindMemory(*result.memory, 0);
-  const bool host_visible = (context.memory_properties.memoryTypes[type].propertyFlags & host_access) == host_access;
+  const bool host_visible = (context.memory_properties.memoryTypes[type].propertyFlags & host_access_flags) == host_access_flags;
   if (host_visible && (side == Side::host || !context.staging)) {
     result.mapped = result.memory.mapMemory(0, VK_WHOLE_SIZE);
   }
@@ -52,12 +46,12 @@ GpuBuffer create_device_buffer(VulkanContext& context, vk::DeviceSize size, vk::
 }
 
 GpuBuffer create_readback_buffer(VulkanContext& context, vk::DeviceSize size) {
-  return create_buffer(context, size, vk::BufferUsageFlagBits::eTransferDst, host_access,
+  return create_buffer(context, size, vk::BufferUsageFlagBits::eTransferDst, host_access_flags,
                        vk::MemoryPropertyFlagBits::eHostCached, Side::host);
 }
 
 GpuBuffer create_upload_buffer(VulkanContext& context, vk::DeviceSize size, vk::BufferUsageFlags usage) {
-  return create_buffer(context, size, usage, host_access, {}, Side::host);
+  return create_buffer(context, size, usage, host_access_flags, {}, Side::host);
 }
 
 GpuBuffer upload_buffer(VulkanContext& context, const void* data, size_t bytes, vk::BufferUsageFlags usage) {
@@ -67,7 +61,7 @@ GpuBuffer upload_buffer(VulkanContext& context, const void* data, size_t bytes, 
     std::memcpy(target.mapped, data, bytes);
     return target;
   }
-  GpuBuffer staging = create_buffer(context, bytes, vk::BufferUsageFlagBits::eTransferSrc, host_access, {}, Side::host);
+  GpuBuffer staging = create_buffer(context, bytes, vk::BufferUsageFlagBits::eTransferSrc, host_access_flags, {}, Side::host);
   std::memcpy(staging.mapped, data, bytes);
   context.submit_and_wait([&](const vk::raii::CommandBuffer& commands) {
     commands.copyBuffer(*staging.buffer, *target.buffer, vk::BufferCopy(0, 0, bytes));

@@ -171,9 +171,8 @@ bool main_memory_is_host_visible(const vk::PhysicalDeviceMemoryProperties& memor
       main_heap = h;
     }
   }
-  const auto host_access = vk::MemoryPropertyFlagBits::eHostVisible | vk::MemoryPropertyFlagBits::eHostCoherent;
   for (uint32_t t = 0; t < memory.memoryTypeCount; ++t) {
-    if (memory.memoryTypes[t].heapIndex == main_heap && (memory.memoryTypes[t].propertyFlags & host_access) == host_access) {
+    if (memory.memoryTypes[t].heapIndex == main_heap && (memory.memoryTypes[t].propertyFlags & host_access_flags) == host_access_flags) {
       return true;
     }
   }

@@ -14,6 +14,10 @@
 
 namespace vkray {
 
+// Memory the host maps and reads or writes without flushing: what direct transfers and staging need.
+inline constexpr vk::MemoryPropertyFlags host_access_flags =
+    vk::MemoryPropertyFlagBits::eHostVisible | vk::MemoryPropertyFlagBits::eHostCoherent;
+
 // What showing images in a window asks of Vulkan (see engine/viewer/window.hpp): the instance
 // extensions of its kind of surface, and whether a queue family of a device can present there.
 struct PresentationSupport {
