@@ -215,9 +215,9 @@ int run_render_views(const RenderOptions& options, const AovSet& aovs) {
   }
   if (options.timings && summary.rendered > 0) {
     std::printf("timings: %.2f s for %u views, %.2f views/s (%.1f ms a view); the device %.2f s of it, waiting for the "
-                "writers %.2f s\n",
+                "%u writers %.2f s\n",
                 summary.seconds, summary.rendered, summary.rendered / summary.seconds, 1e3 * summary.seconds / summary.rendered,
-                summary.render_seconds, summary.queue_wait_seconds);
+                summary.render_seconds, summary.writers, summary.queue_wait_seconds);
   }
   return 0;
 }

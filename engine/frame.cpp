@@ -121,14 +121,34 @@ std::string python_key(const OutputInfo& output) {
   return key;
 }
 
-void Frame::allocate(bool doubles) {
-  // What is computed: the outputs asked for, what the device computes for them, and both ids,
-  // from which the surface outputs are found.
+namespace {
+
+// What a frame of `aovs` computes and holds: the outputs asked for, what the device computes for
+// them, and both ids, from which the surface outputs are found.
+AovSet computed_outputs(AovSet aovs) {
   AovSet computed = aovs;
   for (const auto& output : output_table) {
     if (aovs.on_device().has(output.aov)) computed.add(output.aov);
   }
   if (aovs.has_surface_outputs()) computed.add(Aov::mesh_id), computed.add(Aov::primitive_id);
+  return computed;
+}
+
+}  // namespace
+
+size_t Frame::bytes(uint32_t width, uint32_t height, AovSet aovs, bool doubles) {
+  const AovSet computed = computed_outputs(aovs);
+  size_t components = 0;
+  for (const auto& output : output_table) {
+    if (computed.has(output.aov)) components += output.components;
+  }
+  const size_t pixels = size_t{width} * height;
+  const size_t double_components = doubles ? (computed.has(Aov::depth) ? 1 : 0) + (computed.has(Aov::normal) ? 3 : 0) : 0;
+  return pixels * (components * sizeof(float) + double_components * sizeof(double));
+}
+
+void Frame::allocate(bool doubles) {
+  const AovSet computed = computed_outputs(aovs);
   for (const auto& output : output_table) {
     const size_t size = computed.has(output.aov) ? output.components * pixel_count() : 0;
     if (output.floats) (this->*output.floats).assign(size, 0.0f);

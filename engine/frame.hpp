@@ -157,6 +157,8 @@ struct Frame {
   // Sizes the planes of the outputs in `aovs` and of what the device computes for them, for
   // width x height (outputs()), with the double ones if asked.
   void allocate(bool doubles = false);
+  // The bytes allocate() gives width x height pixels of `aovs`: what a frame held on the host costs.
+  static size_t bytes(uint32_t width, uint32_t height, AovSet aovs, bool doubles);
   // depth and normal from depth64 and normal64, where those are there.
   void round_doubles();
   glm::vec3 normal_at(size_t pixel) const {

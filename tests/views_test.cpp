@@ -3,6 +3,7 @@
 #include "engine/scene/camera.hpp"
 #include "engine/views/manifest.hpp"
 #include "engine/views/output_pattern.hpp"
+#include "engine/views/view_batch.hpp"
 #include "engine/views/view_list.hpp"
 #include "tests/input_error_test.hpp"
 #include "tests/temp_dir_test.hpp"
@@ -106,6 +107,37 @@ TEST(Views, SphereViewsFromAStraightDownCamera) {
     EXPECT_NEAR(glm::length(view.from), 5.0, 1e-12);
     EXPECT_TRUE(std::isfinite(make_camera_basis(view, 8, 8).right.x));
   }
+}
+
+// Frame::bytes is what allocate() gives, for every output the table has, in float and in double.
+TEST(ViewBatch, AFramesBytesAreWhatItsPlanesHold) {
+  for (bool doubles : {false, true}) {
+    AovSet every;
+    for (const OutputInfo& output : outputs()) every.add(output.aov);
+    for (AovSet aovs : {AovSet{Aov::depth}, AovSet{Aov::depth, Aov::normal}, AovSet{Aov::barycentric}, every}) {
+      Frame frame(7, 5, aovs);
+      frame.allocate(doubles);
+      size_t held = (frame.depth64.size() + frame.normal64.size()) * sizeof(double);
+      for (const OutputInfo& output : outputs()) {
+        if (output.floats) held += (frame.*output.floats).size() * sizeof(float);
+        if (output.integers) held += (frame.*output.integers).size() * sizeof(uint32_t);
+      }
+      EXPECT_EQ(Frame::bytes(7, 5, aovs, doubles), held) << aovs.names() << (doubles ? " in double" : "");
+    }
+  }
+}
+
+// One writer a host thread while 3 w + 2 frames fit in a quarter of the memory; one at least.
+TEST(ViewBatch, WritersAreOneAThreadWhileAQuarterOfTheMemoryHoldsTheirFrames) {
+  const uint64_t frame_1080p = Frame::bytes(1920, 1080, {Aov::depth, Aov::normal}, false);
+  EXPECT_EQ(frame_1080p, 1920ull * 1080 * 4 * sizeof(float));
+  EXPECT_EQ(writer_threads(16, frame_1080p, 128ull << 30), 16u);  // 1035 frames fit: the threads bound it
+  EXPECT_EQ(writer_threads(2, frame_1080p, 128ull << 30), 2u);
+  const uint64_t frame_8k = Frame::bytes(7680, 4320, {Aov::depth, Aov::normal}, false);  // 531 MB
+  EXPECT_EQ(writer_threads(16, frame_8k, 16ull << 30), 2u);  // 4 GiB holds 8 frames: (8 - 2) / 3
+  EXPECT_EQ(writer_threads(16, frame_8k, 8ull << 30), 1u);   // 4 frames: none by the formula, one still
+  EXPECT_EQ(writer_threads(0, frame_1080p, 128ull << 30), 1u);  // hardware_concurrency() may say 0
+  EXPECT_EQ(writer_threads(4, frame_1080p, 0), 1u);             // and sysconf nothing
 }
 
 TEST(Camera, PinholeModelProjectsEachPixelsRayOntoItsPixel) {

@@ -15,8 +15,16 @@
 #include <set>
 #include <thread>
 
+#include <unistd.h>
+
 namespace vkray {
 namespace {
+
+uint64_t host_memory_bytes() {
+  const long pages = sysconf(_SC_PHYS_PAGES);
+  const long page_size = sysconf(_SC_PAGESIZE);
+  return pages > 0 && page_size > 0 ? uint64_t(pages) * uint64_t(page_size) : 0;
+}
 
 
 double seconds_since(Clock::time_point start) { return elapsed_ms(start) / 1e3; }
@@ -239,12 +247,15 @@ ViewBatchSummary render_views(Renderer& renderer, const ViewBatch& batch,
   // Each writer compresses its own file on its own thread: with several views in flight, that keeps
   // the cores as busy as a file's encoding threads would, without their hand-offs.
   use_exr_threads(1);
+  summary.writers = batch.writers > 0 ? batch.writers
+                                      : writer_threads(std::thread::hardware_concurrency(),
+                                                       Frame::bytes(batch.width, batch.height, batch.aovs, true), host_memory_bytes());
   const auto start = Clock::now();
-  WriteQueue queue(batch.writers + 1);
+  WriteQueue queue(summary.writers + 1);
   std::mutex progress_mutex;
   ViewBatchProgress done{0, static_cast<uint32_t>(to_render.size()), 0.0};
   std::vector<std::jthread> writers;
-  for (unsigned w = 0; w < std::max(1u, batch.writers); ++w) {
+  for (unsigned w = 0; w < summary.writers; ++w) {
     writers.emplace_back([&] {
       while (std::optional<WriteJob> job = queue.pop()) {
         try {
@@ -293,6 +304,12 @@ ViewBatchSummary render_views(Renderer& renderer, const ViewBatch& batch,
   summary.rendered = done.done;
   summary.seconds = seconds_since(start);
   return summary;
+}
+
+unsigned writer_threads(unsigned host_threads, uint64_t frame_bytes, uint64_t host_memory_bytes) {
+  const uint64_t frames_in_budget = frame_bytes > 0 ? host_memory_bytes / 4 / frame_bytes : UINT64_MAX;
+  const uint64_t by_memory = frames_in_budget > 2 ? (frames_in_budget - 2) / 3 : 0;
+  return static_cast<unsigned>(std::max<uint64_t>(1, std::min<uint64_t>(host_threads, by_memory)));
 }
 
 }  // namespace vkray

@@ -38,7 +38,7 @@ struct ViewBatch {
   std::string scene;       // geometry_hash of the scene, recorded with each view
   std::vector<std::string> objects;  // object_names of the scene, recorded with each view's mesh_id
   bool overwrite = false;  // render views whose files exist too (and start the manifest afresh)
-  unsigned writers = 2;    // threads writing files; the queue holds one frame more
+  unsigned writers = 0;    // threads writing files, a view each (0: writer_threads's choice); the queue holds one frame more
   // Called with each view's index before it renders; what it throws stops the batch as a failed
   // render does. The tests inject faults here (a device lost at view k).
   std::function<void(uint32_t)> before_render;
@@ -58,7 +58,14 @@ struct ViewBatchSummary {
   double queue_wait_seconds = 0.0;  // the device waiting for a writer (the writing took longer)
   size_t beyond_png16_samples = 0;  // png16 depths past 65535 steps (stored as 0), and their views
   uint32_t beyond_png16_views = 0;
+  unsigned writers = 0;             // threads that wrote the files
 };
+
+// How many views are written at once where the batch does not say: one a host thread (each file is
+// encoded on its writer's thread alone), as long as the frames held stay within a quarter of the
+// host's memory: each writer's, about as much again for its encoder, the queue's one more than the
+// writers and the one rendering (3 w + 2 frames of Frame::bytes). At least one.
+unsigned writer_threads(unsigned host_threads, uint64_t frame_bytes, uint64_t host_memory_bytes);
 
 // Throws InputError where the batch's names would have two views, two files of one view, or a view
 // and the manifest write one file ("d{index}/../v.exr", a png16 depth named as the preview, a
