@@ -2,13 +2,12 @@
 
 #include "engine/bench/bench_report.hpp"
 #include "engine/bench/embree_baseline.hpp"
+#include "engine/bench/scratch_folder.hpp"
 #include "engine/io/image_io.hpp"
 #include "engine/parallel.hpp"
 #include "engine/stopwatch.hpp"
 #include "engine/views/view_batch.hpp"
 #include "engine/views/view_list.hpp"
-
-#include <unistd.h>
 
 #include <algorithm>
 #include <chrono>
@@ -83,8 +82,8 @@ BenchRow run_views_variant(GpuDevice& device, const Scene& scene, const BenchVar
   row.upload_ms = renderer.timings().upload_ms;
   row.bvh_build_ms = renderer.timings().bvh_build_ms + renderer.timings().structures_ms;
   row.pipeline_ms = renderer.timings().pipeline_ms + renderer.timings().pipeline_beside_upload_ms;
-  const std::filesystem::path folder =
-      std::filesystem::temp_directory_path() / ("vkray-bench-views-" + std::to_string(getpid()));
+  const ScratchFolder scratch("vkray-bench-views-");
+  const std::filesystem::path& folder = scratch.path();
   ViewBatch batch;
   batch.cameras = orbit_views(scene.camera, variant.orbit_views);
   batch.width = scene.width;
@@ -93,13 +92,6 @@ BenchRow run_views_variant(GpuDevice& device, const Scene& scene, const BenchVar
   batch.exr = OutputPattern((folder / "view-{index:05}.exr").string(), "views");
   batch.manifest = folder / "manifest.jsonl";
   batch.overwrite = true;
-  struct Remover {
-    std::filesystem::path folder;
-    ~Remover() {
-      std::error_code ignored;
-      std::filesystem::remove_all(folder, ignored);
-    }
-  } remover{folder};
   const ViewBatchSummary summary = render_views(renderer, batch);
   const double ms_a_view = 1e3 * summary.seconds / summary.rendered;
   row.gpu = time_stats({ms_a_view});

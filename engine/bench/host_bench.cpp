@@ -1,5 +1,6 @@
 #include "engine/bench/host_bench.hpp"
 
+#include "engine/bench/scratch_folder.hpp"
 #include "engine/io/exr_file.hpp"
 #include "engine/io/image_io.hpp"
 #include "engine/statistics.hpp"
@@ -68,17 +69,10 @@ void write_and_sync(const std::filesystem::path& path, const std::vector<char>& 
 }  // namespace
 
 std::vector<HostStageRow> bench_host_stages(uint32_t width, uint32_t height, uint32_t frames) {
-  const std::filesystem::path folder = std::filesystem::temp_directory_path() / ("vkray-host-bench-" + std::to_string(::getpid()));
-  std::filesystem::create_directories(folder);
-  struct Remove {
-    std::filesystem::path folder;
-    ~Remove() {
-      std::error_code error;
-      std::filesystem::remove_all(folder, error);
-    }
-  } remove{folder};
+  const ScratchFolder scratch("vkray-host-bench-");
+  const std::filesystem::path& folder = scratch.path();
   const Frame frame = sphere_frame(width, height);
-  const uint64_t frame_bytes = frame.pixel_count() * 4 * sizeof(float);  // depth and normal
+  const uint64_t frame_bytes = Frame::bytes(width, height, frame.aovs, false);
   const unsigned cores = std::max(1u, std::thread::hardware_concurrency());
   std::vector<HostStageRow> rows;
   OutputSettings exr;
