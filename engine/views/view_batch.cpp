@@ -26,7 +26,6 @@ uint64_t host_memory_bytes() {
   return pages > 0 && page_size > 0 ? uint64_t(pages) * uint64_t(page_size) : 0;
 }
 
-
 double seconds_since(Clock::time_point start) { return elapsed_ms(start) / 1e3; }
 
 struct WriteJob {
