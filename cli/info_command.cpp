@@ -41,6 +41,8 @@ Action add_info_command(CLI::App& app) {
               << "  transfer as opened         " << GpuDevice(std::to_string(chosen)).transfer_description() << '\n'
               << "  ray queries                "
               << (d.ray_query ? "yes (--traversal ray-query)" : "no") << '\n'
+              << "  host memory import         "
+              << (d.host_import_alignment > 0 ? "yes (staging copies results straight into the frame)" : "no") << '\n'
               << "  tree walk                  "
               << (d.favours_packet_walk ? "packets of 8x8 camera rays (llvmpipe from Mesa 25 on)" : "per ray") << '\n';
     std::cout << "  Vulkan loader              " << vulkan_loader_description() << '\n';

@@ -265,7 +265,15 @@ void print_render_timings(const RenderRunTimings& run, bool no_preview) {
     } else {
       std::printf("      %-24s %13s  %s\n", "dispatch (GPU time)", "n/a", "(the device has no timestamps)");
     }
-    print_timing(2, "readback", run.gpu_timings->readback_ms);
+    std::string readback_note;
+    if (const uint64_t bytes = run.gpu_timings->readback_bytes; bytes > 0 && run.gpu_timings->readback_ms > 0.0) {
+      char rate[96];
+      std::snprintf(rate, sizeof rate, "%.1f MiB copied by the device, %.2f GB/s", static_cast<double>(bytes) / (1 << 20),
+                    static_cast<double>(bytes) / (run.gpu_timings->readback_ms * 1e6));
+      readback_note = rate;
+      if (run.gpu_timings->readback_in_place_bytes > 0) readback_note += "; the outputs straight into the frame (imported host memory)";
+    }
+    print_timing(2, "readback", run.gpu_timings->readback_ms, readback_note);
     if (run.gpu_timings->unfinished_rays > 0) {
       print_timing(2, "finishing rays on the CPU", run.gpu_timings->cpu_finish_ms,
                    std::to_string(run.gpu_timings->unfinished_rays) + " rays past the loop budget");

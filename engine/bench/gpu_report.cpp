@@ -337,6 +337,10 @@ void run_transfer(const ReportGroup& group, size_t index, const std::string& dev
   line["frame_median_ms"] = median(frame_ms);
   line["gpu_median_ms"] = median(gpu_ms);
   line["readback_median_ms"] = median(readback_ms);
+  // The frame's outputs over the readback's time: what the link (staging) or the host's copy (direct) moved.
+  line["readback_gb_per_s"] = static_cast<double>(Frame::bytes(where.width, where.height, aovs, false)) /
+                              (median(readback_ms) * 1e6);
+  line["readback_in_place"] = renderer.timings().readback_in_place_bytes > 0;
   emit(out, line);
 }
 
@@ -609,12 +613,15 @@ std::string report_markdown(const std::string& json_text) {
   for (const auto& [group, winner] : best) text += " " + group.substr(6) + ": " + winner.row + ";";
   text += "\n" + unfinished(by_section["bench"]);
 
-  text += "\n## Transfer\n\n| scene | size | transfer | frame ms | GPU ms | readback ms |\n| --- | --- | --- | ---: | ---: | ---: |\n";
+  text += "\n## Transfer\n\n| scene | size | transfer | frame ms | GPU ms | readback ms | readback GB/s |\n"
+          "| --- | --- | --- | ---: | ---: | ---: | ---: |\n";
   for (const Json* row : by_section["transfer"]) {
     if (row->value("status", "") != "ok") continue;
-    text += format("| %s | %ux%u | %s | %s | %s | %s |\n", row->value("scene", "").c_str(), row->value("width", 0u),
-                   row->value("height", 0u), row->value("transfer", "").c_str(), ms((*row)["frame_median_ms"]).c_str(),
-                   ms((*row)["gpu_median_ms"]).c_str(), ms((*row)["readback_median_ms"]).c_str());
+    text += format("| %s | %ux%u | %s%s | %s | %s | %s | %.1f |\n", row->value("scene", "").c_str(), row->value("width", 0u),
+                   row->value("height", 0u), row->value("transfer", "").c_str(),
+                   row->value("readback_in_place", false) ? "; straight into the frame" : "",
+                   ms((*row)["frame_median_ms"]).c_str(), ms((*row)["gpu_median_ms"]).c_str(),
+                   ms((*row)["readback_median_ms"]).c_str(), row->value("readback_gb_per_s", 0.0));
   }
   text += unfinished(by_section["transfer"]);
 

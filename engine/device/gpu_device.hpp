@@ -82,6 +82,9 @@ struct GpuDeviceInfo {
   bool ray_query = false;
   uint64_t max_structure_primitives = 0;
   uint32_t structure_scratch_alignment = 0;
+  // VK_EXT_external_memory_host: the alignment of host memory the device imports, so that staging
+  // copies results straight into a frame's planes (engine/vulkan/host_import.hpp); 0 without it.
+  uint64_t host_import_alignment = 0;
   // VKRAY_DEVICE_OVERRIDE as it changed this description (engine/vulkan/context.cpp); empty: as the driver says.
   std::string overridden;
 };

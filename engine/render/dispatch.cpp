@@ -39,12 +39,29 @@ double Renderer::Impl::dispatch_tile(const vk::raii::Pipeline& chosen, const gpu
     bool copied = false;
     for (const auto* output :
          {&tile.depth, &tile.normal, &tile.uv, &tile.overflow, &tile.hits, to_image ? &depth_range : nullptr}) {
-      if (output && *output && (*output)->readback) {
-        const vk::DeviceSize bytes = (*output)->bytes_written(vk::DeviceSize{tile.width} * params.image.w);
-        commands.copyBuffer(*(*output)->written.buffer, *(*output)->readback->buffer, vk::BufferCopy(0, 0, bytes));
-        timings.readback_bytes += bytes;
-        copied = true;
+      if (!output || !*output || !(*output)->readback) continue;
+      const OutputBuffer& written = **output;
+      const vk::DeviceSize pixels = vk::DeviceSize{tile.width} * params.image.w;
+      // Of the list of rays the CPU finishes, its count alone: it is almost always 0, and the rays it
+      // lists are fetched when it is not (finish_unfinished). At 8K the whole list is 127 MiB a frame.
+      const vk::DeviceSize bytes = output == &tile.overflow ? written.header_bytes : written.bytes_written(pixels);
+      if (const auto& frame = written.frame_planes) {
+        // Each plane of the tile (packed to its pixels) to the tile's rows of that plane in the frame.
+        const vk::DeviceSize tile_plane_bytes = pixels * frame->element_bytes;
+        const vk::DeviceSize first_pixel = vk::DeviceSize{tile.width} * params.image.z;
+        std::vector<vk::BufferCopy> regions;
+        for (vk::DeviceSize plane = 0; plane < written.pixel_bytes / frame->element_bytes; ++plane) {
+          regions.emplace_back(plane * tile_plane_bytes,
+                              frame->memory.offset + (plane * frame->frame_pixels + first_pixel) * frame->element_bytes,
+                              tile_plane_bytes);
+        }
+        commands.copyBuffer(*written.written.buffer, *frame->memory.buffer.buffer, regions);
+        timings.readback_in_place_bytes += bytes;
+      } else {
+        commands.copyBuffer(*written.written.buffer, *written.readback->buffer, vk::BufferCopy(0, 0, bytes));
       }
+      timings.readback_bytes += bytes;
+      copied = true;
     }
     if (copied) {  // a fence wait alone does not make device writes visible to the host
       const vk::MemoryBarrier to_host(vk::AccessFlagBits::eTransferWrite, vk::AccessFlagBits::eHostRead);

@@ -46,7 +46,7 @@ OutputBuffer Renderer::Impl::make_output(vk::DeviceSize pixels, vk::DeviceSize p
   const vk::DeviceSize bytes = header_bytes + pixels * pixel_bytes;
   OutputBuffer output{create_storage_buffer(context, bytes,
                                             vk::BufferUsageFlagBits::eTransferSrc | vk::BufferUsageFlagBits::eTransferDst),
-                      std::nullopt, pixel_bytes, header_bytes};
+                      std::nullopt, pixel_bytes, header_bytes, std::nullopt};
   if (!output.written.mapped) output.readback = create_readback_buffer(context, bytes);
   return output;
 }
@@ -163,6 +163,34 @@ const vk::raii::Pipeline& Renderer::Impl::begin_render(const Camera& camera, uin
   return chosen;
 }
 
+template <typename Visit>
+void Renderer::Impl::for_each_frame_plane(Frame& frame, Visit&& visit) {
+  if (precision() == Precision::float64) {
+    visit(tile.depth, frame.depth64, 1);
+    visit(tile.normal, frame.normal64, 3);
+  } else {
+    visit(tile.depth, frame.depth, 1);
+    visit(tile.normal, frame.normal, 3);
+  }
+  visit(tile.uv, frame.uv, 2);
+}
+
+Renderer::Impl::FrameLanding Renderer::Impl::land_in_frame(Frame& frame) {
+  for_each_frame_plane(frame, [&]<typename T>(std::optional<OutputBuffer>& output, std::vector<T>& target, size_t) {
+    if (!output || !output->readback || target.empty()) return;
+    if (auto memory = import_host_memory(context, target.data(), target.size() * sizeof(T))) {
+      output->frame_planes = OutputBuffer::FramePlanes{std::move(*memory), sizeof(T), frame.pixel_count()};
+    }
+  });
+  return FrameLanding{tile};
+}
+
+Renderer::Impl::FrameLanding::~FrameLanding() {
+  for (std::optional<OutputBuffer>* output : {&tile.depth, &tile.normal, &tile.uv}) {
+    if (*output) (*output)->frame_planes.reset();
+  }
+}
+
 void Renderer::Impl::read_tile(Frame& frame, uint32_t first_row, uint32_t rows) {
   const uint32_t width = frame.width;
   const auto copy_start = Clock::now();
@@ -170,22 +198,14 @@ void Renderer::Impl::read_tile(Frame& frame, uint32_t first_row, uint32_t rows) 
   // lands in the same plane of the frame.
   const size_t first_pixel = size_t{first_row} * width;
   const size_t tile_pixels = size_t{rows} * width;
-  auto copy_planes = [&]<typename T>(const std::optional<OutputBuffer>& output, std::vector<T>& target, size_t plane_count) {
-    if (!output) return;
+  for_each_frame_plane(frame, [&]<typename T>(std::optional<OutputBuffer>& output, std::vector<T>& target, size_t plane_count) {
+    if (!output || output->frame_planes) return;
     const auto* source = static_cast<const T*>(output->host());
     for (size_t plane = 0; plane < plane_count; ++plane) {
       std::memcpy(target.data() + plane * frame.pixel_count() + first_pixel,
                   source + plane * tile_pixels, tile_pixels * sizeof(T));
     }
-  };
-  if (precision() == Precision::float64) {
-    copy_planes(tile.depth, frame.depth64, 1);
-    copy_planes(tile.normal, frame.normal64, 3);
-  } else {
-    copy_planes(tile.depth, frame.depth, 1);
-    copy_planes(tile.normal, frame.normal, 3);
-  }
-  copy_planes(tile.uv, frame.uv, 2);
+  });
   if (tile.hits) {  // the device's slots, as the scene numbers them
     const auto* slots = static_cast<const uint32_t*>(tile.hits->host());
     parallel_for_chunks(tile_pixels, [&](size_t begin, size_t end) {

@@ -173,6 +173,7 @@ void Renderer::Impl::render_camera_rows(const Camera& camera, AovSet device_aovs
     const CameraBasis basis = make_camera_basis(camera, width, height);
     uint32_t tile_rows = 0;
     const vk::raii::Pipeline& camera_pipeline = begin_render(camera, width, height, device_aovs, nullptr, tile_rows);
+    const FrameLanding landing = land_in_frame(frame);
     dispatch_camera_rows(camera_pipeline, basis, width, height, tile_rows, RaycastMode::image_buffers,
                          [&](uint32_t first_row, uint32_t rows) {
       read_tile(frame, first_row, rows);

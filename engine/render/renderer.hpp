@@ -40,6 +40,7 @@ struct RenderTimings {
   double dispatch_gpu_ms = 0.0;    // GPU time of the ray-casting dispatches (timestamp queries)
   double readback_ms = 0.0;        // copying results back into the Frame (or the few the host reads)
   uint64_t readback_bytes = 0;     // copied on the device into host-visible memory (staging), all dispatches
+  uint64_t readback_in_place_bytes = 0;  // of those, copied straight into the frame's planes: no host copy
   double rays_ms = 0.0;            // cast_rays: ordering the rays and writing them for the device
   GivenRayWalk given_walk = GivenRayWalk::none;  // how cast_rays walked the tree
   uint32_t tiles = 0;              // dispatches the image was split into

@@ -9,6 +9,7 @@
 #include "engine/render/renderer.hpp"
 #include "engine/vulkan/acceleration_structures.hpp"
 #include "engine/vulkan/buffer.hpp"
+#include "engine/vulkan/host_import.hpp"
 #include "engine/vulkan/raycast_pipeline.hpp"
 
 #include <functional>
@@ -46,6 +47,14 @@ struct OutputBuffer {
   std::optional<GpuBuffer> readback;
   vk::DeviceSize pixel_bytes = 0;
   vk::DeviceSize header_bytes = 0;
+  // For the render under way, in place of readback: the frame's planes of this output, imported
+  // (land_in_frame). The device copies each plane of a tile into its place; the host copies nothing.
+  struct FramePlanes {
+    ImportedHostMemory memory;
+    vk::DeviceSize element_bytes = 0;  // a float or a double
+    vk::DeviceSize frame_pixels = 0;   // a plane's length in the frame
+  };
+  std::optional<FramePlanes> frame_planes;
   const void* host() const { return readback ? readback->mapped : written.mapped; }
   vk::DeviceSize bytes_written(vk::DeviceSize pixels) const {
     return std::min(written.size, header_bytes + pixels * pixel_bytes);
@@ -139,7 +148,19 @@ struct Renderer::Impl {
   // camera, the tile's outputs and bindings; `tile_rows` receives the rows per tile.
   const vk::raii::Pipeline& begin_render(const Camera& camera, uint32_t width, uint32_t height, AovSet aovs,
                                          const ImageTarget* target, uint32_t& tile_rows);
-  // The outputs of the tile of `rows` rows from `first_row` into their places in `frame`.
+  // Each output of the tile with its planes in `frame` (float or double, as the precision has them),
+  // `planes` of them.
+  template <typename Visit>
+  void for_each_frame_plane(Frame& frame, Visit&& visit);
+  // With staging, the frame's planes imported where the device allows (OutputBuffer::frame_planes),
+  // so that the device copies each tile straight into them; the returned guard forgets them again.
+  struct FrameLanding {
+    TileOutputs& tile;
+    ~FrameLanding();
+  };
+  [[nodiscard]] FrameLanding land_in_frame(Frame& frame);
+  // The outputs of the tile of `rows` rows from `first_row` into their places in `frame`, where the
+  // device did not copy them there.
   void read_tile(Frame& frame, uint32_t first_row, uint32_t rows);
   // The planes' heights above `origin` into their buffer (no submission is in flight: every render
   // waits for its own).

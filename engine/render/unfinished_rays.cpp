@@ -9,6 +9,16 @@ void Renderer::Impl::finish_unfinished(const std::function<void(uint32_t index)>
   const uint32_t count = overflow[0];
   if (count == 0) return;
   const auto start = Clock::now();
+  if (tile.overflow->readback) {  // staging: the dispatch copied the count alone; now the rays listed
+    const vk::DeviceSize listed = vk::DeviceSize{count} * sizeof(uint32_t);
+    context.submit_and_wait([&](const vk::raii::CommandBuffer& commands) {
+      commands.copyBuffer(*tile.overflow->written.buffer, *tile.overflow->readback->buffer,
+                          vk::BufferCopy(tile.overflow->header_bytes, tile.overflow->header_bytes, listed));
+      const vk::MemoryBarrier to_host(vk::AccessFlagBits::eTransferWrite, vk::AccessFlagBits::eHostRead);
+      commands.pipelineBarrier(vk::PipelineStageFlagBits::eTransfer, vk::PipelineStageFlagBits::eHost, {}, to_host, {}, {});
+    });
+    timings.readback_bytes += listed;
+  }
   if (!reference) reference.emplace(host_scene);
   for (uint32_t k = 0; k < count; ++k) finish(overflow[1 + k]);
   timings.unfinished_rays += count;

@@ -216,8 +216,8 @@ bool runs_doubles_at_half_rate(std::string_view name) {
 
 // VKRAY_DEVICE_OVERRIDE: a comma-separated list that makes a device present itself as a GPU would,
 // so that the paths a GPU takes run on lavapipe in the test suite: `discrete` (its type: float edge
-// functions, no packet walk, staging by default), `no-ray-query`, `no-float64`. What it cannot
-// change stays: lavapipe's loop limit, its memory types.
+// functions, no packet walk, staging by default), `no-ray-query`, `no-float64`, `no-host-import`.
+// What it cannot change stays: lavapipe's loop limit, its memory types.
 void apply_device_override(GpuDeviceInfo& info) {
   const char* value = std::getenv("VKRAY_DEVICE_OVERRIDE");
   if (!value || !*value) return;
@@ -231,13 +231,15 @@ void apply_device_override(GpuDeviceInfo& info) {
       info.fast_float64 = runs_doubles_at_half_rate(info.name);
     } else if (word == "no-ray-query") {
       info.ray_query = false;
+    } else if (word == "no-host-import") {
+      info.host_import_alignment = 0;
     } else if (word == "no-float64") {
       info.shader_float64 = false;
       info.fast_float64 = false;
       info.favours_packet_walk = false;
     } else {
       throw GpuError("VKRAY_DEVICE_OVERRIDE: unknown word '" + std::string(word) +
-                     "' (it takes a comma-separated list of discrete, no-ray-query, no-float64)");
+                     "' (it takes a comma-separated list of discrete, no-ray-query, no-float64, no-host-import)");
     }
     list = comma == std::string_view::npos ? std::string_view() : list.substr(comma + 1);
   }
@@ -301,6 +303,12 @@ GpuDeviceInfo describe(const vk::raii::PhysicalDevice& physical_device) {
   if (!info.can_compute) info.unusable_reason = "no compute queue, or no subgroup vote, ballot, arithmetic and shuffle";
   info.favours_packet_walk = llvmpipe && mesa_major >= 25 && info.subgroup_size == 8;
   info.ray_query = has_ray_queries(physical_device);
+  if (has_device_extension(physical_device, VK_EXT_EXTERNAL_MEMORY_HOST_EXTENSION_NAME)) {
+    info.host_import_alignment =
+        physical_device.getProperties2<vk::PhysicalDeviceProperties2, vk::PhysicalDeviceExternalMemoryHostPropertiesEXT>()
+            .get<vk::PhysicalDeviceExternalMemoryHostPropertiesEXT>()
+            .minImportedHostPointerAlignment;
+  }
   if (info.ray_query) {
     const auto structures = physical_device
                                 .getProperties2<vk::PhysicalDeviceProperties2, vk::PhysicalDeviceAccelerationStructurePropertiesKHR>()
@@ -509,6 +517,8 @@ void open_device(VulkanContext& vk_context, std::string_view name_filter, const 
     if (has_device_extension(vk_context.physical_device, "VK_KHR_portability_subset")) {
       device_extensions.push_back("VK_KHR_portability_subset");
     }
+    // Results copied straight into host memory vkray already has (engine/vulkan/host_import.hpp).
+    if (vk_context.info.host_import_alignment > 0) device_extensions.push_back(VK_EXT_EXTERNAL_MEMORY_HOST_EXTENSION_NAME);
     // float64 arithmetic, where the device has it, for the `--precision double` shader; ray queries
     // where it has them, for the ray-query traversal.
     vk::StructureChain<vk::PhysicalDeviceFeatures2, vk::PhysicalDeviceVulkan12Features,
