@@ -210,15 +210,17 @@ GpuSceneShape plan_gpu_scene(const Scene& scene, const GpuSceneOptions& options)
   return shape_for_counts(scene.triangle_count(), scene.spheres.size(), scene.planes.size(), options);
 }
 
-GpuScene make_gpu_scene(const Scene& scene, const GpuSceneOptions& options, const ShaderVariant& shader) {
+GpuScene make_gpu_scene(const Scene& scene, const GpuSceneOptions& options, const ShaderVariant& shader,
+                        const std::optional<SceneExtent>& extent) {
   GpuScene gpu;
   gpu.precision = shader.precision;
   const bool world_origin = shader.precision == Precision::float64 || shader.coordinates == VKRAY_COORDINATES_ABSOLUTE;
-  gpu.anchor = world_origin ? glm::dvec3(0.0) : scene_anchor(scene);
+  const SceneExtent anchored = extent ? *extent : scene_extent(scene);
+  gpu.anchor = world_origin ? glm::dvec3(0.0) : anchored.anchor;
   gpu.hit_sources.first_sphere_object = static_cast<uint32_t>(scene.meshes.size());
   gpu.hit_sources.first_plane_object = static_cast<uint32_t>(scene.meshes.size() + scene.spheres.size());
   auto encode = [&](const glm::dvec3& position, double w) { return encode_point(glm::dvec4(position, w), gpu.precision); };
-  gpu.radius = scene_radius(scene, gpu.anchor);
+  gpu.radius = world_origin ? scene_radius(scene, gpu.anchor) : anchored.radius;
   for (const auto& plane : scene.planes) {
     gpu.planes.push_back({{}, encode(plane.normal, glm::dot(plane.normal, plane.point - gpu.anchor))});
   }

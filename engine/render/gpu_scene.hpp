@@ -112,8 +112,10 @@ struct GeometryLayout {
 // GpuSceneShape): every triangle counted as kept, the tree shallow enough for the packet walk.
 GpuSceneShape plan_gpu_scene(const Scene& scene, const GpuSceneOptions& options);
 
-// Positions encoded for `shader`'s precision and coordinates.
-GpuScene make_gpu_scene(const Scene& scene, const GpuSceneOptions& options = {}, const ShaderVariant& shader = {});
+// Positions encoded for `shader`'s precision and coordinates; `extent` is scene_extent(scene), found
+// here where not given.
+GpuScene make_gpu_scene(const Scene& scene, const GpuSceneOptions& options = {}, const ShaderVariant& shader = {},
+                        const std::optional<SceneExtent>& extent = std::nullopt);
 
 // Every plane's normal_height for a camera at `origin` (see GpuPlane): `scene_planes` are the
 // scene's, in the same order as `planes`.

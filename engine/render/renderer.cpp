@@ -31,12 +31,13 @@ Renderer::Renderer(GpuDevice& device, const Scene& scene, RendererOptions option
     // The packet walk's pipeline does not depend on the tree: the first one is made on a second
     // thread while the tree builds and the scene uploads, and kept if the built scene is as planned.
     const GpuSceneShape planned = plan_gpu_scene(scene, scene_options);
+    const SceneExtent extent = scene_extent(scene);
     std::optional<RaycastPipeline> early_pipeline;
     std::future<double> early_creation;
     if (!options.first_aovs.empty() && planned.search == PrimitiveSearch::bvh_packet && packet_obstacle.empty()) {
       early_pipeline.emplace(r.context, specialization_for(planned, 0, tree_loop_budget(planned, r.context.info, options.loop_budget),
                                                            options.shader));
-      const bool lo_parts = needs_lo_parts(scene_anchor(scene), scene_radius(scene, scene_anchor(scene)), scene.camera.from);
+      const bool lo_parts = needs_lo_parts(extent.anchor, extent.radius, scene.camera.from);
       early_creation = std::async(std::launch::async, [&early_pipeline, &options, lo_parts] {
         double created_ms = 0.0;
         early_pipeline->pipeline(options.first_aovs.on_device(), lo_parts, RaycastMode::image_buffers, created_ms);
@@ -53,7 +54,7 @@ Renderer::Renderer(GpuDevice& device, const Scene& scene, RendererOptions option
         if (creation.valid()) creation.wait();
       }
     } joiner{early_creation};
-    const GpuScene gpu_scene = make_gpu_scene(scene, scene_options, options.shader);
+    const GpuScene gpu_scene = make_gpu_scene(scene, scene_options, options.shader, extent);
     if (gpu_scene.search == PrimitiveSearch::bvh_packet && !packet_walk_fits(gpu_scene.bvh_depth)) {
       throw GpuError("the packet walk keeps its stack in registers, for trees up to " +
                      std::to_string(VKRAY_STACK_REGISTERS_MAX) + " deep; this one is " + std::to_string(gpu_scene.bvh_depth));

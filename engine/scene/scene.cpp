@@ -256,6 +256,11 @@ double scene_radius(const Scene& scene, const glm::dvec3& anchor) {
   return radius;
 }
 
+SceneExtent scene_extent(const Scene& scene) {
+  const glm::dvec3 anchor = scene_anchor(scene);
+  return {anchor, scene_radius(scene, anchor)};
+}
+
 void add_geometry(Fnv1a& fnv, const Scene& scene) {
   fnv.add(uint64_t{scene.spheres.size()});
   for (const auto& sphere : scene.spheres) fnv.add(sphere.center), fnv.add(sphere.radius);

@@ -129,6 +129,13 @@ glm::dvec3 scene_anchor(const Scene& scene);
 // The largest distance from `anchor` of a sphere's surface or a mesh vertex (0 without either).
 double scene_radius(const Scene& scene, const glm::dvec3& anchor);
 
+// The anchor and the radius about it, found once for all who need them (two passes over the vertices).
+struct SceneExtent {
+  glm::dvec3 anchor;
+  double radius = 0.0;
+};
+SceneExtent scene_extent(const Scene& scene);
+
 // What each mesh_id of the outputs stands for, by id: the meshes' sources (Mesh::source; "meshes[i]"
 // for one built in memory), then "spheres[i]", then "planes[i]", as ObjectPrimitive numbers them.
 std::vector<std::string> object_names(const Scene& scene);
