@@ -12,6 +12,7 @@
 #include <fcntl.h>
 #include <signal.h>
 #include <spawn.h>
+#include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -96,6 +97,7 @@ std::vector<std::string> lines_of(const fs::path& path) {
 struct Ended {
   bool timed_out = false;
   int status = 0;  // waitpid's
+  uint64_t peak_bytes = 0;  // the process's peak resident memory (getrusage's ru_maxrss)
 };
 
 // Starts this executable with `arguments` in a process group of its own, its standard error
@@ -124,15 +126,17 @@ Ended run_process(const std::vector<std::string>& arguments, const std::vector<s
   if (spawned != 0) throw std::runtime_error(std::string("cannot start a report process: ") + std::strerror(spawned));
   const auto deadline = after_ms(Clock::now(), 1e3 * std::max(seconds, 0.0));
   Ended ended;
-  while (waitpid(pid, &ended.status, WNOHANG) == 0) {
+  struct rusage usage {};
+  while (wait4(pid, &ended.status, WNOHANG, &usage) == 0) {
     if (Clock::now() >= deadline) {
       kill(-pid, SIGKILL);
-      waitpid(pid, &ended.status, 0);
+      wait4(pid, &ended.status, 0, &usage);
       ended.timed_out = true;
       break;
     }
-    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
   }
+  ended.peak_bytes = static_cast<uint64_t>(usage.ru_maxrss) * 1024;  // in KiB on Linux
   return ended;
 }
 
@@ -210,6 +214,44 @@ std::vector<std::string> run_group(const ReportOptions& options, const ReportGro
   return lines;
 }
 
+// A process group's rows (report_process_arguments): `vkray render` run once to warm the pipeline
+// cache, then timed three times, each a process of its own, its output in the group's parts folder
+// and removed afterwards.
+void run_process_rows(const ReportOptions& options, const ReportSettings& settings, const ReportGroup& group,
+                      std::ostream& rows) {
+  const std::optional<std::vector<std::string>> arguments = report_process_arguments(settings, group);
+  if (!arguments) {
+    rows << report_unfinished_row(group, 0, "skipped", "no model file to render (the generated stand-in has none)") << std::endl;
+    return;
+  }
+  const fs::path parts = fs::path(options.folder) / "parts";
+  const fs::path output = parts / (group.id + ".exr"), log = parts / (group.id + ".render.log");
+  std::vector<std::string> command = {"vkray"};
+  command.insert(command.end(), arguments->begin(), arguments->end());
+  command.insert(command.end(), {"-o", output.string()});
+  if (!options.device.empty()) command.insert(command.end(), {"--device", options.device});
+  std::vector<std::string> environment;
+  for (char** variable = environ; *variable; ++variable) environment.emplace_back(*variable);
+  constexpr int timed_runs = 3;
+  ProcessTimes times;
+  for (int run = 0; run <= timed_runs; ++run) {
+    const auto start = Clock::now();
+    const Ended ended = run_process(command, environment, log, group.timeout_s);
+    const double wall_ms = elapsed_ms(start);
+    if (ended.timed_out || !WIFEXITED(ended.status) || WEXITSTATUS(ended.status) != 0) {
+      rows << report_unfinished_row(group, 0, "failed", describe_end(ended, group.timeout_s, log)) << std::endl;
+      return;
+    }
+    if (run == 0) continue;  // the pipeline cache warmed
+    times.wall_ms.push_back(wall_ms);
+    times.peak_bytes = std::max(times.peak_bytes, ended.peak_bytes);
+  }
+  std::string shown = "vkray";
+  for (const std::string& argument : *arguments) shown += " " + argument;
+  rows << report_process_row(group, 0, shown, times) << std::endl;
+  for (const fs::path& file : {output, fs::path(output).replace_extension(".png"), log}) fs::remove(file);
+}
+
 int run_report(const ReportOptions& options) {
   const ReportSettings settings = settings_of(options);
   if (!options.group.empty()) {  // one group's process
@@ -217,7 +259,11 @@ int run_report(const ReportOptions& options) {
       if (group.id != options.group) continue;
       std::ofstream rows(options.rows_file, std::ios::app);
       if (!rows) throw std::runtime_error("cannot write " + options.rows_file);
-      run_report_group(settings, group, options.first_row, options.device, rows);
+      if (group.section == "process") {
+        run_process_rows(options, settings, group, rows);
+      } else {
+        run_report_group(settings, group, options.first_row, options.device, rows);
+      }
       return 0;
     }
     throw InputError("--group: no group '" + options.group + "' in this report");
@@ -302,9 +348,10 @@ Action add_report_command(CLI::App& app) {
                     "Small sizes (320x180, 640x360 and 1280x720, 64k rays, 8 views): a few minutes on lavapipe, as CI runs it");
   command->add_option("--minutes", options->minutes, "Time for the whole report (default 8, or 3 with --reduced)")
       ->check(CLI::Range(0.1, 1e4));
-  command->add_option("--only", options->only, "Only these sections (and the device): checks, bench, rays, views, transfer")
+  command->add_option("--only", options->only,
+                      "Only these sections (and the device): checks, bench, rays, views, transfer, process")
       ->delimiter(',')
-      ->check(CLI::IsMember({"checks", "bench", "rays", "views", "transfer"}));
+      ->check(CLI::IsMember({"checks", "bench", "rays", "views", "transfer", "process"}));
   command->add_flag("--require-gpu", options->require_gpu,
                     "Exit 1 after the first line when the device is a CPU implementation of Vulkan (lavapipe)");
   command->add_option("--device", options->device,

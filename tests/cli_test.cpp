@@ -1630,13 +1630,13 @@ TEST_F(CliTest, HelpSpeaksOfScenes) {
 // The GPU report (engine/bench/gpu_report.hpp), its reduced sizes: the sections that take seconds
 // here (CI's bundle check runs all of them). Every row ran, JSON and Markdown hold them, exit 0.
 TEST_F(CliTest, ReportReducedWritesJsonAndMarkdown) {
-  const RunResult run = vkray({"report", "report", "--reduced", "--only", "rays,views", "--models", VKRAY_MODELS_DIR});
+  const RunResult run = vkray({"report", "report", "--reduced", "--only", "rays,views,process", "--models", VKRAY_MODELS_DIR});
   ASSERT_EQ(run.exit_code, 0) << run.out << run.err;
   EXPECT_TRUE(starts_with(run.out, "vkray on ")) << "the first line names the device: " << run.out;
   const auto json = nlohmann::json::parse(read_text(path("report/report.json")));
   EXPECT_EQ(json.at("schema"), "vkray-gpu-report-1");
   EXPECT_FALSE(json.at("device").at("name").get<std::string>().empty());
-  size_t rays = 0, views = 0;
+  size_t rays = 0, views = 0, processes = 0;
   for (const auto& row : json.at("rows")) {
     EXPECT_EQ(row.at("status"), "ok") << row.dump();
     if (row.at("section") == "rays") {
@@ -1646,11 +1646,20 @@ TEST_F(CliTest, ReportReducedWritesJsonAndMarkdown) {
       EXPECT_GT(row.at("embree_median_ms").get<double>(), 0.0);
     }
     views += row.at("section") == "views";
+    if (row.at("section") == "process") {  // whole `vkray render` processes: their time and memory
+      ++processes;
+      EXPECT_GT(row.at("wall_min_ms").get<double>(), 0.0);
+      const uint64_t output = uint64_t{row.at("width")} * uint64_t{row.at("height")} * 16;  // float depth, 3 float normals
+      EXPECT_EQ(row.at("output_bytes"), output);
+      EXPECT_GT(row.at("peak_bytes"), output);  // the process holds the frame
+    }
   }
   EXPECT_EQ(rays, 4u);
-  EXPECT_EQ(views, 1u);
+  EXPECT_EQ(views, 2u);  // EXR and npy
+  EXPECT_EQ(processes, 2u);
   const std::string markdown = read_text(path("report/report.md"));
-  for (const char* heading : {"# vkray on ", "## Given rays", "## Many views", "| camera-rows | 65536 |", "| occlusion | 65536 |"}) {
+  for (const char* heading : {"# vkray on ", "## Given rays", "## Many views", "## Whole processes", "| camera-rows | 65536 |",
+                              "| occlusion | 65536 |", "written to .npy files"}) {
     EXPECT_NE(markdown.find(heading), std::string::npos) << heading;
   }
 }

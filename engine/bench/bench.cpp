@@ -10,6 +10,7 @@
 #include "engine/views/view_list.hpp"
 
 #include <algorithm>
+#include <cstdio>
 #include <chrono>
 #include <filesystem>
 #include <limits>
@@ -44,11 +45,22 @@ BenchVariant shader_variant(std::string name, std::string description, ShaderVar
 
 }  // namespace
 
-BenchVariant views_variant(uint32_t views) {
-  BenchVariant variant{"views-" + std::to_string(views),
-                       std::to_string(views) + " orbiting views rendered and written in one run: wall time a view",
+std::optional<BenchVariant> views_variant(const std::string& name) {
+  uint32_t views = 0;
+  char format[8] = "exr";
+  int length = 0;
+  if ((std::sscanf(name.c_str(), "views-%u%n", &views, &length) != 1 || size_t(length) != name.size()) &&
+      (std::sscanf(name.c_str(), "views-%u-%7[a-z0-9]%n", &views, format, &length) != 2 || size_t(length) != name.size())) {
+    return std::nullopt;
+  }
+  const std::optional<FileFormat> stored = file_format_from_name(format);
+  if (views == 0 || !stored) return std::nullopt;
+  BenchVariant variant{name,
+                       std::to_string(views) + " orbiting views rendered and written in one run (" + format +
+                           "): wall time a view",
                        {}, CpuBaseline::none, [](const Scene& scene) { return finite_primitives(scene) > 0; }};
   variant.orbit_views = views;
+  variant.views_format = *stored;
   return variant;
 }
 
@@ -92,6 +104,7 @@ BenchRow run_views_variant(GpuDevice& device, const Scene& scene, const BenchVar
   batch.exr = OutputPattern((folder / "view-{index:05}.exr").string(), "views");
   batch.manifest = folder / "manifest.jsonl";
   batch.overwrite = true;
+  batch.output_settings.format = variant.views_format;
   const ViewBatchSummary summary = render_views(renderer, batch);
   const double ms_a_view = 1e3 * summary.seconds / summary.rendered;
   row.gpu = time_stats({ms_a_view});
@@ -220,7 +233,7 @@ const std::vector<BenchVariant>& bench_variants() {
       shader_variant("naive", "every textbook choice: b^2 - c spheres, Moeller-Trumbore, float32 world coordinates",
                      naive),
       shader_variant("float64", "the shader in double precision (--precision double)", float64),
-      views_variant(100),
+      *views_variant("views-100"),
       cpu_baseline("embree-1", "Embree 3 on the CPU, all threads, one ray at a time", CpuBaseline::embree_single),
       cpu_baseline("embree-8", "Embree 3 on the CPU, all threads, packets of 8 rays", CpuBaseline::embree_packet),
   };

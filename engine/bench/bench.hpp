@@ -7,6 +7,7 @@
 #include "engine/bench/embree_baseline.hpp"
 #include "engine/reference/compare.hpp"
 #include "engine/device/gpu_device.hpp"
+#include "engine/io/array_files.hpp"
 #include "engine/render/renderer.hpp"
 #include "engine/statistics.hpp"
 
@@ -32,6 +33,7 @@ struct BenchVariant {
   // OpenEXR files in one run (engine/views), writing overlapped with rendering; its time is the
   // whole run's wall time a view, its error the first view's. Run only where named (--variants).
   uint32_t orbit_views = 0;
+  FileFormat views_format = FileFormat::exr;  // how a many-views row stores its views
   // Outputs beside depth and normal (the camera, id and surface outputs): what each costs beside
   // the default, and its error against the reference's. Run only where named (--variants).
   AovSet extra_outputs = AovSet{};
@@ -108,8 +110,9 @@ struct BenchSettings {
   std::function<void(double)> reference_progress;  // fraction done of the reference, from any thread
 };
 
-// The many-views row of `views` views (bench_variants() has views-100).
-BenchVariant views_variant(uint32_t views);
+// A many-views row by name (bench_variants() has views-100): "views-100" writes OpenEXR files,
+// "views-100-npy" .npy arrays. None for another name.
+std::optional<BenchVariant> views_variant(const std::string& name);
 
 // Throws InputError naming the known variants when `name` is not one.
 const BenchVariant& find_bench_variant(const std::string& name);

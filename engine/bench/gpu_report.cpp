@@ -278,8 +278,8 @@ void run_bench_group(const ReportGroup& group, size_t first, GpuDevice& device, 
   for (size_t index = first; index < group.rows.size(); ++index) {
     if (skip_failed(index)) continue;
     const std::string& name = group.rows[index];
-    const BenchVariant variant = name.starts_with("views-") ? views_variant(static_cast<uint32_t>(std::stoul(name.substr(6))))
-                                                            : find_bench_variant(name);
+    const std::optional<BenchVariant> views = views_variant(name);
+    const BenchVariant variant = views ? *views : find_bench_variant(name);
     if (!variant.applies(bench.scene)) {
       emit(out, row_head(group, index, "skipped", "does not apply to this scene"));
       continue;
@@ -401,8 +401,11 @@ std::vector<ReportGroup> report_plan(const ReportSettings& settings) {
   bench(plan, scale.small_width, scale.small_height);
   plan.push_back({group_id("rays", models.front(), scale.small_width, scale.small_height), "rays", kinds, scale.timeout_s});
   plan.push_back({group_id("views", models.front(), scale.views_width, scale.views_height), "views",
-                  {"views-" + std::to_string(scale.views)}, scale.timeout_s});
+                  {"views-" + std::to_string(scale.views), "views-" + std::to_string(scale.views) + "-npy"}, scale.timeout_s});
   plan.push_back({group_id("transfer", models.front(), scale.large_width, scale.large_height), "transfer", transfers, scale.timeout_s});
+  for (const auto& [width, height] : {std::pair{scale.large_width, scale.large_height}, {scale.huge_width, scale.huge_height}}) {
+    plan.push_back({group_id("process", models.front(), width, height), "process", {"render"}, scale.timeout_s});
+  }
   bench(plan, scale.large_width, scale.large_height);
   plan.push_back({group_id("bench", models.front(), scale.huge_width, scale.huge_height), "bench", huge_rows, scale.timeout_s});
   plan.push_back(checks("direct"));
@@ -425,6 +428,7 @@ void run_report_group(const ReportSettings& settings, const ReportGroup& group, 
                            "' ended its process in an earlier group of this report (see that group's failed row)"));
     return true;
   };
+  if (group.section == "process") throw std::logic_error("the report's process rows are run by the CLI, which starts processes");
   if (group.section == "transfer") {
     for (size_t index = first; index < group.rows.size(); ++index) {
       if (!skip_failed(index)) run_transfer(group, index, device_choice, settings, out);
@@ -457,6 +461,26 @@ void run_report_group(const ReportSettings& settings, const ReportGroup& group, 
       }
     }
   }
+}
+
+std::optional<std::vector<std::string>> report_process_arguments(const ReportSettings& settings, const ReportGroup& group) {
+  const GroupScene where = parse_group_scene(group.id);
+  if (where.scene == stand_in_model) return std::nullopt;
+  return std::vector<std::string>{"render", (settings.models_dir / where.scene).string(), "--width", std::to_string(where.width),
+                                  "--height", std::to_string(where.height)};
+}
+
+std::string report_process_row(const ReportGroup& group, size_t row, const std::string& command, const ProcessTimes& times) {
+  const GroupScene where = parse_group_scene(group.id);
+  Json line = row_head(group, row, "ok");
+  line["scene"] = where.scene;
+  line["width"] = where.width, line["height"] = where.height;
+  line["command"] = command;
+  line["wall_median_ms"] = median(times.wall_ms);
+  line["wall_min_ms"] = *std::min_element(times.wall_ms.begin(), times.wall_ms.end());
+  line["peak_bytes"] = times.peak_bytes;
+  line["output_bytes"] = Frame::bytes(where.width, where.height, AovSet{Aov::depth, Aov::normal}, false);
+  return line.dump();
 }
 
 std::string report_unfinished_row(const ReportGroup& group, size_t row, const std::string& status,
@@ -625,13 +649,25 @@ std::string report_markdown(const std::string& json_text) {
   }
   text += unfinished(by_section["transfer"]);
 
+  text += "\n## Whole processes\n\nA user's `vkray render` of the model (EXR and PNG preview), the pipeline cache warm: "
+          "wall time of the whole process (median of the timed runs) and its peak resident memory against the frame's "
+          "output bytes (depth and normal).\n\n| command | wall ms | peak MiB | peak / output bytes |\n| --- | ---: | ---: | ---: |\n";
+  for (const Json* row : by_section["process"]) {
+    if (row->value("status", "") != "ok") continue;
+    const double peak = row->value("peak_bytes", 0.0), output = row->value("output_bytes", 1.0);
+    text += format("| `%s` | %s | %.0f | %.2f |\n", row->value("command", "").c_str(), ms((*row)["wall_median_ms"]).c_str(),
+                   peak / (1 << 20), peak / output);
+  }
+  text += unfinished(by_section["process"]);
+
   text += "\n## Many views\n\n";
   for (const Json* row : by_section["views"]) {
     if (row->value("status", "") != "ok") continue;
-    text += format("%u views of %s at %ux%u (depth and normal, rendered and written to OpenEXR in one run): %.1f views/s, "
+    const bool npy = row->value("row", "").ends_with("-npy");
+    text += format("%u views of %s at %ux%u (depth and normal, rendered and written to %s in one run): %.1f views/s, "
                    "%s ms a view.\n",
                    row->value("views", 0u), row->value("scene", "").c_str(), row->value("width", 0u), row->value("height", 0u),
-                   row->value("views_per_s", 0.0), ms((*row)["gpu_median_ms"]).c_str());
+                   npy ? ".npy files" : "OpenEXR (zip:1)", row->value("views_per_s", 0.0), ms((*row)["gpu_median_ms"]).c_str());
   }
   text += unfinished(by_section["views"]);
 

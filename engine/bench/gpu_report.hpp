@@ -2,7 +2,7 @@
 // (README, "The GPU report"). Its groups of rows: the device as Vulkan describes it; checks of
 // correctness against the reference (the stiff cases and models, every traversal and geometry
 // layout the device runs, both transfers, float64); the bench at two sizes and an 8K frame with
-// Embree beside it; many views; given rays. Each group runs in a process of its own (the CLI starts
+// Embree beside it; many views; given rays; whole `vkray render` processes. Each group runs in a process of its own (the CLI starts
 // them, cli/report_command.cpp), so that a hang or a lost device ends a row, not the report: a
 // group writes each row as one line of JSON the moment it is done, and the rows a process did not
 // finish get their reason from how it ended.
@@ -11,6 +11,7 @@
 #include <cstddef>
 #include <filesystem>
 #include <iosfwd>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -55,6 +56,18 @@ std::vector<ReportGroup> report_plan(const ReportSettings& settings);
 // run: a lost device.
 void run_report_group(const ReportSettings& settings, const ReportGroup& group, size_t first,
                       const std::string& device_choice, std::ostream& out);
+
+// The whole-process rows (section "process"): `vkray render` of a model at a size, as a user runs
+// it (EXR and PNG preview, the pipeline cache warm), each a process the CLI starts and times (the
+// engine starts none). What the row runs, less the executable and the output it names; none where
+// the report has no model file (the generated stand-in), the row then skipped.
+std::optional<std::vector<std::string>> report_process_arguments(const ReportSettings& settings, const ReportGroup& group);
+// Each timed run's wall time and the largest peak resident memory among them.
+struct ProcessTimes {
+  std::vector<double> wall_ms;
+  uint64_t peak_bytes = 0;
+};
+std::string report_process_row(const ReportGroup& group, size_t row, const std::string& command, const ProcessTimes& times);
 
 // The line of a row its process did not finish: `status` "failed" (the process died or the device
 // was lost: `reason` says how) or "not run" (the group's or the report's time ran out first).
