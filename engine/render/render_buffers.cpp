@@ -176,12 +176,15 @@ void Renderer::Impl::for_each_frame_plane(Frame& frame, Visit&& visit) {
 }
 
 Renderer::Impl::FrameLanding Renderer::Impl::land_in_frame(Frame& frame) {
+  // Part of the readback's cost: a driver pins the pages it imports.
+  const auto import_start = Clock::now();
   for_each_frame_plane(frame, [&]<typename T>(std::optional<OutputBuffer>& output, std::vector<T>& target, size_t) {
     if (!output || !output->readback || target.empty()) return;
     if (auto memory = import_host_memory(context, target.data(), target.size() * sizeof(T))) {
       output->frame_planes = OutputBuffer::FramePlanes{std::move(*memory), sizeof(T), frame.pixel_count()};
     }
   });
+  timings.readback_ms += elapsed_ms(import_start);
   return FrameLanding{tile};
 }
 
