@@ -6,6 +6,7 @@
 #include "engine/device/gpu_device.hpp"
 #include "engine/parallel.hpp"
 #include "engine/reference/reference.hpp"
+#include "engine/render/ray_order.hpp"
 #include "engine/render/renderer.hpp"
 #include "engine/render/search.hpp"
 #include "engine/scene/camera_description.hpp"
@@ -192,6 +193,7 @@ struct CallRays {
 std::vector<std::pair<size_t, size_t>> pose_runs(std::span<const GivenRay> rays, const RayRanges& ranges) {
   constexpr size_t least_run = 4096, most_runs = 256;  // fewer rays walk as fast one by one
   if (!std::all_of(ranges.t_min.begin(), ranges.t_min.end(), [](double t) { return t == 0.0; })) return {};
+  if (shared_origin(rays)) return {};  // one pose: found on every core, where the runs are found on one
   std::vector<std::pair<size_t, size_t>> runs;  // first, end
   for (size_t k = 0; k < rays.size(); ++k) {
     const bool same = k > 0 && std::equal(rays[k].begin(), rays[k].begin() + 3, rays[k - 1].begin());
@@ -258,7 +260,10 @@ class RayOutputs {
  public:
   RayOutputs(const std::vector<const OutputInfo*>& asked, void* const* results, bool doubles, const CallRays& call, const Scene& scene)
       : asked_(asked), results_(results), doubles_(doubles), call_(call), scene_(scene) {
-    for (const OutputInfo* output : asked) surface_ = surface_ || output->source == OutputSource::surface;
+    for (const OutputInfo* output : asked) {
+      surface_ = surface_ || output->source == OutputSource::surface;
+      needs_direction_ = needs_direction_ || output->source == OutputSource::surface || output->aov == Aov::position;
+    }
   }
 
   void miss(size_t k) const { hit(k, INFINITY, glm::dvec3(0.0), {no_object, no_object}); }
@@ -266,7 +271,8 @@ class RayOutputs {
   void hit(size_t k, double t, const glm::dvec3& normal, ObjectPrimitive source) const {
     const bool missed = source.object == no_object;
     const glm::dvec3 origin = vec3_at(call_.rays[k].data(), 0, 6);
-    const glm::dvec3 direction = missed ? glm::dvec3(0.0) : unit_vector(vec3_at(call_.rays[k].data(), 0, 6, 3));
+    const glm::dvec3 direction =
+        missed || !needs_direction_ ? glm::dvec3(0.0) : unit_vector(vec3_at(call_.rays[k].data(), 0, 6, 3));
     SurfaceAt surface;
     if (surface_ && !missed) surface = surface_at(scene_, source, origin, direction, t);
     for (size_t n = 0; n < asked_.size(); ++n) {
@@ -305,6 +311,7 @@ class RayOutputs {
   const CallRays& call_;
   const Scene& scene_;
   bool surface_ = false;
+  bool needs_direction_ = false;  // the hit point or the surface outputs are asked for
 };
 
 nlohmann::json timings_json(const RenderTimings& t, bool constructor) {
