@@ -101,6 +101,13 @@ VKRAY_API vkray_status vkray_reference_new(const vkray_scene* scene, vkray_rende
 /* Whether depth, normal and t come in float64 (the float64 shader, the reference). */
 VKRAY_API int vkray_renderer_doubles(const vkray_renderer* renderer);
 VKRAY_API const char* vkray_renderer_device_name(const vkray_renderer* renderer);
+/* Moves the vertices of mesh `mesh` (its mesh_id) to `positions`, `count` x 3 doubles in the mesh's
+ * vertex order: the next call renders the moved scene, as a renderer made from it would. The GPU's
+ * tree keeps its shape, its boxes recomputed, while the same triangles keep a non-zero area; else it
+ * is built anew (vkray_renderer_timings: "scene_update_ms", "tree_refitted"). A bad mesh, count or
+ * coordinate: VKRAY_INPUT_ERROR, the scene unchanged. */
+VKRAY_API vkray_status vkray_renderer_set_vertices(vkray_renderer* renderer, uint32_t mesh, const double* positions,
+                                                   uint64_t count);
 /* What the last call's time went to, as JSON ({"dispatch_gpu_ms": ..., ...}, milliseconds); the
  * constructor's own (upload, BVH build, pipelines) under "setup". */
 VKRAY_API const char* vkray_renderer_timings(vkray_renderer* renderer);

@@ -329,6 +329,11 @@ nlohmann::json timings_json(const RenderTimings& t, bool constructor) {
   if (t.given_walk != GivenRayWalk::none) json["rays_walk"] = given_ray_walk_name(t.given_walk);
   json["dispatches"] = t.tiles;
   json["cpu_finished_rays"] = t.unfinished_rays;
+  if (t.scene_update_ms > 0.0) {  // set_vertices
+    json["scene_update_ms"] = t.scene_update_ms;
+    json["tree_refitted"] = t.tree_refitted;
+    json["bvh_build_ms"] = t.bvh_build_ms;
+  }
   return json;
 }
 
@@ -545,6 +550,26 @@ vkray_status vkray_reference_new(const vkray_scene* scene, vkray_renderer** rend
 int vkray_renderer_doubles(const vkray_renderer* renderer) { return renderer && renderer->doubles ? 1 : 0; }
 
 const char* vkray_renderer_device_name(const vkray_renderer* renderer) { return renderer ? renderer->device_name.c_str() : ""; }
+
+vkray_status vkray_renderer_set_vertices(vkray_renderer* renderer, uint32_t mesh, const double* positions, uint64_t count) {
+  return guarded([&] {
+    require(renderer, "renderer");
+    if (count > 0) require(positions, "positions");
+    static_assert(sizeof(glm::dvec3) == 3 * sizeof(double));
+    const std::span<const glm::dvec3> moved(reinterpret_cast<const glm::dvec3*>(positions), static_cast<size_t>(count));
+    const std::lock_guard one_call_at_a_time(renderer->busy);
+    move_vertices(renderer->scene, mesh, moved);  // the surface outputs of given rays read it
+    if (renderer->renderer) {
+      renderer->renderer->set_vertices(mesh, moved);
+      renderer->last_call = renderer->renderer->timings();
+    } else {
+      const auto start = std::chrono::steady_clock::now();
+      renderer->reference = std::make_unique<ReferenceScene>(renderer->scene);
+      renderer->reference_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    }
+    renderer->called = true;
+  });
+}
 
 const char* vkray_renderer_timings(vkray_renderer* renderer) {
   if (!renderer) return "{}";

@@ -211,7 +211,7 @@ GpuSceneShape plan_gpu_scene(const Scene& scene, const GpuSceneOptions& options)
 }
 
 GpuScene make_gpu_scene(const Scene& scene, const GpuSceneOptions& options, const ShaderVariant& shader,
-                        const std::optional<SceneExtent>& extent) {
+                        const std::optional<SceneExtent>& extent, const std::optional<RefitSource>& refit) {
   GpuScene gpu;
   gpu.precision = shader.precision;
   const bool world_origin = shader.precision == Precision::float64 || shader.coordinates == VKRAY_COORDINATES_ABSOLUTE;
@@ -297,7 +297,18 @@ GpuScene make_gpu_scene(const Scene& scene, const GpuSceneOptions& options, cons
   std::vector<Box> boxes;
   boxes.reserve(unordered.size());
   for (const auto& primitive : unordered) boxes.push_back({glm::dvec3(primitive.box.lower), glm::dvec3(primitive.box.upper)});
-  const Bvh bvh = build_bvh(boxes, options.bvh);
+  // A refit keeps the tree's shape where each leaf slot still holds the primitive it held: the same
+  // triangles kept (none became or stopped being of zero area) and spheres, in the same order.
+  const auto same_primitives = [&] {
+    const std::vector<uint32_t>& order = refit->tree.primitive_order;
+    if (order.size() != unordered.size() || refit->slots.slots.size() != order.size()) return false;
+    for (size_t slot = 0; slot < order.size(); ++slot) {
+      if (refit->slots.slots[slot] != unordered[order[slot]].source) return false;
+    }
+    return true;
+  };
+  gpu.refitted = refit && same_primitives();
+  const Bvh bvh = gpu.refitted ? refit->tree : build_bvh(boxes, options.bvh);
   gpu.primitives.reserve(unordered.size() + VKRAY_BVH_MAX_LEAF_SIZE);
   for (uint32_t i : bvh.primitive_order) {
     gpu.primitives.push_back(unordered[i].primitive);
@@ -319,6 +330,7 @@ GpuScene make_gpu_scene(const Scene& scene, const GpuSceneOptions& options, cons
     };
   }
   gpu.bvh_depth = bvh.depth;
+  gpu.tree = bvh;
   if (options.search == PrimitiveSearch::automatic && gpu.search == PrimitiveSearch::bvh_packet &&
       !packet_walk_fits(bvh.depth)) {
     gpu.search = PrimitiveSearch::bvh_per_ray;

@@ -84,6 +84,10 @@ struct GpuScene {
   bool tree_has_spheres = false;
   uint32_t triangle_count = 0;  // kept triangles
   double bvh_build_ms = 0.0;
+  // The tree's shape (its nodes and which primitive each leaf slot holds), kept for a refit: a scene
+  // whose vertices moved gets the same tree with its boxes recomputed (make_gpu_scene's `refit`).
+  std::optional<Bvh> tree;
+  bool refitted = false;  // the tree is `refit`'s, its boxes recomputed; not built
 
   // A tree or the device's structures find the primitives: no brute-force loop.
   bool has_tree() const { return search != PrimitiveSearch::brute_force; }
@@ -112,10 +116,17 @@ struct GeometryLayout {
 // GpuSceneShape): every triangle counted as kept, the tree shallow enough for the packet walk.
 GpuSceneShape plan_gpu_scene(const Scene& scene, const GpuSceneOptions& options);
 
+// A scene built before, whose tree make_gpu_scene refits where the scene it is given keeps the same
+// primitives (the same triangles of non-zero area, the same spheres): only vertices moved.
+struct RefitSource {
+  const Bvh& tree;
+  const HitSources& slots;  // what each slot of the tree's leaves held
+};
+
 // Positions encoded for `shader`'s precision and coordinates; `extent` is scene_extent(scene), found
-// here where not given.
+// here where not given. With `refit`, its tree's shape where it fits (GpuScene::refitted), else a new tree.
 GpuScene make_gpu_scene(const Scene& scene, const GpuSceneOptions& options = {}, const ShaderVariant& shader = {},
-                        const std::optional<SceneExtent>& extent = std::nullopt);
+                        const std::optional<SceneExtent>& extent = std::nullopt, const std::optional<RefitSource>& refit = std::nullopt);
 
 // Every plane's normal_height for a camera at `origin` (see GpuPlane): `scene_planes` are the
 // scene's, in the same order as `planes`.

@@ -54,25 +54,54 @@ Renderer::Renderer(GpuDevice& device, const Scene& scene, RendererOptions option
         if (creation.valid()) creation.wait();
       }
     } joiner{early_creation};
+    r.scene_options = scene_options;
     const GpuScene gpu_scene = make_gpu_scene(scene, scene_options, options.shader, extent);
-    if (gpu_scene.search == PrimitiveSearch::bvh_packet && !packet_walk_fits(gpu_scene.bvh_depth)) {
-      throw GpuError("the packet walk keeps its stack in registers, for trees up to " +
-                     std::to_string(VKRAY_STACK_REGISTERS_MAX) + " deep; this one is " + std::to_string(gpu_scene.bvh_depth));
-    }
     r.upload_scene(gpu_scene, scene);
+    r.make_placeholders();
     r.placeholder_image = std::make_unique<ImageTarget>(device, 1, 1);
-    const PipelineSpecialization specialization =
-        specialization_for(gpu_scene.shape(), gpu_scene.bvh_depth, r.stats.loop_budget, options.shader);
     const double early_ms = join_early();
-    if (early_pipeline && early_pipeline->specialization() == specialization) {
-      r.pipeline.emplace(std::move(*early_pipeline));
-      r.timings.pipeline_beside_upload_ms = early_ms;
-    } else {
-      r.pipeline.emplace(r.context, specialization);
-    }
+    r.choose_pipeline(gpu_scene, early_pipeline);
+    if (!early_pipeline) r.timings.pipeline_beside_upload_ms = early_ms;  // taken
     r.timings.upload_ms = elapsed_ms(start);
   });
 }
+
+void Renderer::Impl::choose_pipeline(const GpuScene& gpu_scene, std::optional<RaycastPipeline>& early) {
+  if (gpu_scene.search == PrimitiveSearch::bvh_packet && !packet_walk_fits(gpu_scene.bvh_depth)) {
+    throw GpuError("the packet walk keeps its stack in registers, for trees up to " +
+                   std::to_string(VKRAY_STACK_REGISTERS_MAX) + " deep; this one is " + std::to_string(gpu_scene.bvh_depth));
+  }
+  const PipelineSpecialization specialization =
+      specialization_for(gpu_scene.shape(), gpu_scene.bvh_depth, stats.loop_budget, options.shader);
+  if (early && early->specialization() == specialization) {
+    pipeline.emplace(std::move(*early));
+    early.reset();
+  } else if (!pipeline || pipeline->specialization() != specialization) {
+    pipeline.emplace(context, specialization);
+  }
+}
+
+void Renderer::set_vertices(uint32_t mesh, std::span<const glm::dvec3> positions) {
+  Impl& r = *impl_;
+  const auto start = Clock::now();
+  move_vertices(r.host_scene, mesh, positions);
+  r.reference.reset();  // made again from the moved scene where a ray needs it
+  with_vulkan_errors("moving the vertices", [&] {
+    r.context.check_usable();
+    // The scene as a Renderer made from it would hold it (its anchor and radius too), the tree's
+    // shape kept where it can be.
+    const GpuScene gpu_scene = make_gpu_scene(r.host_scene, r.scene_options, r.options.shader, scene_extent(r.host_scene),
+                                              r.tree ? std::optional<RefitSource>({*r.tree, r.hit_sources}) : std::nullopt);
+    r.upload_scene(gpu_scene, r.host_scene);
+    std::optional<RaycastPipeline> none;
+    r.choose_pipeline(gpu_scene, none);
+    r.reset_timings();  // keeps the tree's time (and the structures'), which upload_scene set anew
+    r.timings.tree_refitted = gpu_scene.refitted;
+  });
+  r.timings.scene_update_ms = elapsed_ms(start);
+}
+
+const Scene& Renderer::scene() const { return impl_->host_scene; }
 
 Renderer::~Renderer() = default;
 
@@ -128,11 +157,8 @@ void Renderer::prepare_pipelines(const Camera& camera, uint32_t width, uint32_t 
     cast_rays(two_origins);
     occluded(two_origins);
   }
-  r.timings = RenderTimings{};
-  r.timings.upload_ms = constructor.upload_ms;
-  r.timings.bvh_build_ms = constructor.bvh_build_ms;
-  r.timings.structures_ms = constructor.structures_ms;
-  r.timings.pipeline_beside_upload_ms = constructor.pipeline_beside_upload_ms;
+  r.timings = constructor;
+  r.reset_timings();
   r.timings.pipeline_ms = elapsed_ms(start);
 }
 

@@ -47,6 +47,10 @@ struct RenderTimings {
   double longest_dispatch_ms = 0.0;  // GPU time of the longest (wall time where no timestamps)
   uint64_t unfinished_rays = 0;    // rays that ran out of the device's loop budget, finished on the CPU
   double cpu_finish_ms = 0.0;      // time spent finishing them
+  // set_vertices: its whole time (the scene converted, its tree refitted or built, the upload), and
+  // whether the tree kept its shape (refitted) or was built anew.
+  double scene_update_ms = 0.0;
+  bool tree_refitted = false;
 };
 
 // What the constructor put on the device.
@@ -157,6 +161,18 @@ class Renderer {
   // use: lavapipe makes each in 0.2 to 0.6 s and compiles it at its first dispatch. Its time goes to
   // timings().pipeline_ms; the call timings its runs left are cleared.
   void prepare_pipelines(const Camera& camera, uint32_t width, uint32_t height);
+
+  // Moves the vertices of mesh `mesh` (the scene's meshes[mesh], its mesh_id) to `positions`, one a
+  // vertex in its order (a deforming mesh: a skinned arm, cloth): the next call renders the moved
+  // scene, exactly as a Renderer made from it would. Its tree keeps its shape and only its boxes are
+  // recomputed (a refit) while the same triangles keep a non-zero area; else it is built anew.
+  // timings() then says which (tree_refitted) and what it took (scene_update_ms). Throws InputError
+  // for a mesh out of range, a count other than the mesh's or a coordinate not finite or beyond
+  // max_coordinate, the scene unchanged.
+  void set_vertices(uint32_t mesh, std::span<const glm::dvec3> positions);
+
+  // The scene as the renderer holds it (with the vertices set_vertices moved).
+  const Scene& scene() const;
 
   // Timings of the last render (upload_ms and bvh_build_ms are the constructor's).
   const RenderTimings& timings() const;

@@ -88,6 +88,8 @@ struct Renderer::Impl {
 
   VulkanContext& context;
   RendererOptions options;
+  GpuSceneOptions scene_options;  // options.scene as the constructor settled them (the packet walk)
+  std::optional<Bvh> tree;        // the tree's shape, for set_vertices' refit
   glm::dvec3 anchor{0.0};
   double scene_radius = 0.0;  // GpuScene::radius
   glm::uvec4 counts{0};  // RayGenParams.counts
@@ -120,8 +122,14 @@ struct Renderer::Impl {
 
   Precision precision() const { return options.shader.precision; }
 
-  // scene_upload.cpp: the scene's geometry (and the ray-query traversal's structures) on the device.
+  // scene_upload.cpp: the scene's geometry (and the ray-query traversal's structures) on the device,
+  // replacing what was there (set_vertices); `scene` is what gpu_scene was made from.
   void upload_scene(const GpuScene& gpu_scene, const Scene& scene);
+  // What the constructor makes once besides: the placeholders bound for what a scene lacks, timestamps.
+  void make_placeholders();
+  // The pipeline for `gpu_scene`: `early` where it was made for the same specialization, the current
+  // one where it is, else a new one (its pipelines made on first use).
+  void choose_pipeline(const GpuScene& gpu_scene, std::optional<RaycastPipeline>& early);
   // Throws where the device has no such workgroup, or Morton order cannot walk it.
   void check_workgroup() const;
 

@@ -73,13 +73,20 @@ void Renderer::Impl::upload_scene(const GpuScene& gpu_scene, const Scene& scene)
     timings.structures_ms = structures->build_ms();
   }
   stats.loop_budget = tree_loop_budget(gpu_scene.shape(), context.info, options.loop_budget);
-  host_scene = scene;
+  if (&host_scene != &scene) host_scene = scene;
   anchor = gpu_scene.anchor;
   scene_radius = gpu_scene.radius;
   counts = run_time_counts(gpu_scene);
   checked_count(gpu_scene.spheres.size(), "spheres");
   checked_count(gpu_scene.planes.size(), "planes");
   timings.bvh_build_ms = gpu_scene.bvh_build_ms;
+  tree = gpu_scene.tree;
+  // The tiles' bindings name the buffers replaced above: the next call binds anew.
+  tile = TileOutputs{};
+  parked_tile = TileOutputs{};
+}
+
+void Renderer::Impl::make_placeholders() {
   placeholder = create_storage_buffer(context, texel_bytes);
   const std::array<uint32_t, 4> zero_texel{};
   placeholder_texels = make_texel_buffer(context, zero_texel.data(), texel_bytes);

@@ -2,6 +2,7 @@
 
 #include "engine/fnv1a.hpp"
 #include "engine/parallel.hpp"
+#include "engine/scene/model_loader.hpp"
 #include "engine/unit_vector.hpp"
 
 #include <glm/geometric.hpp>
@@ -254,6 +255,25 @@ double scene_radius(const Scene& scene, const glm::dvec3& anchor) {
     for (const auto& position : mesh.positions) radius = std::max(radius, glm::length(position - anchor));
   }
   return radius;
+}
+
+void move_vertices(Scene& scene, uint32_t mesh, std::span<const glm::dvec3> positions) {
+  if (mesh >= scene.meshes.size()) {
+    throw InputError("mesh " + std::to_string(mesh) + ": the scene has " + std::to_string(scene.meshes.size()) + " meshes");
+  }
+  Mesh& moved = scene.meshes[mesh];
+  if (positions.size() != moved.positions.size()) {
+    throw InputError("mesh " + std::to_string(mesh) + " (" + moved.source + "): " + std::to_string(positions.size()) +
+                     " positions for its " + std::to_string(moved.positions.size()) + " vertices");
+  }
+  std::vector<glm::dvec3> before(positions.begin(), positions.end());
+  std::swap(moved.positions, before);
+  try {
+    check_mesh_values(moved, 0);
+  } catch (const InputError&) {
+    std::swap(moved.positions, before);
+    throw;
+  }
 }
 
 SceneExtent scene_extent(const Scene& scene) {

@@ -129,6 +129,11 @@ glm::dvec3 scene_anchor(const Scene& scene);
 // The largest distance from `anchor` of a sphere's surface or a mesh vertex (0 without either).
 double scene_radius(const Scene& scene, const glm::dvec3& anchor);
 
+// Moves the vertices of scene.meshes[mesh] to `positions`, one a vertex in its order. Throws
+// InputError, the scene unchanged, for a mesh out of range, another count of positions, or a
+// coordinate not finite or beyond max_coordinate.
+void move_vertices(Scene& scene, uint32_t mesh, std::span<const glm::dvec3> positions);
+
 // The anchor and the radius about it, found once for all who need them (two passes over the vertices).
 struct SceneExtent {
   glm::dvec3 anchor;

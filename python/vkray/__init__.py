@@ -419,6 +419,17 @@ class _Caster:
                                           _pointer(blocked, ctypes.c_uint8)))
         return blocked.view(np.bool_)
 
+    def set_vertices(self, mesh: int, positions: Any) -> None:
+        """Moves the vertices of mesh `mesh` (its mesh_id) to `positions`, an N x 3 array of the mesh's N
+        vertices in its order (a skinned arm, cloth): the next call renders the moved scene, as a
+        renderer made from it would. The tree keeps its shape and only its boxes are recomputed while
+        every triangle keeps a non-zero area, else it is built anew (timings: 'scene_update_ms',
+        'tree_refitted'). ValueError for a bad mesh, count or coordinate, the scene unchanged."""
+        if isinstance(mesh, bool) or not isinstance(mesh, (int, np.integer)) or not 0 <= mesh < 2**32:
+            raise ValueError(f"mesh: expected a mesh_id (0 for the first mesh), got {mesh!r}")
+        moved = _rows(positions, "positions", 3)
+        _check(_native.lib.vkray_renderer_set_vertices(self._handle, int(mesh), _pointer(moved), len(moved)))
+
     @property
     def timings(self) -> Dict[str, Any]:
         """Where the last call's time went, in milliseconds; what the constructor took (upload, BVH

@@ -57,6 +57,7 @@ _signatures = {
     "vkray_reference_new": (Status, [_scene, ctypes.POINTER(_renderer)]),
     "vkray_renderer_doubles": (ctypes.c_int, [_renderer]),
     "vkray_renderer_device_name": (ctypes.c_char_p, [_renderer]),
+    "vkray_renderer_set_vertices": (Status, [_renderer, ctypes.c_uint32, _doubles, ctypes.c_uint64]),
     "vkray_renderer_timings": (ctypes.c_char_p, [_renderer]),
     "vkray_renderer_free": (None, [_renderer]),
     "vkray_render": (Status, [_renderer, ctypes.c_char_p, ctypes.c_uint32, ctypes.c_uint32, ctypes.c_uint32, _names, _pointers]),
