@@ -1,6 +1,7 @@
 """A deforming mesh (README, "Python"): the bunny with every vertex moved by up to 1% of its size,
-through Renderer.set_vertices, which refits the tree (keeps its shape, recomputes its boxes), against
-the same call where one triangle also collapses to a point, which builds the tree anew; then the
+through Renderer.set_vertices, which refits the tree (keeps its shape, recomputes its boxes; from the
+second call on in place), against the same call where one triangle also collapses to a point or
+opens again, which builds the tree anew; then the
 render after each against a Renderer made from the moved bunny (its tree built for it), GPU time,
 with the depth's largest relative difference from the double-precision reference. Best of CALLS.
 

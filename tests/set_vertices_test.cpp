@@ -68,17 +68,69 @@ TEST(SetVertices, AMovedMeshRendersAsTheMovedSceneInEverySearch) {
     expect_same_frame(frame, fresh.render(moved.camera, width, height, outputs));
     EXPECT_EQ(renderer.scene().meshes[0].positions, moved.meshes[0].positions);
 
-    // A triangle of zero area (its second and third corners on its first) is left out, as a new
-    // Renderer leaves it out: the primitives change, and the tree is built anew.
+    // Later moves refit in place (the arrays the first one kept, written into the same buffers):
+    // still what a Renderer made from the moved scene renders. The grid (mesh 1) moves as well.
+    for (uint32_t seed : {11u, 13u}) {
+      moved.meshes[0].positions = moved_positions(scene.meshes[0], 0.01, seed);
+      moved.meshes[1].positions = moved_positions(scene.meshes[1], 0.002, seed);
+      renderer.set_vertices(0, moved.meshes[0].positions);
+      renderer.set_vertices(1, moved.meshes[1].positions);
+      EXPECT_EQ(renderer.timings().tree_refitted, has_tree);
+      const Frame again = renderer.render(moved.camera, width, height, outputs);
+      Renderer fresh_again(device(), moved, options);
+      expect_same_frame(again, fresh_again.render(moved.camera, width, height, outputs));
+    }
+
+    // A triangle of zero area (its corners on one line along x, so exactly: they share y and z) is
+    // left out, as a new Renderer leaves it out: the primitives change, and the tree is built anew.
     const auto& corners = moved.meshes[0].triangles[5];
-    moved.meshes[0].positions[corners[1]] = moved.meshes[0].positions[corners[0]];
-    moved.meshes[0].positions[corners[2]] = moved.meshes[0].positions[corners[0]];
+    const glm::dvec3 first = moved.meshes[0].positions[corners[0]];
+    moved.meshes[0].positions[corners[1]] = first + glm::dvec3(0.01, 0.0, 0.0);
+    moved.meshes[0].positions[corners[2]] = first + glm::dvec3(0.02, 0.0, 0.0);
     renderer.set_vertices(0, moved.meshes[0].positions);
     EXPECT_FALSE(renderer.timings().tree_refitted);
     const Frame collapsed = renderer.render(moved.camera, width, height, outputs);
     test::expect_frame_matches_reference(moved, collapsed);
     Renderer fresh_collapsed(device(), moved, options);
     expect_same_frame(collapsed, fresh_collapsed.render(moved.camera, width, height, outputs));
+    // And opened again: the triangle is back, and the tree built anew once more.
+    moved.meshes[0].positions = moved_positions(scene.meshes[0], 0.01, 17);
+    renderer.set_vertices(0, moved.meshes[0].positions);
+    EXPECT_FALSE(renderer.timings().tree_refitted);
+    const Frame reopened = renderer.render(moved.camera, width, height, outputs);
+    Renderer fresh_reopened(device(), moved, options);
+    expect_same_frame(reopened, fresh_reopened.render(moved.camera, width, height, outputs));
+  }
+}
+
+// Two vertices at one position share one stored vertex. Moved together they still do (the second
+// move refits in place); moved apart, they cannot, and the scene is converted anew: either way it
+// renders as a Renderer made from the moved scene (which shares what coincides).
+TEST(SetVertices, VerticesThatSharedAPositionMovedApart) {
+  Scene scene = two_meshes();
+  Mesh& sphere = scene.meshes[0];
+  // The triangle the camera looks at most directly: its first corner gets a vertex of its own.
+  const glm::dvec3 toward_eye = glm::normalize(scene.camera.from);
+  size_t facing = 0;
+  auto facing_by = [&](size_t t) {
+    const auto& corners = sphere.triangles[t];
+    return glm::dot(sphere.positions[corners[0]] + sphere.positions[corners[1]] + sphere.positions[corners[2]], toward_eye);
+  };
+  for (size_t t = 1; t < sphere.triangles.size(); ++t) facing = facing_by(t) > facing_by(facing) ? t : facing;
+  const uint32_t original = sphere.triangles[facing][0], copy = static_cast<uint32_t>(sphere.positions.size());
+  sphere.positions.push_back(sphere.positions[original]);  // a second vertex at the same place
+  sphere.triangles[facing][0] = copy;
+  Renderer renderer(device(), scene);
+  for (const auto& [seed, apart] : {std::pair{3u, 0.0}, {5u, 0.0}, {7u, 0.1}}) {
+    SCOPED_TRACE(testing::Message() << "seed " << seed << ", apart " << apart);
+    Scene moved = scene;
+    moved.meshes[0].positions = moved_positions(sphere, 0.005, seed);
+    moved.meshes[0].positions[copy] = moved.meshes[0].positions[original] + apart * toward_eye;  // a spike toward the camera
+    renderer.set_vertices(0, moved.meshes[0].positions);
+    const Frame frame = renderer.render(moved.camera, width, height, {Aov::depth, Aov::normal});
+    test::expect_frame_matches_reference(moved, frame);
+    Renderer fresh(device(), moved);
+    expect_same_frame(frame, fresh.render(moved.camera, width, height, {Aov::depth, Aov::normal}));
   }
 }
 

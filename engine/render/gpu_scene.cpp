@@ -1,5 +1,6 @@
 #include "engine/render/gpu_scene.hpp"
 
+#include "engine/parallel.hpp"
 #include "engine/stopwatch.hpp"
 #include "engine/unit_vector.hpp"
 
@@ -7,6 +8,7 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <bit>
 #include <chrono>
 #include <cmath>
@@ -67,6 +69,34 @@ struct EncodedPrimitive {
   ObjectPrimitive source;
 };
 
+// A triangle relative to the anchor, its corners in a canonical order (lexicographic): the shader's
+// normal faces the ray whatever the winding, and the watertight test accepts either orientation,
+// so the order is free, and fixing it makes copies of a triangle with another winding or starting
+// vertex give bit-identical distances: coincident copies tie exactly (see VKRAY_COINCIDENT_GAP).
+struct CanonicalTriangle {
+  std::array<glm::dvec3, 3> v;     // the corners relative to the anchor, in canonical order
+  std::array<uint32_t, 3> vertex;  // each one's index in the mesh
+  glm::dvec3 normal{0.0};          // the unit normal; 0 for a triangle of zero area (left out)
+  FloatBox box() const { return outward(glm::min(v[0], glm::min(v[1], v[2])), glm::max(v[0], glm::max(v[1], v[2]))); }
+};
+
+CanonicalTriangle canonical_triangle(const Mesh& mesh, uint32_t triangle, const glm::dvec3& anchor) {
+  const auto& corners = mesh.triangles[triangle];
+  std::array<std::pair<glm::dvec3, uint32_t>, 3> sorted;
+  for (size_t c = 0; c < 3; ++c) sorted[c] = {mesh.positions[corners[c]] - anchor, corners[c]};
+  std::sort(sorted.begin(), sorted.end(), [](const auto& a, const auto& b) {
+    return std::tie(a.first.x, a.first.y, a.first.z) < std::tie(b.first.x, b.first.y, b.first.z);
+  });
+  CanonicalTriangle result;
+  for (size_t c = 0; c < 3; ++c) result.v[c] = sorted[c].first, result.vertex[c] = sorted[c].second;
+  const glm::dvec3 cross = glm::cross(result.v[1] - result.v[0], result.v[2] - result.v[0]);
+  if (cross != glm::dvec3(0.0)) result.normal = unit_vector(cross);
+  return result;
+}
+
+// A sphere's box relative to the anchor.
+FloatBox sphere_box(const glm::dvec3& centre, double radius) { return outward(centre - radius, centre + radius); }
+
 // The vertex buffer: each distinct position (relative to the anchor, exact in double) once.
 class VertexTable {
  public:
@@ -99,14 +129,46 @@ class VertexTable {
   std::unordered_map<glm::dvec3, uint32_t, BitHash> indices_;
 };
 
-// A slot's normal texels (VKRAY_TEXELS_PER_NORMAL_*).
-void append_normal(std::vector<glm::vec4>& texels, const glm::dvec3& normal, Precision precision) {
+// Texels a slot's normal takes (VKRAY_TEXELS_PER_NORMAL_*), and them written at `at`.
+size_t normal_texels(Precision precision) {
+  return precision == Precision::float64 ? VKRAY_TEXELS_PER_NORMAL_FLOAT64 : VKRAY_TEXELS_PER_NORMAL_FLOAT32;
+}
+void write_normal(glm::vec4* at, const glm::dvec3& normal, Precision precision) {
   if (precision == Precision::float64) {
     const gpu::GpuPoint point = encode_point(glm::dvec4(normal, 0.0), precision);
-    texels.insert(texels.end(), {point.first, point.second});
+    at[0] = point.first, at[1] = point.second;
   } else {
-    texels.push_back(glm::vec4(glm::dvec4(normal, 0.0)));
+    at[0] = glm::vec4(glm::dvec4(normal, 0.0));
   }
+}
+void append_normal(std::vector<glm::vec4>& texels, const glm::dvec3& normal, Precision precision) {
+  texels.resize(texels.size() + normal_texels(precision));
+  write_normal(texels.data() + texels.size() - normal_texels(precision), normal, precision);
+}
+
+// The tree's nodes: each holds its two children's boxes (from their slots' boxes), widened (see
+// safe_inverse in shaders/intersect.glsl).
+template <typename SlotBox>
+std::vector<gpu::GpuBvhNode> encode_nodes(const Bvh& bvh, SlotBox slot_box) {
+  const auto bounds = child_bounds<FloatBox>(bvh, slot_box);
+  std::vector<gpu::GpuBvhNode> nodes(bvh.nodes.size());
+  for (size_t n = 0; n < bvh.nodes.size(); ++n) {
+    const FloatBox first = widened(bounds[n][0]);
+    const FloatBox second = widened(bounds[n][1]);
+    nodes[n] = {
+        glm::vec4(first.lower.x, second.lower.x, first.upper.x, second.upper.x),
+        glm::vec4(first.lower.y, second.lower.y, first.upper.y, second.upper.y),
+        glm::vec4(first.lower.z, second.lower.z, first.upper.z, second.upper.z),
+        glm::uvec4(bvh.nodes[n][0], bvh.nodes[n][1], 0, 0),
+    };
+  }
+  return nodes;
+}
+
+// Where a shader's positions are stored from (GpuScene::anchor), and the radius about it.
+SceneExtent anchored_extent(const Scene& scene, const ShaderVariant& shader, const SceneExtent& extent) {
+  const bool world_origin = shader.precision == Precision::float64 || shader.coordinates == VKRAY_COORDINATES_ABSOLUTE;
+  return world_origin ? SceneExtent{glm::dvec3(0.0), scene_radius(scene, glm::dvec3(0.0))} : extent;
 }
 
 // Triangle slots of the brute-force loop: whole batches.
@@ -175,7 +237,7 @@ void lay_out_for_ray_queries(GpuScene& gpu, const Scene& scene, std::vector<Enco
     gpu.primitives.push_back(gpu::GpuPrimitive{glm::uvec4(vertex_table.add(centre_offset, sphere.radius), 0, 0, VKRAY_PRIMITIVE_SPHERE)});
     append_normal(gpu.normal_texels, glm::dvec3(0.0), gpu.precision);
     gpu.hit_sources.slots.push_back({gpu.hit_sources.first_sphere_object + static_cast<uint32_t>(k), static_cast<uint32_t>(k)});
-    const FloatBox box = widened(outward(centre_offset - sphere.radius, centre_offset + sphere.radius));
+    const FloatBox box = widened(sphere_box(centre_offset, sphere.radius));
     gpu.sphere_boxes.push_back({box.lower.x, box.lower.y, box.lower.z, box.upper.x, box.upper.y, box.upper.z});
   }
   gpu.structure_spheres.count = static_cast<uint32_t>(gpu.sphere_boxes.size());
@@ -214,13 +276,12 @@ GpuScene make_gpu_scene(const Scene& scene, const GpuSceneOptions& options, cons
                         const std::optional<SceneExtent>& extent, const std::optional<RefitSource>& refit) {
   GpuScene gpu;
   gpu.precision = shader.precision;
-  const bool world_origin = shader.precision == Precision::float64 || shader.coordinates == VKRAY_COORDINATES_ABSOLUTE;
-  const SceneExtent anchored = extent ? *extent : scene_extent(scene);
-  gpu.anchor = world_origin ? glm::dvec3(0.0) : anchored.anchor;
+  const SceneExtent anchored = anchored_extent(scene, shader, extent ? *extent : scene_extent(scene));
+  gpu.anchor = anchored.anchor;
   gpu.hit_sources.first_sphere_object = static_cast<uint32_t>(scene.meshes.size());
   gpu.hit_sources.first_plane_object = static_cast<uint32_t>(scene.meshes.size() + scene.spheres.size());
   auto encode = [&](const glm::dvec3& position, double w) { return encode_point(glm::dvec4(position, w), gpu.precision); };
-  gpu.radius = world_origin ? scene_radius(scene, gpu.anchor) : anchored.radius;
+  gpu.radius = anchored.radius;
   for (const auto& plane : scene.planes) {
     gpu.planes.push_back({{}, encode(plane.normal, glm::dot(plane.normal, plane.point - gpu.anchor))});
   }
@@ -230,29 +291,21 @@ GpuScene make_gpu_scene(const Scene& scene, const GpuSceneOptions& options, cons
   // triangle that shares it, so they see bit-identical values: the watertight test needs that.
   VertexTable vertex_table(gpu.vertices, gpu.precision);
   std::vector<EncodedPrimitive> triangles;
+  gpu.stored_vertex.resize(scene.meshes.size());
   for (uint32_t mesh_index = 0; mesh_index < scene.meshes.size(); ++mesh_index) {
     const Mesh& mesh = scene.meshes[mesh_index];
+    std::vector<uint32_t>& stored = gpu.stored_vertex[mesh_index];
+    stored.assign(mesh.positions.size(), GpuScene::no_vertex);
     for (uint32_t triangle_index = 0; triangle_index < mesh.triangles.size(); ++triangle_index) {
-      const auto& corners = mesh.triangles[triangle_index];
-      // Vertices in a canonical order (lexicographic): the shader's normal faces the ray whatever
-      // the winding, and the watertight test accepts either orientation, so the order is free, and
-      // fixing it makes copies of a triangle with another winding or starting vertex give
-      // bit-identical distances: coincident copies tie exactly (see VKRAY_COINCIDENT_GAP).
-      std::array<glm::dvec3, 3> v = {mesh.positions[corners[0]] - gpu.anchor, mesh.positions[corners[1]] - gpu.anchor,
-                                     mesh.positions[corners[2]] - gpu.anchor};
-      std::sort(v.begin(), v.end(), [](const glm::dvec3& a, const glm::dvec3& b) {
-        return std::tie(a.x, a.y, a.z) < std::tie(b.x, b.y, b.z);
-      });
-      const auto& [v0, v1, v2] = v;
-      const glm::dvec3 cross = glm::cross(v1 - v0, v2 - v0);
-      if (cross == glm::dvec3(0.0)) continue;
-      const glm::dvec3 normal = unit_vector(cross);
-      const uint32_t i0 = vertex_table.index(v0);  // one statement each: vertices stored in triangle order
-      const uint32_t i1 = vertex_table.index(v1);
-      const uint32_t i2 = vertex_table.index(v2);
-      const gpu::GpuPrimitive record{glm::uvec4(i0, i1, i2, VKRAY_PRIMITIVE_TRIANGLE)};
-      triangles.push_back({record, normal, outward(glm::min(v0, glm::min(v1, v2)), glm::max(v0, glm::max(v1, v2))),
-                           {mesh_index, triangle_index}});
+      const CanonicalTriangle triangle = canonical_triangle(mesh, triangle_index, gpu.anchor);
+      if (triangle.normal == glm::dvec3(0.0)) {
+        gpu.left_out.push_back({mesh_index, triangle_index});
+        continue;
+      }
+      std::array<uint32_t, 3> index;
+      for (size_t c = 0; c < 3; ++c) stored[triangle.vertex[c]] = index[c] = vertex_table.index(triangle.v[c]);
+      const gpu::GpuPrimitive record{glm::uvec4(index[0], index[1], index[2], VKRAY_PRIMITIVE_TRIANGLE)};
+      triangles.push_back({record, triangle.normal, triangle.box(), {mesh_index, triangle_index}});
     }
   }
   gpu.triangle_count = static_cast<uint32_t>(triangles.size());
@@ -288,8 +341,7 @@ GpuScene make_gpu_scene(const Scene& scene, const GpuSceneOptions& options, cons
     const Sphere& sphere = scene.spheres[k];
     const glm::dvec3 centre = sphere.center - gpu.anchor;
     const gpu::GpuPrimitive record{glm::uvec4(vertex_table.add(centre, sphere.radius), 0, 0, VKRAY_PRIMITIVE_SPHERE)};
-    unordered.push_back({record, glm::dvec3(0.0), outward(centre - sphere.radius, centre + sphere.radius),
-                         {gpu.hit_sources.first_sphere_object + k, k}});
+    unordered.push_back({record, glm::dvec3(0.0), sphere_box(centre, sphere.radius), {gpu.hit_sources.first_sphere_object + k, k}});
   }
   if (spheres_apart) {
     for (const auto& sphere : scene.spheres) gpu.spheres.push_back({encode(sphere.center - gpu.anchor, sphere.radius)});
@@ -315,20 +367,7 @@ GpuScene make_gpu_scene(const Scene& scene, const GpuSceneOptions& options, cons
     append_normal(gpu.normal_texels, unordered[i].normal, gpu.precision);
     gpu.hit_sources.slots.push_back(unordered[i].source);
   }
-  // Node boxes hold their primitives' boxes, then are widened (see safe_inverse in
-  // shaders/intersect.glsl).
-  const auto bounds = child_bounds<FloatBox>(bvh, [&](uint32_t slot) { return unordered[bvh.primitive_order[slot]].box; });
-  gpu.bvh_nodes.resize(bvh.nodes.size());
-  for (size_t n = 0; n < bvh.nodes.size(); ++n) {
-    const FloatBox first = widened(bounds[n][0]);
-    const FloatBox second = widened(bounds[n][1]);
-    gpu.bvh_nodes[n] = {
-        glm::vec4(first.lower.x, second.lower.x, first.upper.x, second.upper.x),
-        glm::vec4(first.lower.y, second.lower.y, first.upper.y, second.upper.y),
-        glm::vec4(first.lower.z, second.lower.z, first.upper.z, second.upper.z),
-        glm::uvec4(bvh.nodes[n][0], bvh.nodes[n][1], 0, 0),
-    };
-  }
+  gpu.bvh_nodes = encode_nodes(bvh, [&](uint32_t slot) { return unordered[bvh.primitive_order[slot]].box; });
   gpu.bvh_depth = bvh.depth;
   gpu.tree = bvh;
   if (options.search == PrimitiveSearch::automatic && gpu.search == PrimitiveSearch::bvh_packet &&
@@ -337,6 +376,73 @@ GpuScene make_gpu_scene(const Scene& scene, const GpuSceneOptions& options, cons
   }
   gpu.bvh_build_ms = elapsed_ms(start);
   return gpu;
+}
+
+bool refit_in_place(GpuScene& gpu, const Scene& scene, const ShaderVariant& shader, const SceneExtent& extent) {
+  if (!gpu.tree || gpu.stored_vertex.size() != scene.meshes.size()) return false;
+  const SceneExtent anchored = anchored_extent(scene, shader, extent);
+  gpu.anchor = anchored.anchor;
+  gpu.radius = anchored.radius;
+  std::atomic<bool> fits = true;
+  // The stored positions: every mesh vertex that shares one must still lie where the others do.
+  std::vector<glm::dvec3> position(gpu.vertices.size());
+  std::vector<uint8_t> found(gpu.vertices.size(), 0);
+  for (size_t m = 0; m < scene.meshes.size() && fits; ++m) {
+    const std::vector<glm::dvec3>& positions = scene.meshes[m].positions;
+    for (size_t k = 0; k < positions.size(); ++k) {
+      const uint32_t stored = gpu.stored_vertex[m][k];
+      if (stored == GpuScene::no_vertex) continue;
+      const glm::dvec3 relative = positions[k] - gpu.anchor;
+      if (!found[stored]) {
+        found[stored] = 1, position[stored] = relative;
+        const gpu::GpuPoint point = encode_point(glm::dvec4(relative, 0.0), gpu.precision);  // named first: see VertexTable::add
+        gpu.vertices[stored] = point;
+      } else if (position[stored] != relative) {
+        fits = false;
+      }
+    }
+  }
+  parallel_for_chunks(gpu.left_out.size(), [&](size_t begin, size_t end) {
+    for (size_t k = begin; k < end && fits; ++k) {
+      const auto [mesh, triangle] = gpu.left_out[k];
+      if (canonical_triangle(scene.meshes[mesh], triangle, gpu.anchor).normal != glm::dvec3(0.0)) fits = false;
+    }
+  });
+  if (!fits) return false;
+  // Each slot's record, normal and box; the spheres where they are stored.
+  const Bvh& tree = *gpu.tree;
+  std::vector<FloatBox> boxes(gpu.hit_sources.slots.size());
+  const size_t texels = normal_texels(gpu.precision);
+  parallel_for_chunks(boxes.size(), [&](size_t begin, size_t end) {
+    for (size_t slot = begin; slot < end && fits; ++slot) {
+      const ObjectPrimitive source = gpu.hit_sources.slots[slot];
+      gpu::GpuPrimitive& record = gpu.primitives[slot];
+      if (record.indices.w == VKRAY_PRIMITIVE_SPHERE) {
+        const Sphere& sphere = scene.spheres[source.primitive];
+        const glm::dvec3 centre = sphere.center - gpu.anchor;
+        gpu.vertices[record.indices.x] = encode_point(glm::dvec4(centre, sphere.radius), gpu.precision);
+        boxes[slot] = sphere_box(centre, sphere.radius);
+        continue;
+      }
+      const CanonicalTriangle triangle = canonical_triangle(scene.meshes[source.object], source.primitive, gpu.anchor);
+      if (triangle.normal == glm::dvec3(0.0)) {
+        fits = false;
+        break;
+      }
+      const std::vector<uint32_t>& stored = gpu.stored_vertex[source.object];
+      record.indices = glm::uvec4(stored[triangle.vertex[0]], stored[triangle.vertex[1]], stored[triangle.vertex[2]],
+                                  VKRAY_PRIMITIVE_TRIANGLE);
+      write_normal(gpu.normal_texels.data() + slot * texels, triangle.normal, gpu.precision);
+      boxes[slot] = triangle.box();
+    }
+  });
+  if (!fits) return false;
+  for (size_t k = 0; k < gpu.spheres.size(); ++k) {  // tested apart
+    gpu.spheres[k] = {encode_point(glm::dvec4(scene.spheres[k].center - gpu.anchor, scene.spheres[k].radius), gpu.precision)};
+  }
+  gpu.bvh_nodes = encode_nodes(tree, [&](uint32_t slot) { return boxes[slot]; });
+  gpu.refitted = true;
+  return true;
 }
 
 ObjectPrimitive HitSources::operator()(uint32_t hit) const {

@@ -88,6 +88,11 @@ struct GpuScene {
   // whose vertices moved gets the same tree with its boxes recomputed (make_gpu_scene's `refit`).
   std::optional<Bvh> tree;
   bool refitted = false;  // the tree is `refit`'s, its boxes recomputed; not built
+  // For a refit in place (refit_in_place): each mesh vertex's index in `vertices` (no_vertex where
+  // no kept triangle uses it), and the triangles of zero area left out.
+  static constexpr uint32_t no_vertex = UINT32_MAX;
+  std::vector<std::vector<uint32_t>> stored_vertex;
+  std::vector<ObjectPrimitive> left_out;
 
   // A tree or the device's structures find the primitives: no brute-force loop.
   bool has_tree() const { return search != PrimitiveSearch::brute_force; }
@@ -127,6 +132,14 @@ struct RefitSource {
 // here where not given. With `refit`, its tree's shape where it fits (GpuScene::refitted), else a new tree.
 GpuScene make_gpu_scene(const Scene& scene, const GpuSceneOptions& options = {}, const ShaderVariant& shader = {},
                         const std::optional<SceneExtent>& extent = std::nullopt, const std::optional<RefitSource>& refit = std::nullopt);
+
+// `gpu`, a tree's scene that make_gpu_scene made for `scene` before its vertices moved (the same
+// meshes, triangles and spheres), brought up to `scene` where it lies: every stored position, triangle
+// record, normal and box found again from `extent` (scene_extent(scene)) on every core, the tree's
+// shape kept and its boxes refitted; the same arrays as make_gpu_scene's with that tree would hold,
+// their vertices in their former order. False, `gpu` then unusable, where it cannot be: a triangle's
+// area became or stopped being zero, or vertices that shared a stored position no longer coincide.
+bool refit_in_place(GpuScene& gpu, const Scene& scene, const ShaderVariant& shader, const SceneExtent& extent);
 
 // Every plane's normal_height for a camera at `origin` (see GpuPlane): `scene_planes` are the
 // scene's, in the same order as `planes`.

@@ -89,14 +89,25 @@ void Renderer::set_vertices(uint32_t mesh, std::span<const glm::dvec3> positions
   with_vulkan_errors("moving the vertices", [&] {
     r.context.check_usable();
     // The scene as a Renderer made from it would hold it (its anchor and radius too), the tree's
-    // shape kept where it can be.
-    const GpuScene gpu_scene = make_gpu_scene(r.host_scene, r.scene_options, r.options.shader, scene_extent(r.host_scene),
-                                              r.tree ? std::optional<RefitSource>({*r.tree, r.hit_sources}) : std::nullopt);
+    // shape kept where it can be: in place from the second call on, else converted anew.
+    const SceneExtent extent = scene_extent(r.host_scene);
+    const auto refit_start = Clock::now();
+    if (r.moving && refit_in_place(*r.moving, r.host_scene, r.options.shader, extent)) {
+      r.write_refitted(*r.moving);
+      r.reset_timings();
+      r.timings.bvh_build_ms = elapsed_ms(refit_start);
+      r.timings.tree_refitted = true;
+      return;
+    }
+    GpuScene gpu_scene = make_gpu_scene(r.host_scene, r.scene_options, r.options.shader, extent,
+                                        r.tree ? std::optional<RefitSource>({*r.tree, r.hit_sources}) : std::nullopt);
     r.upload_scene(gpu_scene, r.host_scene);
     std::optional<RaycastPipeline> none;
     r.choose_pipeline(gpu_scene, none);
     r.reset_timings();  // keeps the tree's time (and the structures'), which upload_scene set anew
     r.timings.tree_refitted = gpu_scene.refitted;
+    r.moving.reset();
+    if (gpu_scene.tree) r.moving = std::move(gpu_scene);
   });
   r.timings.scene_update_ms = elapsed_ms(start);
 }

@@ -90,6 +90,9 @@ struct Renderer::Impl {
   RendererOptions options;
   GpuSceneOptions scene_options;  // options.scene as the constructor settled them (the packet walk)
   std::optional<Bvh> tree;        // the tree's shape, for set_vertices' refit
+  // After a first set_vertices of a tree's scene: its arrays on the host, which the next ones refit
+  // in place (refit_in_place) and write into the same buffers. None for a scene that never moves.
+  std::optional<GpuScene> moving;
   glm::dvec3 anchor{0.0};
   double scene_radius = 0.0;  // GpuScene::radius
   glm::uvec4 counts{0};  // RayGenParams.counts
@@ -125,6 +128,8 @@ struct Renderer::Impl {
   // scene_upload.cpp: the scene's geometry (and the ray-query traversal's structures) on the device,
   // replacing what was there (set_vertices); `scene` is what gpu_scene was made from.
   void upload_scene(const GpuScene& gpu_scene, const Scene& scene);
+  // A refitted scene's arrays into the buffers that hold them (the same sizes), and its anchor.
+  void write_refitted(const GpuScene& gpu_scene);
   // What the constructor makes once besides: the placeholders bound for what a scene lacks, timestamps.
   void make_placeholders();
   // The pipeline for `gpu_scene`: `early` where it was made for the same specialization, the current

@@ -86,6 +86,19 @@ void Renderer::Impl::upload_scene(const GpuScene& gpu_scene, const Scene& scene)
   parked_tile = TileOutputs{};
 }
 
+void Renderer::Impl::write_refitted(const GpuScene& gpu_scene) {
+  auto write = [&]<typename T>(std::optional<TexelBuffer>& target, const std::vector<T>& items) {
+    if (target) write_buffer(context, target->buffer, items.data(), items.size() * sizeof(T));
+  };
+  write(spheres, gpu_scene.spheres);
+  write(primitives, gpu_scene.primitives);
+  write(vertices, gpu_scene.vertices);
+  write(normals, gpu_scene.normal_texels);
+  write(bvh_nodes, gpu_scene.bvh_nodes);
+  anchor = gpu_scene.anchor;
+  scene_radius = gpu_scene.radius;
+}
+
 void Renderer::Impl::make_placeholders() {
   placeholder = create_storage_buffer(context, texel_bytes);
   const std::array<uint32_t, 4> zero_texel{};

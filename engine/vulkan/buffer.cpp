@@ -57,9 +57,14 @@ GpuBuffer create_upload_buffer(VulkanContext& context, vk::DeviceSize size, vk::
 GpuBuffer upload_buffer(VulkanContext& context, const void* data, size_t bytes, vk::BufferUsageFlags usage) {
   GpuBuffer target = create_buffer(context, bytes, usage | vk::BufferUsageFlagBits::eTransferDst,
                                    shader_memory_required(context), vk::MemoryPropertyFlagBits::eDeviceLocal, Side::device);
+  write_buffer(context, target, data, bytes);
+  return target;
+}
+
+void write_buffer(VulkanContext& context, GpuBuffer& target, const void* data, size_t bytes) {
   if (target.mapped) {
     std::memcpy(target.mapped, data, bytes);
-    return target;
+    return;
   }
   GpuBuffer staging = create_buffer(context, bytes, vk::BufferUsageFlagBits::eTransferSrc, host_access_flags, {}, Side::host);
   std::memcpy(staging.mapped, data, bytes);
@@ -71,7 +76,6 @@ GpuBuffer upload_buffer(VulkanContext& context, const void* data, size_t bytes, 
     commands.pipelineBarrier(vk::PipelineStageFlagBits::eTransfer, vk::PipelineStageFlagBits::eComputeShader, {}, copied,
                              {}, {});
   });
-  return target;
 }
 
 vk::raii::BufferView create_texel_view(VulkanContext& context, const GpuBuffer& buffer, vk::Format format) {
