@@ -1,9 +1,9 @@
 """A deforming mesh (README, "Python"): the bunny with every vertex moved by up to 1% of its size,
 through Renderer.set_vertices, which refits the tree (keeps its shape, recomputes its boxes; from the
 second call on in place), against the same call where one triangle also collapses to a point or
-opens again, which builds the tree anew; then the
-render after each against a Renderer made from the moved bunny (its tree built for it), GPU time,
-with the depth's largest relative difference from the double-precision reference. Best of CALLS.
+opens again, which builds the tree anew. Then the render after a refit against a Renderer made from
+the moved bunny (its tree built for it): GPU time, and the depth's relative error against the
+double-precision reference. Best of CALLS.
 
 Run from the repository root after building:
     PYTHONPATH=build/python python3 docs/moving_vertices.py [MODEL.obj] [CALLS]
