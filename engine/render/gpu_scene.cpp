@@ -130,7 +130,7 @@ class VertexTable {
 };
 
 // Texels a slot's normal takes (VKRAY_TEXELS_PER_NORMAL_*), and them written at `at`.
-size_t normal_texels(Precision precision) {
+size_t texels_a_normal(Precision precision) {
   return precision == Precision::float64 ? VKRAY_TEXELS_PER_NORMAL_FLOAT64 : VKRAY_TEXELS_PER_NORMAL_FLOAT32;
 }
 void write_normal(glm::vec4* at, const glm::dvec3& normal, Precision precision) {
@@ -142,8 +142,8 @@ void write_normal(glm::vec4* at, const glm::dvec3& normal, Precision precision) 
   }
 }
 void append_normal(std::vector<glm::vec4>& texels, const glm::dvec3& normal, Precision precision) {
-  texels.resize(texels.size() + normal_texels(precision));
-  write_normal(texels.data() + texels.size() - normal_texels(precision), normal, precision);
+  texels.resize(texels.size() + texels_a_normal(precision));
+  write_normal(texels.data() + texels.size() - texels_a_normal(precision), normal, precision);
 }
 
 // The tree's nodes: each holds its two children's boxes (from their slots' boxes), widened (see
@@ -412,7 +412,7 @@ bool refit_in_place(GpuScene& gpu, const Scene& scene, const ShaderVariant& shad
   // Each slot's record, normal and box; the spheres where they are stored.
   const Bvh& tree = *gpu.tree;
   std::vector<FloatBox> boxes(gpu.hit_sources.slots.size());
-  const size_t texels = normal_texels(gpu.precision);
+  const size_t texels = texels_a_normal(gpu.precision);
   parallel_for_chunks(boxes.size(), [&](size_t begin, size_t end) {
     for (size_t slot = begin; slot < end && fits; ++slot) {
       const ObjectPrimitive source = gpu.hit_sources.slots[slot];
