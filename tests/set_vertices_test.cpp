@@ -17,11 +17,12 @@ using test::device;
 
 constexpr uint32_t width = 96, height = 72;
 
-// A sphere of about 4000 triangles beside a plane-like grid, the camera seeing both.
+// A sphere of about 4000 triangles above a grid, a plane below both, the camera seeing all three.
 Scene two_meshes() {
   Scene scene;
   scene.meshes.push_back(make_sphere_mesh(4000, glm::dvec3(0.0), 1.0));
   scene.meshes.push_back(test::quad_grid({-3, -1.5, -3}, {6, 0, 0}, {0, 0, 6}, 8));
+  scene.planes.push_back({{0.0, -2.0, 0.0}, {0.0, 1.0, 0.0}});
   scene.camera = {{0.4, 0.9, 3.6}, {0, 0, 0}, {0, 1, 0}, 50};
   return test::sized(scene, width, height);
 }
@@ -35,6 +36,25 @@ std::vector<glm::dvec3> moved_positions(const Mesh& mesh, double fraction, uint3
   std::vector<glm::dvec3> positions = mesh.positions;
   for (glm::dvec3& p : positions) p += glm::dvec3(offset(random), offset(random), offset(random));
   return positions;
+}
+
+// Rays from origins of their own (each walks alone, and reads the planes' offsets from the anchor)
+// toward the sphere, the grid and the plane beyond the grid's edge.
+std::vector<GivenRay> rays_from_above() {
+  std::mt19937_64 random(9);
+  std::uniform_real_distribution<double> spread(-1.0, 1.0);
+  std::vector<GivenRay> rays;
+  for (int k = 0; k < 2048; ++k) {
+    rays.push_back({2.0 * spread(random), 3.0 + spread(random), 2.0 * spread(random), 2.0 * spread(random), -1.0, 2.0 * spread(random)});
+  }
+  return rays;
+}
+
+void expect_same_hits(const RayHits& got, const RayHits& want) {
+  EXPECT_EQ(got.t, want.t);
+  EXPECT_EQ(got.normal, want.normal);
+  EXPECT_EQ(got.object, want.object);
+  EXPECT_EQ(got.primitive, want.primitive);
 }
 
 void expect_same_frame(const Frame& got, const Frame& want) {
@@ -79,6 +99,7 @@ TEST(SetVertices, AMovedMeshRendersAsTheMovedSceneInEverySearch) {
       const Frame again = renderer.render(moved.camera, width, height, outputs);
       Renderer fresh_again(device(), moved, options);
       expect_same_frame(again, fresh_again.render(moved.camera, width, height, outputs));
+      expect_same_hits(renderer.cast_rays(rays_from_above()), fresh_again.cast_rays(rays_from_above()));
     }
 
     // A triangle of zero area (its corners on one line along x, so exactly: they share y and z) is

@@ -165,6 +165,16 @@ std::vector<gpu::GpuBvhNode> encode_nodes(const Bvh& bvh, SlotBox slot_box) {
   return nodes;
 }
 
+// The planes (GpuPlane): their offsets from the anchor, and their heights above the scene's camera.
+std::vector<gpu::GpuPlane> encode_planes(const Scene& scene, const glm::dvec3& anchor, Precision precision) {
+  std::vector<gpu::GpuPlane> planes;
+  for (const auto& plane : scene.planes) {
+    planes.push_back({{}, encode_point(glm::dvec4(plane.normal, glm::dot(plane.normal, plane.point - anchor)), precision)});
+  }
+  set_plane_heights(planes, scene.planes, scene.camera.from, precision);
+  return planes;
+}
+
 // Where a shader's positions are stored from (GpuScene::anchor), and the radius about it.
 SceneExtent anchored_extent(const Scene& scene, const ShaderVariant& shader, const SceneExtent& extent) {
   const bool world_origin = shader.precision == Precision::float64 || shader.coordinates == VKRAY_COORDINATES_ABSOLUTE;
@@ -282,10 +292,7 @@ GpuScene make_gpu_scene(const Scene& scene, const GpuSceneOptions& options, cons
   gpu.hit_sources.first_plane_object = static_cast<uint32_t>(scene.meshes.size() + scene.spheres.size());
   auto encode = [&](const glm::dvec3& position, double w) { return encode_point(glm::dvec4(position, w), gpu.precision); };
   gpu.radius = anchored.radius;
-  for (const auto& plane : scene.planes) {
-    gpu.planes.push_back({{}, encode(plane.normal, glm::dot(plane.normal, plane.point - gpu.anchor))});
-  }
-  set_plane_heights(gpu.planes, scene.planes, scene.camera.from, gpu.precision);
+  gpu.planes = encode_planes(scene, gpu.anchor, gpu.precision);
 
   // Triangles relative to the anchor; each vertex position is stored once and indexed by every
   // triangle that shares it, so they see bit-identical values: the watertight test needs that.
@@ -437,6 +444,7 @@ bool refit_in_place(GpuScene& gpu, const Scene& scene, const ShaderVariant& shad
     }
   });
   if (!fits) return false;
+  gpu.planes = encode_planes(scene, gpu.anchor, gpu.precision);
   for (size_t k = 0; k < gpu.spheres.size(); ++k) {  // tested apart
     gpu.spheres[k] = {encode_point(glm::dvec4(scene.spheres[k].center - gpu.anchor, scene.spheres[k].radius), gpu.precision)};
   }

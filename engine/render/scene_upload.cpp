@@ -95,6 +95,10 @@ void Renderer::Impl::write_refitted(const GpuScene& gpu_scene) {
   write(vertices, gpu_scene.vertices);
   write(normals, gpu_scene.normal_texels);
   write(bvh_nodes, gpu_scene.bvh_nodes);
+  if (planes) {  // their offsets from the anchor (the heights above the camera are set per render)
+    gpu_planes = gpu_scene.planes;
+    std::memcpy(planes->buffer.mapped, gpu_planes.data(), gpu_planes.size() * sizeof(gpu::GpuPlane));
+  }
   anchor = gpu_scene.anchor;
   scene_radius = gpu_scene.radius;
 }
