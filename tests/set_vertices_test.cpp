@@ -7,6 +7,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cstdio>
 #include <cstring>
 #include <random>
 
@@ -153,6 +154,32 @@ TEST(SetVertices, VerticesThatSharedAPositionMovedApart) {
     Renderer fresh(device(), moved);
     expect_same_frame(frame, fresh.render(moved.camera, width, height, {Aov::depth, Aov::normal}));
   }
+}
+
+// The float64 shader stores positions from the world origin and two texels a normal: its refits in
+// place too render what a Renderer made from the moved scene renders.
+TEST(SetVertices, InDoublePrecision) {
+  if (!device().info().shader_float64) {
+    std::printf("    not run here: %s has no shaderFloat64\n", device().info().name.c_str());
+    return;
+  }
+  const Scene scene = two_meshes();
+  RendererOptions options;
+  options.shader.precision = Precision::float64;
+  Renderer renderer(device(), scene, options);
+  Scene moved = scene;
+  for (uint32_t seed : {21u, 23u}) {  // the second refits in place
+    moved.meshes[0].positions = moved_positions(scene.meshes[0], 0.01, seed);
+    renderer.set_vertices(0, moved.meshes[0].positions);
+    EXPECT_TRUE(renderer.timings().tree_refitted);
+  }
+  Renderer fresh(device(), moved, options);
+  const Frame frame = renderer.render(moved.camera, width, height, {Aov::depth, Aov::normal});
+  const Frame expected = fresh.render(moved.camera, width, height, {Aov::depth, Aov::normal});
+  ASSERT_EQ(frame.depth64.size(), size_t{width} * height);
+  EXPECT_EQ(frame.depth64, expected.depth64);
+  EXPECT_EQ(frame.normal64, expected.normal64);
+  expect_same_hits(renderer.cast_rays(rays_from_above()), fresh.cast_rays(rays_from_above()));
 }
 
 TEST(SetVertices, BadInputLeavesTheSceneAsItWas) {
