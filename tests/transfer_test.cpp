@@ -67,11 +67,15 @@ TEST(StagingReadback, LandsInTheFramesPlanesAsTheDirectTransferReadsThem) {
       for (const auto& [got, want] : {std::pair{&frame.depth, &expected.depth}, {&frame.normal, &expected.normal},
                                       {&frame.uv, &expected.uv}}) {
         ASSERT_EQ(got->size(), want->size());
-        EXPECT_EQ(0, std::memcmp(got->data(), want->data(), got->size() * sizeof(float)));
+        if (!got->empty()) {
+          EXPECT_EQ(0, std::memcmp(got->data(), want->data(), got->size() * sizeof(float)));
+        }
       }
       for (const auto& [got, want] : {std::pair{&frame.depth64, &expected.depth64}, {&frame.normal64, &expected.normal64}}) {
-        ASSERT_EQ(got->size(), want->size());
-        EXPECT_EQ(0, std::memcmp(got->data(), want->data(), got->size() * sizeof(double)));
+        ASSERT_EQ(got->size(), want->size());  // the double planes: empty for the float shader
+        if (!got->empty()) {
+          EXPECT_EQ(0, std::memcmp(got->data(), want->data(), got->size() * sizeof(double)));
+        }
       }
     }
   }
