@@ -48,10 +48,20 @@ using uvec4 = glm::uvec4;
 // hit (VKRAY_HIT_*; for camera rays too with VKRAY_SPEC_WRITE_HIT).
 #define VKRAY_BINDING_RAYS 13        // texels, RGBA32F
 #define VKRAY_BINDING_HITS 14        // storage buffer
+// Rays from one origin read and hits written where the caller holds them
+// (VKRAY_RAY_INPUT_CALLER_DIRECTIONS; the device imports the caller's memory): the rays as the
+// caller gave them, six doubles each (three RGBA32UI texels), and a mesh id and a primitive id a
+// ray beside the depth (VKRAY_BINDING_DEPTH: the distance t) and normal (VKRAY_BINDING_NORMAL, x y z
+// of a ray together); the shader turns a primitive slot into its ids by the table in
+// VKRAY_BINDING_HIT_SOURCES (a uvec2 of mesh id and primitive id a slot, as HitSources holds them).
+#define VKRAY_BINDING_CALLER_RAYS 15     // texels, RGBA32UI
+#define VKRAY_BINDING_HIT_SOURCES 16     // storage buffer
+#define VKRAY_BINDING_MESH_IDS 17        // storage buffer
+#define VKRAY_BINDING_PRIMITIVE_IDS 18   // storage buffer
 // The ray-query traversal's top-level acceleration structure (VKRAY_SEARCH_RAY_QUERY): in its
 // pipelines' descriptor sets alone, the last binding.
-#define VKRAY_BINDING_TOP_STRUCTURE 15
-#define VKRAY_BINDING_COUNT 16
+#define VKRAY_BINDING_TOP_STRUCTURE 19
+#define VKRAY_BINDING_COUNT 20
 
 // How the shader finds the nearest triangle or sphere (VKRAY_SPEC_SEARCH_MODE). Planes are
 // infinite: they stay outside the tree, in their own loop.
@@ -67,6 +77,25 @@ using uvec4 = glm::uvec4;
 #define VKRAY_PACKET_ROWS 8
 #define VKRAY_PACKET_GROUP_WIDTH 16
 #define VKRAY_PACKET_GROUP_HEIGHT 32
+
+#ifdef __cplusplus
+#define VKRAY_SHARED_FUNCTION inline
+using uint = std::uint32_t;
+#else
+#define VKRAY_SHARED_FUNCTION
+#endif
+// Given rays from one origin listed in an order for the packet walk (consecutive rays pointing
+// nearly the same way) take their positions in rows VKRAY_PACKET_GROUP_WIDTH wide so that 64
+// consecutive ones form one packet of 8 columns (lavapipe's 8 lanes; wider subgroups take several
+// packets) by VKRAY_PACKET_ROWS rows: the place in the order of the ray at `position`. A block of
+// VKRAY_PACKET_ROWS rows holds the same places as its positions, whole packets.
+#define VKRAY_PACKET_COLUMNS 8
+VKRAY_SHARED_FUNCTION uint packet_order_index(uint position) {
+  uint x = position % VKRAY_PACKET_GROUP_WIDTH, y = position / VKRAY_PACKET_GROUP_WIDTH;
+  uint packet = (y / VKRAY_PACKET_ROWS) * (VKRAY_PACKET_GROUP_WIDTH / VKRAY_PACKET_COLUMNS) + x / VKRAY_PACKET_COLUMNS;
+  return packet * (VKRAY_PACKET_COLUMNS * VKRAY_PACKET_ROWS) + (y % VKRAY_PACKET_ROWS) * VKRAY_PACKET_COLUMNS +
+         x % VKRAY_PACKET_COLUMNS;
+}
 
 // Specialization constants: counts (0 removes that loop and its reads), how primitives are found,
 // what the tree holds, which outputs are written, and the loop budget.
@@ -118,6 +147,13 @@ using uvec4 = glm::uvec4;
 // rows `width` wide, for the packet walk (the host chooses the positions so that neighbours point
 // nearly the same way: see Renderer::cast_rays).
 #define VKRAY_RAY_INPUT_DIRECTIONS 2
+// The caller's own rays from one origin (VKRAY_BINDING_CALLER_RAYS), all of them from the first
+// one's origin as far as the shader finds (a ray from elsewhere, or with a zero or non-finite
+// direction, is listed in the overflow buffer for the host), each direction normalized in the
+// shader as unit_vector does on the host, then rounded to float; hits written to the caller's
+// arrays by ray (see VKRAY_CALLER_*). Positions are the rays' indices, or with VKRAY_CALLER_IN_ORDER
+// their places in the packet walk's order (packet_order_index).
+#define VKRAY_RAY_INPUT_CALLER_DIRECTIONS 3
 // The device's subgroup size where it is 8, else 0 (see shaders/packet_walk.glsl).
 #define VKRAY_SPEC_SUBGROUP_SIZE 21
 // Write what each camera ray hit to VKRAY_BINDING_HITS too (the mesh-id and primitive-id outputs).
@@ -272,6 +308,13 @@ struct RayGenParams {
   uvec4 counts;  // read by the generic variant only: spheres, planes, triangle slots, search mode
 };
 VKRAY_CHECK_SIZE(RayGenParams, 128);
+// VKRAY_RAY_INPUT_CALLER_DIRECTIONS: camera[5] holds the VKRAY_CALLER_* bits (x), and the mesh ids
+// of the first sphere tested one by one (z) and of the first plane (w), as HitSources has them.
+#define VKRAY_CALLER_WRITE_T 1u
+#define VKRAY_CALLER_WRITE_NORMAL 2u
+#define VKRAY_CALLER_WRITE_MESH_ID 4u
+#define VKRAY_CALLER_WRITE_PRIMITIVE_ID 8u
+#define VKRAY_CALLER_IN_ORDER 16u
 
 // The nearest and farthest finite depth of an image as the bits of positive floats, which order
 // as unsigned integers do: the shader folds its hits in with atomicMin/atomicMax. Reset to

@@ -31,6 +31,8 @@ const bool RAY_INPUT = RAY_INPUT_KIND != VKRAY_RAY_INPUT_NONE;
 // Each ray from its own origin; otherwise every ray starts at the camera's (RayGenParams.camera).
 // The float64 shader is given rays alone (the host gives directions to the packet walk alone).
 const bool GIVEN_ORIGINS = RAY_INPUT_KIND == VKRAY_RAY_INPUT_RAYS;
+// The caller's rays and arrays, in place (VKRAY_RAY_INPUT_CALLER_DIRECTIONS).
+const bool CALLER_ARRAYS = RAY_INPUT_KIND == VKRAY_RAY_INPUT_CALLER_DIRECTIONS;
 
 layout(push_constant) uniform PushConstants { RayGenParams params; };
 
@@ -46,6 +48,19 @@ layout(binding = VKRAY_BINDING_IMAGE, rgba32f) uniform writeonly image2D image_o
 layout(std430, binding = VKRAY_BINDING_DEPTH_RANGE) buffer DepthRange { DepthRangeBits depth_range; };
 GEOMETRY_BUFFER(VKRAY_BINDING_RAYS, GeometryTexel, GeometrySampler, rays_in);  // GpuRay
 layout(std430, binding = VKRAY_BINDING_HITS) writeonly buffer HitsOut { uint hit_out[]; };
+GEOMETRY_BUFFER(VKRAY_BINDING_CALLER_RAYS, uvec4, usamplerBuffer, caller_rays);  // six doubles a ray
+layout(std430, binding = VKRAY_BINDING_HIT_SOURCES) readonly buffer HitSourcesIn { uvec2 hit_sources[]; };
+layout(std430, binding = VKRAY_BINDING_MESH_IDS) writeonly buffer MeshIdsOut { uint mesh_id_out[]; };
+layout(std430, binding = VKRAY_BINDING_PRIMITIVE_IDS) writeonly buffer PrimitiveIdsOut { uint primitive_id_out[]; };
+
+// The mesh id and primitive id of what a ray hit (VKRAY_HIT_*), as HitSources gives them on the host.
+uvec2 hit_source(uint hit) {
+  if (hit == VKRAY_HIT_NONE) return uvec2(VKRAY_HIT_NONE);
+  uint index = hit & VKRAY_HIT_INDEX_MASK;
+  if ((hit & VKRAY_HIT_PLANE) != 0u) return uvec2(params.camera[5].w + index, index);
+  if ((hit & VKRAY_HIT_SPHERE_APART) != 0u) return uvec2(params.camera[5].z + index, index);
+  return hit_sources[index];
+}
 
 // Folds a range of depths into depth_range (near = +infinity and far = 0 where the invocation has
 // none): reduced across the subgroup first, then one atomic pair per subgroup (per-invocation
@@ -139,12 +154,19 @@ void main() {
   real3 normal[VKRAY_PACKET_ROWS];
   uint hit_id[VKRAY_PACKET_ROWS];
   bool unfinished[VKRAY_PACKET_ROWS];
+  // CALLER_ARRAYS: each ray's index in the caller's arrays, and whether it can be traced here (from
+  // the shared origin, with a direction that has one).
+  uint caller_index[VKRAY_PACKET_ROWS];
+  bool traceable[VKRAY_PACKET_ROWS];
   Origin origin;
   for (uint r = 0; r < RAYS; ++r) {
     tile_pixel[r] = first_pixel + uvec2(0, r);
     uint row = params.image.z + tile_pixel[r].y;
     uint ray_index = row * width + tile_pixel[r].x;  // RAY_INPUT: rows of `width` rays, `height` in all
-    inside[r] = tile_pixel[r].x < width && tile_pixel[r].y < params.image.w && (!RAY_INPUT || ray_index < height);
+    bool in_order = (params.camera[5].x & VKRAY_CALLER_IN_ORDER) != 0u;
+    caller_index[r] = CALLER_ARRAYS && in_order ? packet_order_index(ray_index) : ray_index;
+    inside[r] = tile_pixel[r].x < width && tile_pixel[r].y < params.image.w && (!RAY_INPUT || caller_index[r] < height);
+    traceable[r] = true;
     uint out_index = tile_pixel[r].y * width + tile_pixel[r].x;
 
     // UV of the pixel centre: origin at the image centre, the shorter side spans [-1, 1]. The
@@ -199,6 +221,23 @@ void main() {
       range_end = direction_end.w;
     } else {
       origin = Origin(uintBitsToFloat(params.camera[0].xyz), use_lo_parts ? uintBitsToFloat(params.camera[1].xyz) : vec3(0.0));
+#if defined(VKRAY_DOUBLE_EDGES)
+      if (CALLER_ARRAYS) {
+        // The origin compared bit for bit with the first ray's, which the host checked and sent as
+        // the camera's; the direction made a unit vector in double as unit_vector does (the largest
+        // magnitude divided out first outside [2^-480, 2^480]), then rounded to float.
+        int first_texel = 3 * int(inside[r] ? caller_index[r] : 0u);
+        uvec4 origin_xy = FETCH(caller_rays, first_texel), origin_z_x = FETCH(caller_rays, first_texel + 1);
+        uvec4 direction_yz = FETCH(caller_rays, first_texel + 2);
+        dvec3 given = dvec3(packDouble2x32(origin_z_x.zw), packDouble2x32(direction_yz.xy), packDouble2x32(direction_yz.zw));
+        double scale = max(max(abs(given.x), abs(given.y)), abs(given.z));
+        bool finite = !any(isnan(given)) && !any(isinf(given));
+        traceable[r] = origin_xy == FETCH(caller_rays, 0) && origin_z_x.xy == FETCH(caller_rays, 1).xy && finite && scale > 0.0LF;
+        if (scale <= ldexp(1.0LF, -480) || scale >= ldexp(1.0LF, 480)) given /= scale;
+        dirs[r] = traceable[r] ? vec3(given * (1.0LF / sqrt(dot(given, given)))) : vec3(0.0, 0.0, 1.0);
+        if (!traceable[r]) range_end = 0.0;  // hits nothing; listed for the host below
+      } else
+#endif
       if (RAY_INPUT) {
         vec4 direction_end = FETCH(rays_in, inside[r] ? int(ray_index) : 0);
         dirs[r] = direction_end.xyz;
@@ -282,7 +321,7 @@ void main() {
       hit_id[r] = hits[r].id;
     }
     uint out_index = tile_pixel[r].y * width + tile_pixel[r].x;
-    if (hits[r].unfinished && inside[r]) overflow_pixels[atomicAdd(overflow_count, 1u)] = out_index;
+    if ((hits[r].unfinished || !traceable[r]) && inside[r]) overflow_pixels[atomicAdd(overflow_count, 1u)] = out_index;
     // Unfinished rays stay out of the depth range: the host finishes them and folds their depth in.
     // A ray that hit nothing keeps the end of its range as t_best; its depth is written +infinity.
     if (hit_id[r] == VKRAY_HIT_NONE) t_best[r] = uintBitsToFloat(0x7f800000u);
@@ -301,6 +340,20 @@ void main() {
     if (IMAGE_TARGET) {
       imageStore(image_out, ivec2(tile_pixel[r].x, params.image.z + tile_pixel[r].y),
                  WRITE_DEPTH ? vec4(t_best[r], 0.0, 0.0, 0.0) : vec4(normal[r], 0.0));
+      continue;
+    }
+    if (CALLER_ARRAYS) {  // by ray, as the caller holds them: t, x y z of the normal, the ids
+      uint k = caller_index[r];
+      uint written = params.camera[5].x;
+      if ((written & VKRAY_CALLER_WRITE_T) != 0u) depth_out[k] = t_best[r];
+      if ((written & VKRAY_CALLER_WRITE_NORMAL) != 0u) {
+        normal_out[3 * k] = normal[r].x;
+        normal_out[3 * k + 1] = normal[r].y;
+        normal_out[3 * k + 2] = normal[r].z;
+      }
+      uvec2 ids = hit_source(hit_id[r]);
+      if ((written & VKRAY_CALLER_WRITE_MESH_ID) != 0u) mesh_id_out[k] = ids.x;
+      if ((written & VKRAY_CALLER_WRITE_PRIMITIVE_ID) != 0u) primitive_id_out[k] = ids.y;
       continue;
     }
     if (RAY_INPUT || WRITE_HIT) hit_out[out_index] = hit_id[r];

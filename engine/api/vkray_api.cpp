@@ -214,25 +214,23 @@ void add_timings(RenderTimings& call, const RenderTimings& engine, bool first) {
     call = engine;
     return;
   }
-  call.pipeline_ms += engine.pipeline_ms;
-  call.dispatch_gpu_ms += engine.dispatch_gpu_ms;
-  call.readback_ms += engine.readback_ms;
-  call.readback_bytes += engine.readback_bytes;
-  call.rays_ms += engine.rays_ms;
-  call.tiles += engine.tiles;
-  call.unfinished_rays += engine.unfinished_rays;
-  call.cpu_finish_ms += engine.cpu_finish_ms;
+  call.add(engine);
   call.given_walk = engine.given_walk;
 }
 
-// Traces the call's rays: trace(first, rays, ranges) for each pose run of them (pose_runs), or once
-// for all, each engine call's timings added to the call's; where the engine refuses a bad ray and
-// the call takes bad rays as misses, again without the bad ones. `bad(given)` is called for each.
-template <typename Trace, typename Bad>
-void trace_call(vkray_renderer& r, CallRays& call, Trace&& trace, Bad&& bad) {
+// Traces the call's rays: all of them at once where whole(rays, ranges) takes them (returns true),
+// else trace(first, rays, ranges) for each pose run of them (pose_runs), or once for all, each
+// engine call's timings added to the call's; where the engine refuses a bad ray and the call takes
+// bad rays as misses, again without the bad ones. `bad(given)` is called for each.
+template <typename Whole, typename Trace, typename Bad>
+void trace_call(vkray_renderer& r, CallRays& call, Whole&& whole, Trace&& trace, Bad&& bad) {
   const auto all_runs = [&] {
     const std::span<const GivenRay> rays = call.traced();
     const RayRanges ranges = call.traced_ranges();
+    if (whole(rays, ranges)) {
+      if (r.renderer) add_timings(r.last_call, r.renderer->timings(), true);
+      return;
+    }
     std::vector<std::pair<size_t, size_t>> runs = r.renderer ? pose_runs(rays, ranges) : std::vector<std::pair<size_t, size_t>>{};
     if (runs.empty()) runs.emplace_back(0, rays.size());
     for (const auto& [first, end] : runs) {
@@ -267,6 +265,25 @@ class RayOutputs {
   }
 
   void miss(size_t k) const { hit(k, INFINITY, glm::dvec3(0.0), {no_object, no_object}); }
+
+  // The caller's arrays from ray `first` on, for Renderer::cast_rays_in_place: where the outputs
+  // asked for are float32 t along the unit direction, normals and ids alone, and the traced rays are
+  // the given ones (none was left out as bad).
+  std::optional<HitArrays> arrays_from(size_t first) const {
+    if (doubles_ || !call_.length.empty() || call_.filtered) return std::nullopt;
+    HitArrays arrays;
+    for (size_t n = 0; n < asked_.size(); ++n) {
+      if (std::count(asked_.begin(), asked_.begin() + static_cast<std::ptrdiff_t>(n), asked_[n]) > 0) return std::nullopt;  // asked twice
+      switch (asked_[n]->aov) {
+        case Aov::depth: arrays.t = static_cast<float*>(results_[n]) + first; break;
+        case Aov::normal: arrays.normal = static_cast<float*>(results_[n]) + 3 * first; break;
+        case Aov::mesh_id: arrays.object = static_cast<uint32_t*>(results_[n]) + first; break;
+        case Aov::primitive_id: arrays.primitive = static_cast<uint32_t*>(results_[n]) + first; break;
+        default: return std::nullopt;
+      }
+    }
+    return arrays;
+  }
 
   void hit(size_t k, double t, const glm::dvec3& normal, ObjectPrimitive source) const {
     const bool missed = source.object == no_object;
@@ -326,7 +343,10 @@ nlohmann::json timings_json(const RenderTimings& t, bool constructor) {
   if (t.has_gpu_times) json["dispatch_gpu_ms"] = t.dispatch_gpu_ms;
   json["readback_ms"] = t.readback_ms;
   json["rays_ms"] = t.rays_ms;
-  if (t.given_walk != GivenRayWalk::none) json["rays_walk"] = given_ray_walk_name(t.given_walk);
+  if (t.given_walk != GivenRayWalk::none) {
+    json["rays_walk"] = given_ray_walk_name(t.given_walk);
+    json["rays_in_place"] = t.rays_in_place;
+  }
   json["dispatches"] = t.tiles;
   json["cpu_finished_rays"] = t.unfinished_rays;
   if (t.scene_update_ms > 0.0) {  // set_vertices
@@ -656,8 +676,14 @@ vkray_status vkray_cast_rays(vkray_renderer* renderer, const double* rays, uint6
     const RayOutputs written(asked, results, renderer->doubles, call, renderer->scene);
     const std::lock_guard one_call_at_a_time(renderer->busy);
     renderer->called = true;
-    // Each traced hit straight into the caller's arrays.
-    trace_call(*renderer, call, [&](size_t first, std::span<const GivenRay> run, const RayRanges& run_ranges) {
+    // Where it can, the device reads the rays and writes the hits in the caller's own arrays;
+    // elsewhere each traced hit goes into them from the host.
+    const auto in_place = [&](std::span<const GivenRay> traced, const RayRanges& ranges) {
+      const std::optional<HitArrays> arrays = written.arrays_from(0);
+      return renderer->renderer && arrays && ranges.t_min.empty() && ranges.t_max.empty() &&
+             renderer->renderer->cast_rays_in_place(traced, *arrays);
+    };
+    trace_call(*renderer, call, in_place, [&](size_t first, std::span<const GivenRay> run, const RayRanges& run_ranges) {
       if (renderer->renderer) {
         const RayHits hits = renderer->renderer->cast_rays(run, run_ranges);
         const bool doubles = !hits.t64.empty();
@@ -690,7 +716,8 @@ vkray_status vkray_occluded(vkray_renderer* renderer, const double* rays, uint64
     CallRays call(rays, count, t_min, t_max, flags);
     const std::lock_guard one_call_at_a_time(renderer->busy);
     renderer->called = true;
-    trace_call(*renderer, call, [&](size_t first, std::span<const GivenRay> run, const RayRanges& run_ranges) {
+    const auto never_whole = [](std::span<const GivenRay>, const RayRanges&) { return false; };
+    trace_call(*renderer, call, never_whole, [&](size_t first, std::span<const GivenRay> run, const RayRanges& run_ranges) {
       std::vector<uint8_t> blocked;
       if (renderer->renderer) {
         blocked = renderer->renderer->occluded(run, run_ranges);

@@ -13,23 +13,12 @@
 namespace vkray {
 namespace {
 
-// The packet walk's layout of given directions in an order (by direction): rows
-// VKRAY_PACKET_GROUP_WIDTH wide, in which a packet is packet_columns columns (lavapipe's 8 lanes;
-// wider subgroups take several packets) of VKRAY_PACKET_ROWS rows. The n-th ray of the order takes
-// the n % 64-th place of packet n / 64, so that 64 consecutive rays walk the tree together; a block
-// of VKRAY_PACKET_ROWS rows holds whole packets.
-constexpr uint32_t packet_columns = 8;
-constexpr uint32_t packet_rays = packet_columns * VKRAY_PACKET_ROWS;
-constexpr uint32_t packets_a_row = VKRAY_PACKET_GROUP_WIDTH / packet_columns;
+// The packet walk's layout of given directions in an order (gpu::packet_order_index): 64
+// consecutive rays of the order walk the tree together; a block of VKRAY_PACKET_ROWS rows holds
+// whole packets.
+constexpr uint32_t packet_rays = VKRAY_PACKET_COLUMNS * VKRAY_PACKET_ROWS;
 constexpr uint32_t packet_block_positions = VKRAY_PACKET_GROUP_WIDTH * VKRAY_PACKET_ROWS;
-static_assert(VKRAY_PACKET_GROUP_WIDTH % packet_columns == 0);
-
-// The place in the order of the ray at layout position p.
-size_t packet_order_index(size_t position) {
-  const size_t x = position % VKRAY_PACKET_GROUP_WIDTH, y = position / VKRAY_PACKET_GROUP_WIDTH;
-  const size_t packet = (y / VKRAY_PACKET_ROWS) * packets_a_row + x / packet_columns;
-  return packet * packet_rays + (y % VKRAY_PACKET_ROWS) * packet_columns + x % packet_columns;
-}
+static_assert(VKRAY_PACKET_GROUP_WIDTH % VKRAY_PACKET_COLUMNS == 0);
 
 }  // namespace
 
@@ -71,7 +60,7 @@ void Renderer::Impl::cast_given(const GivenRays& given, RaycastMode mode, uint32
   const RayRanges& ranges = given.ranges;
   auto ray_at = [&](size_t position) {  // rays.size() for padding
     if (!order) return position;
-    const size_t n = packet_order_index(position);
+    const size_t n = gpu::packet_order_index(static_cast<uint32_t>(position));
     return n < order->size() ? size_t{(*order)[n]} : rays.size();
   };
   // Ray k as traced: from the start of its range (RayRanges).
@@ -227,6 +216,140 @@ RayHits Renderer::Impl::cast_rays(const GivenRays& given) {
                nullptr, nullptr, hits);
   });
   return hits;
+}
+
+bool Renderer::Impl::casts_in_place() const {
+  // The shader reads the caller's doubles in the float32 variant with double edge functions (in
+  // packets or one by one); the float64 shader and ray queries take the host's encoding.
+  return precision() == Precision::float32 && stats.search != PrimitiveSearch::ray_query &&
+         resolve_edges(context.info, options.shader.edges) == EdgeArithmetic::double_products &&
+         context.info.host_import_alignment > 0;
+}
+
+bool Renderer::Impl::cast_rays_in_place(std::span<const GivenRay> rays, const HitArrays& into) {
+  if (!casts_in_place() || rays.empty() || rays.size() > UINT32_MAX / 3 || given_ray_fault(rays.front())) return false;
+  reset_timings();
+  const auto start = Clock::now();
+  // One origin, as far as samples over the list show: the shader checks every ray against the
+  // first and lists any other, so a sample only spares a list of many origins a wasted dispatch.
+  const GivenRay& first = rays.front();
+  constexpr size_t origin_samples = 1024;
+  for (size_t sample = 0; sample < origin_samples; ++sample) {
+    const GivenRay& ray = rays[(rays.size() - 1) * sample / (origin_samples - 1)];
+    if (!std::equal(ray.begin(), ray.begin() + 3, first.begin())) return false;
+  }
+  // Packets as cast_rays makes them, where the list needs no sorting: an image's rows in place, or
+  // runs of 64 that stay compact in order; one by one in rows of a workgroup's width.
+  const bool packets = stats.search == PrimitiveSearch::bvh_packet;
+  uint32_t width = options.shader.workgroup_width;
+  bool in_order = false;
+  timings.given_walk = GivenRayWalk::one_by_one;
+  if (packets) {
+    if (const std::optional<uint32_t> rows_width = scan_width(rays)) {
+      width = *rows_width;
+      timings.given_walk = GivenRayWalk::packets_in_place;
+    } else if (runs_stay_compact(rays, packet_rays)) {
+      width = VKRAY_PACKET_GROUP_WIDTH;
+      in_order = true;
+      timings.given_walk = GivenRayWalk::packets_in_order;
+    } else {
+      return false;  // ordered by direction first (cast_rays)
+    }
+  }
+  const size_t count = rays.size();
+  const size_t positions = in_order ? (count + packet_block_positions - 1) / packet_block_positions * packet_block_positions : count;
+  const auto total_rows = static_cast<uint32_t>((positions + width - 1) / width);
+  const AovSet aovs{Aov::depth, Aov::normal};
+  uint32_t tile_rows = rows_per_tile(width, total_rows, aovs, RaycastMode::caller_arrays);
+  if (in_order) tile_rows = tile_rows / VKRAY_PACKET_ROWS * VKRAY_PACKET_ROWS;
+  // Each array bound whole, from its first entry (the binding's offset alignment).
+  const vk::PhysicalDeviceLimits& limits = context.limits;
+  const vk::DeviceSize ray_bytes = count * sizeof(GivenRay);
+  const bool rays_bind = options.shader.storage_geometry ? ray_bytes <= limits.maxStorageBufferRange
+                                                          : 3 * count <= limits.maxTexelBufferElements;
+  if (tile_rows == 0 || !rays_bind || count * 3 * sizeof(float) > limits.maxStorageBufferRange) return false;
+  CallerArrays caller;
+  std::optional<ImportedHostMemory> imported_rays = import_host_memory(context, rays.data(), ray_bytes, geometry_usage);
+  const vk::DeviceSize ray_alignment = options.shader.storage_geometry ? limits.minStorageBufferOffsetAlignment
+                                                                         : limits.minTexelBufferOffsetAlignment;
+  if (!imported_rays || imported_rays->offset % ray_alignment != 0) return false;
+  caller.rays = std::move(*imported_rays);
+  auto import_output = [&](void* data, vk::DeviceSize bytes, std::optional<ImportedHostMemory>& imported) {
+    if (!data) return true;
+    imported = import_host_memory(context, data, bytes, vk::BufferUsageFlagBits::eStorageBuffer);
+    return imported && imported->offset % limits.minStorageBufferOffsetAlignment == 0;
+  };
+  if (!import_output(into.t, count * sizeof(float), caller.t) ||
+      !import_output(into.normal, 3 * count * sizeof(float), caller.normal) ||
+      !import_output(into.object, count * sizeof(uint32_t), caller.object) ||
+      !import_output(into.primitive, count * sizeof(uint32_t), caller.primitive)) {
+    return false;
+  }
+  const uint32_t written = (into.t ? VKRAY_CALLER_WRITE_T : 0u) | (into.normal ? VKRAY_CALLER_WRITE_NORMAL : 0u) |
+                           (into.object ? VKRAY_CALLER_WRITE_MESH_ID : 0u) |
+                           (into.primitive ? VKRAY_CALLER_WRITE_PRIMITIVE_ID : 0u) | (in_order ? VKRAY_CALLER_IN_ORDER : 0u);
+
+  std::vector<uint32_t> listed;  // rays the shader left to the host, by index
+  with_vulkan_errors("casting rays", [&] {
+    if (!options.shader.storage_geometry) {
+      caller.ray_texels = create_texel_view(context, caller.rays.buffer, vk::Format::eR32G32B32A32Uint, caller.rays.offset, ray_bytes);
+    }
+    if (!hit_source_table && !hit_sources.slots.empty()) {
+      static_assert(sizeof(ObjectPrimitive) == 2 * sizeof(uint32_t));  // the shader's uvec2
+      hit_source_table = upload_buffer(context, hit_sources.slots.data(), hit_sources.slots.size() * sizeof(ObjectPrimitive),
+                                       vk::BufferUsageFlagBits::eStorageBuffer);
+    }
+    const glm::dvec3 origin(first[0], first[1], first[2]);
+    const vk::raii::Pipeline& chosen =
+        pipeline->pipeline(aovs, needs_lo_parts(anchor, scene_radius, origin), RaycastMode::caller_arrays, timings.pipeline_ms);
+    set_planes_above(origin);
+    prepare_tile(width, tile_rows, aovs, nullptr, RaycastMode::caller_arrays, &caller);
+    timings.rays_ms += elapsed_ms(start);
+
+    gpu::RayGenParams params = make_ray_gen_params(CameraBasis{origin, {}, {}, {}, 0.0}, anchor, precision(), 0, 0, 0, 0, counts);
+    params.counts = counts;
+    params.camera[5] = glm::uvec4(written, 0u, hit_sources.first_sphere_object, hit_sources.first_plane_object);
+    double& ms_per_ray = packets ? camera_ms_per_pixel : given_ms_per_ray;  // packets cost as pixels do
+    DispatchSizer sizer(width, tile_rows, options.dispatch_budget_ms, ms_per_ray,
+                        workgroup_footprint(RaycastMode::caller_arrays).height);
+    for (uint32_t first_row = 0, rows = 0; first_row < total_rows; first_row += rows) {
+      rows = std::min(sizer.next_rows(), total_rows - first_row);
+      params.image = glm::uvec4(width, static_cast<uint32_t>(count), first_row, rows);
+      sizer.measured(rows, dispatch_tile(chosen, params));
+      ms_per_ray = sizer.slowest_ms_per_pixel();
+      for (const uint32_t index : listed_rays()) {
+        const auto position = static_cast<uint32_t>(size_t{first_row} * width + index);
+        listed.push_back(in_order ? gpu::packet_order_index(position) : position);
+      }
+    }
+  });
+  timings.rays_in_place = true;
+  if (!listed.empty()) cast_listed_again(rays, listed, into);
+  return true;
+}
+
+void Renderer::Impl::cast_listed_again(std::span<const GivenRay> rays, std::vector<uint32_t>& listed, const HitArrays& into) {
+  // The first bad ray by its index among all the rays (the shader lists every bad one), as
+  // check_given_rays names it.
+  std::sort(listed.begin(), listed.end());
+  for (const uint32_t k : listed) {
+    if (const char* fault = given_ray_fault(rays[k])) throw InputError("ray " + std::to_string(k) + ": " + fault);
+  }
+  std::vector<GivenRay> again(listed.size());
+  for (size_t n = 0; n < listed.size(); ++n) again[n] = rays[listed[n]];
+  RenderTimings in_place = timings;
+  const RayHits hits = cast_rays({again, {}, HitQuery::nearest});
+  in_place.add(timings);
+  timings = in_place;
+  parallel_for_chunks(listed.size(), [&](size_t begin, size_t end) {
+    for (size_t n = begin; n < end; ++n) {
+      const size_t k = listed[n];
+      if (into.t) into.t[k] = hits.t[n];
+      for (size_t c = 0; c < 3 && into.normal; ++c) into.normal[3 * k + c] = hits.normal[c * hits.count + n];
+      if (into.object) into.object[k] = hits.object[n];
+      if (into.primitive) into.primitive[k] = hits.primitive[n];
+    }
+  });
 }
 
 void Renderer::Impl::render_by_given_rays(const Camera& camera, Frame& frame) {

@@ -52,30 +52,37 @@ OutputBuffer Renderer::Impl::make_output(vk::DeviceSize pixels, vk::DeviceSize p
 }
 
 void Renderer::Impl::prepare_tile(uint32_t width, uint32_t rows, AovSet aovs, const ImageTarget* target,
-                                  RaycastMode mode) {
+                                  RaycastMode mode, const CallerArrays* caller) {
   const uint64_t image_id = target ? target->id() : 0;
   auto fits = [&](const TileOutputs& outputs) {
     return outputs.width == width && outputs.rows == rows && outputs.aov_bits == aovs.bits() &&
            outputs.image_id == image_id && outputs.mode == mode;
   };
-  if (fits(tile)) return;
-  if (fits(parked_tile)) {
+  // A call's imported arrays are bound for that call alone.
+  const bool bind_anew = caller || caller_arrays_bound;
+  if (fits(tile)) {
+    if (!bind_anew) return;
+  } else if (fits(parked_tile)) {
     std::swap(tile, parked_tile);
   } else {
     if (is_given(tile.mode) != is_given(mode)) std::swap(tile, parked_tile);  // the other kind's, kept
     tile = TileOutputs{width, rows, aovs.bits(), image_id, mode, {}, {}, {}, {}, {}, {}};
     const vk::DeviceSize pixels = vk::DeviceSize{width} * rows;
-    if (!target) {
+    // In place, the shader writes the caller's arrays and lists the rays it leaves to the host.
+    const bool in_place = mode == RaycastMode::caller_arrays;
+    if (!target && !in_place) {
       if (aovs.has(Aov::depth)) tile.depth = make_output(pixels, depth_bytes(precision()));
       if (aovs.has(Aov::normal)) tile.normal = make_output(pixels, normal_bytes(precision()));
       if (aovs.has(Aov::uv)) tile.uv = make_output(pixels, uv_bytes);
     }
-    if (is_given(mode)) {
+    if (is_given(mode) && !in_place) {
       const vk::DeviceSize bytes = pixels * given_ray_bytes(mode);
       tile.rays = texel_views_of(context, create_upload_buffer(context, bytes, geometry_usage));
     }
-    if (is_given(mode) || (!target && aovs.has(Aov::hit))) tile.hits = make_output(pixels, sizeof(uint32_t));
-    if (stats.loop_budget > 0 && aovs.needs_rays()) tile.overflow = make_output(pixels, sizeof(uint32_t), sizeof(uint32_t));
+    if ((is_given(mode) && !in_place) || (!target && aovs.has(Aov::hit))) tile.hits = make_output(pixels, sizeof(uint32_t));
+    if ((stats.loop_budget > 0 && aovs.needs_rays()) || in_place) {
+      tile.overflow = make_output(pixels, sizeof(uint32_t), sizeof(uint32_t));
+    }
   }
   auto floats = [&](const std::optional<TexelBuffer>& texels) {
     return *(texels ? texels->floats : placeholder_texels.floats);
@@ -97,6 +104,7 @@ void Renderer::Impl::prepare_tile(uint32_t width, uint32_t rows, AovSet aovs, co
   resources.texel_views[VKRAY_BINDING_VERTICES] = geometry(vertices);
   resources.texel_views[VKRAY_BINDING_NORMALS] = geometry(normals);
   resources.texel_views[VKRAY_BINDING_RAYS] = geometry(tile.rays);
+  resources.texel_views[VKRAY_BINDING_CALLER_RAYS] = caller ? *caller->ray_texels : *placeholder_texels.uints;
   resources.buffers[VKRAY_BINDING_HITS] = output(tile.hits);
   resources.texel_views[VKRAY_BINDING_BVH_BOUNDS] = floats(bvh_nodes);
   resources.texel_views[VKRAY_BINDING_BVH_LINKS] = uints(bvh_nodes);
@@ -116,6 +124,22 @@ void Renderer::Impl::prepare_tile(uint32_t width, uint32_t rows, AovSet aovs, co
   resources.buffers[VKRAY_BINDING_UV] = output(tile.uv);
   resources.buffers[VKRAY_BINDING_OVERFLOW] = output(tile.overflow);
   resources.buffers[VKRAY_BINDING_DEPTH_RANGE] = output(depth_range);
+  resources.buffers[VKRAY_BINDING_CALLER_RAYS] = caller ? *caller->rays.buffer.buffer : *placeholder_texels.buffer.buffer;
+  resources.offsets[VKRAY_BINDING_CALLER_RAYS] = caller ? caller->rays.offset : 0;
+  resources.buffers[VKRAY_BINDING_HIT_SOURCES] = *(hit_source_table ? *hit_source_table : placeholder).buffer;
+  // The caller's arrays in place of the outputs, each bound from its first entry.
+  for (const auto& [binding, imported] :
+       {std::pair{VKRAY_BINDING_DEPTH, caller ? &caller->t : nullptr}, {VKRAY_BINDING_NORMAL, caller ? &caller->normal : nullptr},
+        {VKRAY_BINDING_MESH_IDS, caller ? &caller->object : nullptr},
+        {VKRAY_BINDING_PRIMITIVE_IDS, caller ? &caller->primitive : nullptr}}) {
+    if (imported && *imported) {
+      resources.buffers[binding] = *(*imported)->buffer.buffer;
+      resources.offsets[binding] = (*imported)->offset;
+    } else if (binding == VKRAY_BINDING_MESH_IDS || binding == VKRAY_BINDING_PRIMITIVE_IDS) {
+      resources.buffers[binding] = *placeholder.buffer;
+    }
+  }
+  caller_arrays_bound = caller != nullptr;
   resources.images[VKRAY_BINDING_IMAGE] = *(target ? *target : *placeholder_image).image().view;
   if (structures) resources.top_structure = structures->top();
   pipeline->bind_resources(resources);
@@ -123,17 +147,17 @@ void Renderer::Impl::prepare_tile(uint32_t width, uint32_t rows, AovSet aovs, co
 
 uint32_t Renderer::Impl::rows_per_tile(uint32_t width, uint32_t height, AovSet buffer_aovs,
                                        RaycastMode mode) const {
-  vk::DeviceSize largest = is_given(mode) ? sizeof(uint32_t) : 0;  // the hits
+  vk::DeviceSize largest = is_given(mode) && mode != RaycastMode::caller_arrays ? sizeof(uint32_t) : 0;  // the hits
   if (buffer_aovs.has(Aov::depth)) largest = std::max(largest, depth_bytes(precision()));
   if (buffer_aovs.has(Aov::normal)) largest = std::max(largest, normal_bytes(precision()));
   if (buffer_aovs.has(Aov::uv)) largest = std::max(largest, uv_bytes);
   vk::DeviceSize limit = context.limits.maxStorageBufferRange;
   if (options.max_tile_bytes > 0) limit = std::min<vk::DeviceSize>(limit, options.max_tile_bytes);
   vk::DeviceSize by_bytes = largest > 0 ? std::max<vk::DeviceSize>(1, limit / (vk::DeviceSize{width} * largest)) : height;
-  if (stats.loop_budget > 0) {  // the overflow list: a count, then 4 bytes a pixel
+  if (stats.loop_budget > 0 || mode == RaycastMode::caller_arrays) {  // the overflow list: a count, then 4 bytes a pixel
     by_bytes = std::min(by_bytes, std::max<vk::DeviceSize>(1, (limit - sizeof(uint32_t)) / (vk::DeviceSize{width} * 4)));
   }
-  if (is_given(mode)) {  // the rays: one texel buffer
+  if (is_given(mode) && mode != RaycastMode::caller_arrays) {  // the rays: one texel buffer
     const vk::DeviceSize ray_limit = binding_limit();
     by_bytes = std::min(by_bytes, std::max<vk::DeviceSize>(1, ray_limit / (vk::DeviceSize{width} * given_ray_bytes(mode))));
   }

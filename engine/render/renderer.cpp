@@ -140,6 +140,11 @@ void Renderer::prepare_pipelines(const Camera& camera, uint32_t width, uint32_t 
         for (const HitQuery query : {HitQuery::nearest, HitQuery::any}) wanted.push_back({AovSet{Aov::depth, Aov::normal}, lo_parts, mode, query});
       }
     }
+    if (r.casts_in_place()) {
+      for (const bool lo_parts : {false, true}) {
+        wanted.push_back({AovSet{Aov::depth, Aov::normal}, lo_parts, RaycastMode::caller_arrays, HitQuery::nearest});
+      }
+    }
     std::vector<std::future<void>> made;
     for (const Wanted& pipeline : wanted) {
       made.push_back(std::async(std::launch::async, [&r, pipeline] {
@@ -167,6 +172,12 @@ void Renderer::prepare_pipelines(const Camera& camera, uint32_t width, uint32_t 
     occluded(one_origin);
     cast_rays(two_origins);
     occluded(two_origins);
+    // In place: an arc of rays long enough to walk in packets as listed.
+    std::vector<GivenRay> arc;
+    for (int k = 0; k < 1024; ++k) arc.push_back({origin.x, origin.y, origin.z, std::cos(1e-3 * k), std::sin(1e-3 * k), 0.5});
+    std::vector<float> t(arc.size()), normal(3 * arc.size());
+    std::vector<uint32_t> object(arc.size()), primitive(arc.size());
+    cast_rays_in_place(arc, {t.data(), normal.data(), object.data(), primitive.data()});
   }
   r.timings = constructor;
   r.reset_timings();
@@ -240,6 +251,25 @@ double Renderer::sustained_dispatch_ms(const Camera& camera, uint32_t width, uin
 
 RayHits Renderer::cast_rays(std::span<const GivenRay> rays, const RayRanges& ranges) {
   return impl_->cast_rays({rays, ranges, HitQuery::nearest});
+}
+
+void RenderTimings::add(const RenderTimings& later) {
+  pipeline_ms += later.pipeline_ms;
+  dispatch_gpu_ms += later.dispatch_gpu_ms;
+  readback_ms += later.readback_ms;
+  readback_bytes += later.readback_bytes;
+  readback_in_place_bytes += later.readback_in_place_bytes;
+  rays_ms += later.rays_ms;
+  tiles += later.tiles;
+  longest_dispatch_ms = std::max(longest_dispatch_ms, later.longest_dispatch_ms);
+  unfinished_rays += later.unfinished_rays;
+  cpu_finish_ms += later.cpu_finish_ms;
+}
+
+bool Renderer::casts_in_place() const { return impl_->casts_in_place(); }
+
+bool Renderer::cast_rays_in_place(std::span<const GivenRay> rays, const HitArrays& into) {
+  return impl_->cast_rays_in_place(rays, into);
 }
 
 std::vector<uint8_t> Renderer::occluded(std::span<const GivenRay> rays, const RayRanges& ranges) {

@@ -43,6 +43,7 @@ struct RenderTimings {
   uint64_t readback_in_place_bytes = 0;  // of those, copied straight into the frame's planes: no host copy
   double rays_ms = 0.0;            // cast_rays: ordering the rays and writing them for the device
   GivenRayWalk given_walk = GivenRayWalk::none;  // how cast_rays walked the tree
+  bool rays_in_place = false;      // cast_rays_in_place: the device read the rays and wrote the hits in the caller's memory
   uint32_t tiles = 0;              // dispatches the image was split into
   double longest_dispatch_ms = 0.0;  // GPU time of the longest (wall time where no timestamps)
   uint64_t unfinished_rays = 0;    // rays that ran out of the device's loop budget, finished on the CPU
@@ -51,6 +52,9 @@ struct RenderTimings {
   // whether the tree kept its shape (refitted) or was built anew.
   double scene_update_ms = 0.0;
   bool tree_refitted = false;
+  // A later engine call's times and counts added, for a call made of several (the walk and the
+  // constructor's figures stay this one's).
+  void add(const RenderTimings& later);
 };
 
 // What the constructor put on the device.
@@ -93,6 +97,15 @@ struct RayHits {
   // Room for `ray_count` rays, their values unset: cast_rays stores every one.
   void allocate(size_t ray_count, bool doubles = false);
   void store(size_t ray, double distance, const glm::dvec3& unit_normal, ObjectPrimitive source);
+};
+
+// A caller's arrays for cast_rays_in_place, one entry a ray in the rays' order (x, y, z together
+// for the normal); a null array is not written.
+struct HitArrays {
+  float* t = nullptr;              // along the unit direction; +inf on a miss
+  float* normal = nullptr;         // the unit normal facing the ray; 0 on a miss
+  uint32_t* object = nullptr;      // ObjectPrimitive::object; no_object on a miss
+  uint32_t* primitive = nullptr;   // ObjectPrimitive::primitive; no_object on a miss
 };
 
 // The longest a dispatch may run, by default. A display-attached GPU is reset when one runs for
@@ -149,6 +162,19 @@ class Renderer {
   // its range, with the precision contract of images: the origin relative to the scene's anchor, the
   // direction normalized in double, then rounded as a camera's are.
   RayHits cast_rays(std::span<const GivenRay> rays, const RayRanges& ranges = {});
+
+  // cast_rays for rays from one origin with no ranges, their hits written straight into the
+  // caller's arrays: the device reads `rays` and writes `into` where they lie (host memory it
+  // imports: VK_EXT_external_memory_host), and the shader normalizes the directions and turns
+  // primitive slots into ids, so that the host touches no ray. Rays the shader finds from another
+  // origin or with a bad direction, or leaves unfinished, are cast again by cast_rays (which checks
+  // them: InputError names the first bad one). Returns false, having written nothing, where this way
+  // does not apply (a device without the import or fast doubles, the float64 shader, ray queries,
+  // rays from several origins, arrays the device cannot bind); cast_rays then does the work.
+  bool cast_rays_in_place(std::span<const GivenRay> rays, const HitArrays& into);
+  // Whether cast_rays_in_place takes rays here at all: the device imports host memory, and the
+  // float32 shader takes double edge functions (lavapipe; a GPU's variant reads no doubles yet).
+  bool casts_in_place() const;
 
   // Whether each ray hits anything within its range (1) or not (0): an occlusion query, whose walk
   // stops at the first hit it meets. The same rays, ranges and precision contract as cast_rays.

@@ -76,6 +76,14 @@ struct TileOutputs {
   std::optional<OutputBuffer> hits;
 };
 
+// RaycastMode::caller_arrays: a call's rays and hit arrays where the caller holds them, imported
+// for the call (Renderer::cast_rays_in_place); an array the caller did not ask for is none.
+struct CallerArrays {
+  ImportedHostMemory rays;
+  vk::raii::BufferView ray_texels{nullptr};  // RGBA32UI, from the first ray on
+  std::optional<ImportedHostMemory> t, normal, object, primitive;
+};
+
 // A pixel of a storage-image target written by the host: a ray the CPU finished.
 struct PixelPatch {
   uint32_t i, j;
@@ -102,6 +110,10 @@ struct Renderer::Impl {
   std::optional<TexelBuffer> spheres, planes, primitives, vertices, normals, bvh_nodes;
   std::optional<AccelerationStructures> structures;  // the ray-query traversal's
   HitSources hit_sources;
+  // hit_sources.slots as the shader reads them (VKRAY_BINDING_HIT_SOURCES), made by the first
+  // cast_rays_in_place; remade when the scene is uploaded again.
+  std::optional<GpuBuffer> hit_source_table;
+  bool caller_arrays_bound = false;  // the descriptor set holds a call's imported arrays
   std::vector<gpu::GpuPlane> gpu_planes;  // what `planes` holds, its heights set per render
   std::vector<Plane> scene_planes;
   SceneStats stats;
@@ -149,8 +161,9 @@ struct Renderer::Impl {
   OutputBuffer make_output(vk::DeviceSize pixels, vk::DeviceSize pixel_bytes, vk::DeviceSize header_bytes = 0);
   // Output buffers and bindings for tiles of `width` x `rows` writing `aovs` to buffers, or to
   // `target` when given; with given rays, their buffer and the hits' too.
+  // RaycastMode::caller_arrays binds `caller`'s arrays in place of the tile's outputs.
   void prepare_tile(uint32_t width, uint32_t rows, AovSet aovs, const ImageTarget* target,
-                    RaycastMode mode = RaycastMode::image_buffers);
+                    RaycastMode mode = RaycastMode::image_buffers, const CallerArrays* caller = nullptr);
   // Rows per dispatch: every output buffer within the device's storage-buffer range (and the
   // caller's cap), and the workgroup count within the device's limit.
   // `buffer_aovs`: the outputs written to buffers (none with the storage-image target).
@@ -211,6 +224,12 @@ struct Renderer::Impl {
   // one origin (given_directions), sent as a camera's.
   void cast_given(const GivenRays& given, RaycastMode mode, uint32_t width, uint32_t tile_rows, size_t positions,
                   const glm::dvec3* origin, const std::vector<uint32_t>* order, RayHits& hits);
+  bool cast_rays_in_place(std::span<const GivenRay> rays, const HitArrays& into);
+  // Whether this device and shader can (the lists themselves aside).
+  bool casts_in_place() const;
+  // The rays at `listed` (indices into `rays`; sorted here) cast by cast_rays and written into `into`:
+  // those cast_rays_in_place's shader left to the host. InputError names the first bad one.
+  void cast_listed_again(std::span<const GivenRay> rays, std::vector<uint32_t>& listed, const HitArrays& into);
   // The depth, normal and ids of a camera whose rays do not leave one point through an image
   // plane's pixels, into `frame`: its pixels' rays cast as given rays.
   void render_by_given_rays(const Camera& camera, Frame& frame);
@@ -221,6 +240,9 @@ struct Renderer::Impl {
   // visits tens to hundreds of nodes, the budget is ~65000 on lavapipe.
   // `finish` receives each such ray's index within the tile (row-major).
   void finish_unfinished(const std::function<void(uint32_t index)>& finish);
+  // The indices within the tile the last dispatch listed in the overflow buffer (fetched from the
+  // device first under staging).
+  std::span<const uint32_t> listed_rays();
   // The same for a camera's pixels: `finish` receives each pixel (i, j) and its hit.
   void finish_unfinished_rays(const CameraBasis& basis, uint32_t width, uint32_t height, uint32_t first_row,
                               const std::function<void(uint32_t i, uint32_t j, const ReferenceHit& hit)>& finish);

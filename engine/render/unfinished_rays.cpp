@@ -4,12 +4,10 @@
 
 namespace vkray {
 
-void Renderer::Impl::finish_unfinished(const std::function<void(uint32_t index)>& finish) {
+std::span<const uint32_t> Renderer::Impl::listed_rays() {
   const auto* overflow = static_cast<const uint32_t*>(tile.overflow->host());
   const uint32_t count = overflow[0];
-  if (count == 0) return;
-  const auto start = Clock::now();
-  if (tile.overflow->readback) {  // staging: the dispatch copied the count alone; now the rays listed
+  if (count > 0 && tile.overflow->readback) {  // staging: the dispatch copied the count alone; now the rays listed
     const vk::DeviceSize listed = vk::DeviceSize{count} * sizeof(uint32_t);
     context.submit_and_wait([&](const vk::raii::CommandBuffer& commands) {
       commands.copyBuffer(*tile.overflow->written.buffer, *tile.overflow->readback->buffer,
@@ -19,9 +17,16 @@ void Renderer::Impl::finish_unfinished(const std::function<void(uint32_t index)>
     });
     timings.readback_bytes += listed;
   }
+  return {overflow + 1, count};
+}
+
+void Renderer::Impl::finish_unfinished(const std::function<void(uint32_t index)>& finish) {
+  const auto start = Clock::now();
+  const std::span<const uint32_t> listed = listed_rays();
+  if (listed.empty()) return;
   if (!reference) reference.emplace(host_scene);
-  for (uint32_t k = 0; k < count; ++k) finish(overflow[1 + k]);
-  timings.unfinished_rays += count;
+  for (const uint32_t index : listed) finish(index);
+  timings.unfinished_rays += listed.size();
   timings.cpu_finish_ms += elapsed_ms(start);
 }
 

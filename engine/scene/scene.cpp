@@ -136,9 +136,6 @@ void check_scene(Scene& scene) {
   }
 }
 
-namespace {
-
-// What is wrong with a given ray; null for nothing.
 const char* given_ray_fault(const GivenRay& ray) {
   if (!std::all_of(ray.begin(), ray.begin() + 3, [](double v) { return std::isfinite(v); })) return "the origin is not finite";
   if (!std::all_of(ray.begin() + 3, ray.end(), [](double v) { return std::isfinite(v); })) return "the direction is not finite";
@@ -148,8 +145,6 @@ const char* given_ray_fault(const GivenRay& ray) {
   if (ray[3] == 0.0 && ray[4] == 0.0 && ray[5] == 0.0) return "the direction is 0";
   return nullptr;
 }
-
-}  // namespace
 
 namespace {
 

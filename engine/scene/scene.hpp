@@ -170,8 +170,11 @@ void check_scene(Scene& scene);
 // world coordinates.
 using GivenRay = std::array<double, 6>;
 
-// Throws InputError naming the first ray (by its index) whose origin or direction is not finite,
-// whose origin is beyond max_coordinate, or whose direction is 0.
+// What is wrong with a given ray: its origin or direction is not finite, its origin is beyond
+// max_coordinate, or its direction is 0; null for nothing.
+const char* given_ray_fault(const GivenRay& ray);
+
+// Throws InputError naming the first ray (by its index) given_ray_fault finds fault with.
 void check_given_rays(std::span<const GivenRay> rays);
 
 // Where along each given ray a hit counts: t_min < t < t_max, t the distance from the ray's origin

@@ -78,8 +78,9 @@ void write_buffer(VulkanContext& context, GpuBuffer& target, const void* data, s
   });
 }
 
-vk::raii::BufferView create_texel_view(VulkanContext& context, const GpuBuffer& buffer, vk::Format format) {
-  return vk::raii::BufferView(context.device, vk::BufferViewCreateInfo({}, *buffer.buffer, format, 0, VK_WHOLE_SIZE));
+vk::raii::BufferView create_texel_view(VulkanContext& context, const GpuBuffer& buffer, vk::Format format,
+                                       vk::DeviceSize offset, vk::DeviceSize range) {
+  return vk::raii::BufferView(context.device, vk::BufferViewCreateInfo({}, *buffer.buffer, format, offset, range));
 }
 
 }  // namespace vkray

@@ -41,7 +41,9 @@ GpuBuffer upload_buffer(VulkanContext& context, const void* data, size_t bytes, 
 // mapped, else through a staging buffer; every later shader read sees them.
 void write_buffer(VulkanContext& context, GpuBuffer& target, const void* data, size_t bytes);
 
-// A view of a whole uniform texel buffer as texels of `format`.
-vk::raii::BufferView create_texel_view(VulkanContext& context, const GpuBuffer& buffer, vk::Format format);
+// A view of a uniform texel buffer as texels of `format`: the whole of it, or `range` bytes from
+// `offset` (a multiple of minTexelBufferOffsetAlignment).
+vk::raii::BufferView create_texel_view(VulkanContext& context, const GpuBuffer& buffer, vk::Format format,
+                                       vk::DeviceSize offset = 0, vk::DeviceSize range = VK_WHOLE_SIZE);
 
 }  // namespace vkray

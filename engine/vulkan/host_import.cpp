@@ -4,11 +4,14 @@
 
 namespace vkray {
 
-std::optional<ImportedHostMemory> import_host_memory(VulkanContext& context, void* data, size_t bytes) {
+std::optional<ImportedHostMemory> import_host_memory(VulkanContext& context, const void* data, size_t bytes,
+                                                     vk::BufferUsageFlags usage) {
   const vk::DeviceSize alignment = context.info.host_import_alignment;
   if (alignment == 0 || bytes == 0) return std::nullopt;
   // The import takes whole aligned blocks: those holding the range are mapped memory of this
-  // process (the range's own pages), and the device writes only where it is told to copy.
+  // process (the range's own pages), and the device writes only where it is told to (a copy, or
+  // a shader's writes at the caller's indices). A range the caller only gives to read is imported
+  // as writable memory all the same (the extension has no read-only import); nothing writes it.
   const auto address = reinterpret_cast<uintptr_t>(data);
   const uintptr_t first = address / alignment * alignment;
   const vk::DeviceSize size = (address + bytes - first + alignment - 1) / alignment * alignment;
@@ -21,7 +24,7 @@ std::optional<ImportedHostMemory> import_host_memory(VulkanContext& context, voi
     const vk::ExternalMemoryBufferCreateInfo external(handle);
     imported.buffer.buffer = vk::raii::Buffer(
         context.device,
-        vk::BufferCreateInfo({}, size, vk::BufferUsageFlagBits::eTransferDst, vk::SharingMode::eExclusive, {}, &external));
+        vk::BufferCreateInfo({}, size, usage, vk::SharingMode::eExclusive, {}, &external));
     const vk::MemoryRequirements requirements = imported.buffer.buffer.getMemoryRequirements();
     if (requirements.size > size) return std::nullopt;
     const uint32_t type_bits =

@@ -52,10 +52,10 @@ RaycastPipeline::RaycastPipeline(VulkanContext& context, PipelineSpecialization 
 const vk::raii::Pipeline& RaycastPipeline::pipeline(AovSet aovs, bool lo_parts, RaycastMode mode, double& created_ms,
                                                     HitQuery query) {
   created_ms = 0.0;
-  // The output bits in the low word, then the lo parts, the mode (two bits) and the query above every
+  // The output bits in the low word, then the lo parts, the mode (three bits) and the query above every
   // output's bit (Aov::hit is 256, where the lo parts once were: two different pipelines shared a key).
   const uint64_t key = uint64_t{aovs.bits()} | (uint64_t{lo_parts} << 32) | (uint64_t{static_cast<uint32_t>(mode)} << 33) |
-                       (uint64_t{static_cast<uint32_t>(query)} << 35);
+                       (uint64_t{static_cast<uint32_t>(query)} << 36);
   {
     const std::lock_guard lock(*pipelines_lock_);
     if (auto found = pipelines_.find(key); found != pipelines_.end()) return found->second;
@@ -87,6 +87,7 @@ const vk::raii::Pipeline& RaycastPipeline::pipeline(AovSet aovs, bool lo_parts, 
   values[VKRAY_SPEC_IMAGE_TARGET] = mode == RaycastMode::image_target ? 1u : 0u;
   values[VKRAY_SPEC_RAY_INPUT] = mode == RaycastMode::given_rays         ? VKRAY_RAY_INPUT_RAYS
                                 : mode == RaycastMode::given_directions ? VKRAY_RAY_INPUT_DIRECTIONS
+                                : mode == RaycastMode::caller_arrays    ? VKRAY_RAY_INPUT_CALLER_DIRECTIONS
                                                                         : VKRAY_RAY_INPUT_NONE;
   values[VKRAY_SPEC_STACK_REGISTERS] = specialization_.stack_registers;
   values[VKRAY_SPEC_SUBGROUP_SIZE] = context_.info.subgroup_size == 8 ? 8u : 0u;
@@ -123,7 +124,7 @@ void RaycastPipeline::bind_resources(const Resources& resources) {
         writes[i].setPNext(&top_structure);
         break;
       case vk::DescriptorType::eStorageBuffer:
-        buffer_infos[i] = vk::DescriptorBufferInfo(resources.buffers[i], 0, VK_WHOLE_SIZE);
+        buffer_infos[i] = vk::DescriptorBufferInfo(resources.buffers[i], resources.offsets[i], VK_WHOLE_SIZE);
         writes[i].setPBufferInfo(&buffer_infos[i]);
         break;
       case vk::DescriptorType::eStorageImage:

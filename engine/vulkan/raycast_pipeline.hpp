@@ -36,9 +36,12 @@ enum class RaycastMode : uint32_t {
   image_target,   // a camera's pixels into the storage image (VKRAY_SPEC_IMAGE_TARGET)
   given_rays,     // the caller's rays (VKRAY_RAY_INPUT_RAYS) into output buffers
   given_directions,  // the caller's rays from one origin (VKRAY_RAY_INPUT_DIRECTIONS) into output buffers
+  caller_arrays,     // the caller's rays from one origin read, and hits written, in its own memory
 };
 
-inline bool is_given(RaycastMode mode) { return mode == RaycastMode::given_rays || mode == RaycastMode::given_directions; }
+inline bool is_given(RaycastMode mode) {
+  return mode == RaycastMode::given_rays || mode == RaycastMode::given_directions || mode == RaycastMode::caller_arrays;
+}
 
 // How float32 shaders on `device` take the triangle edge functions for `requested` (see
 // EdgeArithmetic): automatic is double products where the device runs doubles fast
@@ -61,6 +64,7 @@ class RaycastPipeline {
   // storage image (in the GENERAL layout).
   struct Resources {
     std::array<vk::Buffer, VKRAY_BINDING_COUNT> buffers;
+    std::array<vk::DeviceSize, VKRAY_BINDING_COUNT> offsets{};  // where each storage buffer's binding starts
     std::array<vk::BufferView, VKRAY_BINDING_COUNT> texel_views;
     std::array<vk::ImageView, VKRAY_BINDING_COUNT> images;
     vk::AccelerationStructureKHR top_structure;  // the ray-query traversal's

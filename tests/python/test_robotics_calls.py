@@ -2,6 +2,8 @@
 render it must agree with: no call pays for a pipeline, the peers' t, bad rays as misses, rays of any
 shape, the surface outputs of given rays, and batches of poses on the packet walk. Every test here
 failed on the module before the C API (pybind11, one CPython)."""
+import os
+
 import numpy as np
 import pytest
 
@@ -36,6 +38,15 @@ def sensor_rays(origin, count, seed=1):
     directions = rng.normal(size=(count, 3))
     directions *= rng.uniform(0.5, 2.0, size=(count, 1)) / np.linalg.norm(directions, axis=1, keepdims=True)
     return np.hstack([np.broadcast_to(np.asarray(origin, float), (count, 3)), directions])
+
+
+def sensor_rings(origin, rings=32, azimuths=2048):
+    """A spinning sensor's rays from one origin, ring by ring: consecutive rays point nearly the same way."""
+    elevation = np.radians(np.linspace(-15.0, 15.0, rings))[:, None]
+    azimuth = np.linspace(0.0, 2.0 * np.pi, azimuths, endpoint=False)[None, :]
+    directions = np.stack([np.cos(elevation) * np.sin(azimuth), np.sin(elevation) * np.ones_like(azimuth),
+                           -np.cos(elevation) * np.cos(azimuth)], axis=-1).reshape(-1, 3)
+    return np.hstack([np.broadcast_to(np.asarray(origin, float), directions.shape), directions])
 
 
 def test_no_call_makes_a_pipeline_after_the_constructor(scene):
@@ -161,3 +172,29 @@ def test_a_batch_of_poses_walks_in_packets_as_one_pose_does(renderer, reference)
     exact = reference.cast_rays(rays)["t"]
     clear = np.isfinite(exact) == np.isfinite(batch["t"])
     assert clear.mean() > 0.999
+
+
+def test_a_sensor_s_rays_are_read_and_hits_written_in_place(renderer):
+    """A sensor's rays from one origin, ring by ring: where the device imports host memory and reads
+    doubles in its float32 shader (lavapipe), the shader reads the caller's array and writes the
+    returned arrays itself (timings 'rays_in_place'), with the hits of the host's way bit for bit (an
+    output the shader does not write, 'position', takes that way); a dead beam among them is a miss,
+    its neighbours as they were, or with bad_rays='raise' named by its index."""
+    rays = sensor_rings([0.5, 0.3, 4.0])
+    hits = renderer.cast_rays(rays)
+    in_place = renderer.timings["rays_in_place"]
+    host = renderer.cast_rays(rays, outputs=["t", "normal", "primitive_id", "mesh_id", "position"])
+    assert not renderer.timings["rays_in_place"]
+    for key in hits:
+        assert np.array_equal(hits[key], host[key]), key
+    assert (hits["mesh_id"] != vkray.NO_HIT).mean() > 0.05
+    importing = "llvmpipe" in renderer.device_name and "no-host-import" not in os.environ.get("VKRAY_DEVICE_OVERRIDE", "")
+    assert in_place == importing, renderer.timings
+    bad = rays.copy()
+    bad[10, 3:] = 0.0
+    dead = renderer.cast_rays(bad)
+    assert np.isinf(dead["t"][10]) and dead["mesh_id"][10] == vkray.NO_HIT and np.all(dead["normal"][10] == 0)
+    for key in hits:
+        assert np.array_equal(np.delete(dead[key], 10, axis=0), np.delete(hits[key], 10, axis=0)), key
+    with pytest.raises(ValueError, match="ray 10: the direction is 0"):
+        renderer.cast_rays(bad, bad_rays="raise")
