@@ -40,7 +40,8 @@ GEOMETRY_BUFFER(VKRAY_BINDING_PLANES, GeometryTexel, GeometrySampler, planes);  
 layout(std430, binding = VKRAY_BINDING_DEPTH) writeonly buffer DepthOut { real depth_out[]; };
 layout(std430, binding = VKRAY_BINDING_NORMAL) writeonly buffer NormalOut { real normal_out[]; };
 layout(std430, binding = VKRAY_BINDING_UV) writeonly buffer UvOut { float uv_out[]; };
-// Rays that ran out of LOOP_BUDGET: their count, then their pixels' indices within the tile.
+// Rays that ran out of LOOP_BUDGET: their count, then their pixels' indices within the tile (the
+// caller's rays' own indices, with CALLER_ARRAYS).
 layout(std430, binding = VKRAY_BINDING_OVERFLOW) buffer Overflow { uint overflow_count; uint overflow_pixels[]; };
 // The storage-image target: the output at its pixel (depth in x, normal in xyz, uv in xy), and the
 // range of finite depths.
@@ -52,6 +53,7 @@ GEOMETRY_BUFFER(VKRAY_BINDING_CALLER_RAYS, uvec4, usamplerBuffer, caller_rays); 
 layout(std430, binding = VKRAY_BINDING_HIT_SOURCES) readonly buffer HitSourcesIn { uvec2 hit_sources[]; };
 layout(std430, binding = VKRAY_BINDING_MESH_IDS) writeonly buffer MeshIdsOut { uint mesh_id_out[]; };
 layout(std430, binding = VKRAY_BINDING_PRIMITIVE_IDS) writeonly buffer PrimitiveIdsOut { uint primitive_id_out[]; };
+layout(std430, binding = VKRAY_BINDING_RAY_ORDER) readonly buffer RayOrder { uint ray_order[]; };
 
 // The mesh id and primitive id of what a ray hit (VKRAY_HIT_*), as HitSources gives them on the host.
 uvec2 hit_source(uint hit) {
@@ -84,6 +86,10 @@ uint compact_even_bits(uint bits) {
 
 #ifdef VKRAY_RAY_QUERY
 #include "ray_query_walk.glsl"
+#endif
+#if defined(VKRAY_DOUBLE_EDGES)
+#define CALLER_RAY_TEXEL(index) FETCH(caller_rays, index)
+#include "caller_rays.glsl"
 #endif
 #if defined(VKRAY_DOUBLE_EDGES) && !defined(VKRAY_RAY_QUERY)
 #include "packet_walk.glsl"
@@ -163,9 +169,11 @@ void main() {
     tile_pixel[r] = first_pixel + uvec2(0, r);
     uint row = params.image.z + tile_pixel[r].y;
     uint ray_index = row * width + tile_pixel[r].x;  // RAY_INPUT: rows of `width` rays, `height` in all
-    bool in_order = (params.camera[5].x & VKRAY_CALLER_IN_ORDER) != 0u;
-    caller_index[r] = CALLER_ARRAYS && in_order ? packet_order_index(ray_index) : ray_index;
-    inside[r] = tile_pixel[r].x < width && tile_pixel[r].y < params.image.w && (!RAY_INPUT || caller_index[r] < height);
+    bool by_direction = (params.camera[5].x & VKRAY_CALLER_BY_DIRECTION) != 0u;
+    bool in_order = (params.camera[5].x & VKRAY_CALLER_IN_ORDER) != 0u || by_direction;
+    if (CALLER_ARRAYS && in_order) ray_index = packet_order_index(ray_index);  // the place in the order
+    inside[r] = tile_pixel[r].x < width && tile_pixel[r].y < params.image.w && (!RAY_INPUT || ray_index < height);
+    caller_index[r] = by_direction && inside[r] ? ray_order[ray_index] : ray_index;
     traceable[r] = true;
     uint out_index = tile_pixel[r].y * width + tile_pixel[r].x;
 
@@ -223,18 +231,7 @@ void main() {
       origin = Origin(uintBitsToFloat(params.camera[0].xyz), use_lo_parts ? uintBitsToFloat(params.camera[1].xyz) : vec3(0.0));
 #if defined(VKRAY_DOUBLE_EDGES)
       if (CALLER_ARRAYS) {
-        // The origin compared bit for bit with the first ray's, which the host checked and sent as
-        // the camera's; the direction made a unit vector in double as unit_vector does (the largest
-        // magnitude divided out first outside [2^-480, 2^480]), then rounded to float.
-        int first_texel = 3 * int(inside[r] ? caller_index[r] : 0u);
-        uvec4 origin_xy = FETCH(caller_rays, first_texel), origin_z_x = FETCH(caller_rays, first_texel + 1);
-        uvec4 direction_yz = FETCH(caller_rays, first_texel + 2);
-        dvec3 given = dvec3(packDouble2x32(origin_z_x.zw), packDouble2x32(direction_yz.xy), packDouble2x32(direction_yz.zw));
-        double scale = max(max(abs(given.x), abs(given.y)), abs(given.z));
-        bool finite = !any(isnan(given)) && !any(isinf(given));
-        traceable[r] = origin_xy == FETCH(caller_rays, 0) && origin_z_x.xy == FETCH(caller_rays, 1).xy && finite && scale > 0.0LF;
-        if (scale <= ldexp(1.0LF, -480) || scale >= ldexp(1.0LF, 480)) given /= scale;
-        dirs[r] = traceable[r] ? vec3(given * (1.0LF / sqrt(dot(given, given)))) : vec3(0.0, 0.0, 1.0);
+        traceable[r] = caller_unit_direction(int(inside[r] ? caller_index[r] : 0u), dirs[r]);
         if (!traceable[r]) range_end = 0.0;  // hits nothing; listed for the host below
       } else
 #endif
@@ -321,7 +318,9 @@ void main() {
       hit_id[r] = hits[r].id;
     }
     uint out_index = tile_pixel[r].y * width + tile_pixel[r].x;
-    if ((hits[r].unfinished || !traceable[r]) && inside[r]) overflow_pixels[atomicAdd(overflow_count, 1u)] = out_index;
+    if ((hits[r].unfinished || !traceable[r]) && inside[r]) {
+      overflow_pixels[atomicAdd(overflow_count, 1u)] = CALLER_ARRAYS ? caller_index[r] : out_index;
+    }
     // Unfinished rays stay out of the depth range: the host finishes them and folds their depth in.
     // A ray that hit nothing keeps the end of its range as t_best; its depth is written +infinity.
     if (hit_id[r] == VKRAY_HIT_NONE) t_best[r] = uintBitsToFloat(0x7f800000u);

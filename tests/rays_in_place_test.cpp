@@ -1,9 +1,9 @@
 // Renderer::cast_rays_in_place: rays from one origin read, and their hits written, by the device in
-// the caller's own arrays. Where it walks as cast_rays does (the packet walk from the shared origin,
-// as listed) its hits are cast_rays' bit for bit; in every search it takes they lie in the camera
-// image's error envelope of the reference. Rays the shader leaves to the host (from another origin,
-// with a bad direction, past the loop budget) are cast again, and a bad one is named by its index
-// as cast_rays names it.
+// the caller's own arrays. Where it walks as cast_rays does (the packet walk from the shared origin:
+// as listed, or ordered by direction, here on the device) its hits are cast_rays' bit for bit; in
+// every search it takes they lie in the camera image's error envelope of the reference. Rays the
+// shader leaves to the host (from another origin, with a bad direction, past the loop budget) are
+// cast again, and a bad one is named by its index as cast_rays names it.
 #include "engine/render/renderer.hpp"
 #include "engine/scene/camera.hpp"
 #include "engine/scene/scene_loader.hpp"
@@ -11,8 +11,11 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <numeric>
+#include <random>
 
 namespace vkray {
 namespace {
@@ -60,6 +63,16 @@ std::vector<GivenRay> sensor_rings(const Scene& scene) {
   return rays;
 }
 
+// `rays` in a fixed random order: listed[n] is the index in `rays` of the n-th.
+std::vector<GivenRay> shuffled(const std::vector<GivenRay>& rays, std::vector<size_t>& listed) {
+  listed.resize(rays.size());
+  std::iota(listed.begin(), listed.end(), size_t{0});
+  std::shuffle(listed.begin(), listed.end(), std::mt19937_64(20261128));
+  std::vector<GivenRay> result;
+  for (const size_t k : listed) result.push_back(rays[k]);
+  return result;
+}
+
 // How many rays' entries in `in_place` differ from cast_rays' `hits` of the same rays in any bit
 // (its normals are planes, the caller's x, y, z together).
 size_t differing_rays(const CallerHits& in_place, const RayHits& hits) {
@@ -92,8 +105,9 @@ void expect_within_envelope(const Scene& scene, const CallerHits& hits) {
 }
 
 // Spheres, planes and a mesh in each search the device runs in place: a camera's pixel rays within
-// the envelope, and in packets the same bits as cast_rays, listed as an image's rows and as a
-// sensor's rings.
+// the envelope, and in packets the same bits as cast_rays, listed as an image's rows, as a sensor's
+// rings and shuffled (ordered by direction: on the device here, on the host by cast_rays; a packet's
+// rays share only its culling, which never drops a hit, so any order gives the same bits).
 TEST(RaysInPlace, MatchCastRaysAndTheReference) {
   const Scene scene = sized(default_scene(), 64, 48);
   for (const PrimitiveSearch search :
@@ -129,28 +143,51 @@ TEST(RaysInPlace, MatchCastRaysAndTheReference) {
     size_t hit = 0;
     for (const float t : ring_hits.t) hit += std::isfinite(t) ? 1 : 0;
     EXPECT_GT(hit, rings.size() / 20);  // the scene's objects are in view, not only misses
+
+    std::vector<size_t> listed;
+    const std::vector<GivenRay> mixed = shuffled(rays, listed);
+    CallerHits mixed_hits(mixed.size());
+    ASSERT_TRUE(renderer.cast_rays_in_place(mixed, mixed_hits.arrays()));
+    EXPECT_EQ(renderer.timings().given_walk, GivenRayWalk::packets_by_direction);
+    if (renderer.timings().has_gpu_times) {
+      EXPECT_GT(renderer.timings().order_gpu_ms, 0.0);
+    }
+    const RayHits sorted = renderer.cast_rays(mixed);
+    EXPECT_EQ(renderer.timings().given_walk, GivenRayWalk::packets_by_direction);
+    EXPECT_EQ(differing_rays(mixed_hits, sorted), 0u);
+    CallerHits by_pixel(rays.size());
+    for (size_t n = 0; n < listed.size(); ++n) {
+      const size_t k = listed[n];
+      by_pixel.t[k] = mixed_hits.t[n];
+      for (size_t c = 0; c < 3; ++c) by_pixel.normal[3 * k + c] = mixed_hits.normal[3 * n + c];
+      by_pixel.object[k] = mixed_hits.object[n];
+      by_pixel.primitive[k] = mixed_hits.primitive[n];
+    }
+    EXPECT_EQ(differing_rays(by_pixel, renderer.cast_rays(rays)), 0u);
   }
 }
 
 // A ray from another origin (one the origin samples miss) is cast again from its own: the same bits
 // as cast_rays gives it alone, the rest those of the list without it. A zero or non-finite direction
-// is named by the ray's index, as cast_rays names it. Rays from many origins are not taken.
-TEST(RaysInPlace, RaysTheShaderLeavesAreCastAgain) {
-  const Scene scene = default_scene();
-  Renderer renderer(device(), scene);
-  if (!renderer.casts_in_place()) GTEST_SKIP() << "no rays in place on " << device().info().name;
-  const std::vector<GivenRay> rings = sensor_rings(scene);
+// is named by the ray's index, as cast_rays names it. Rays from many origins are not taken. A sensor's
+// rings as listed (in order) and shuffled (ordered by direction on the device).
+void expect_rays_the_shader_leaves_are_cast_again(Renderer& renderer, const std::vector<GivenRay>& rings, GivenRayWalk walk) {
   const RayHits original = renderer.cast_rays(rings);
+  // A ray that hits something, among the first 16 (the list's 1024 origin samples are 16 rays apart).
+  size_t m = 1;
+  while (m < 16 && !std::isfinite(original.t[m])) ++m;
+  ASSERT_LT(m, 16u);
   std::vector<GivenRay> moved = rings;
-  moved[2][1] += 0.25;  // the list's 1024 samples are 16 rays apart
+  moved[m][1] += 0.25;
   CallerHits in_place(moved.size());
   ASSERT_TRUE(renderer.cast_rays_in_place(moved, in_place.arrays()));
-  const RayHits alone = renderer.cast_rays(std::span(moved).subspan(2, 1));
-  EXPECT_NE(alone.t[0], original.t[2]);  // it sees the ground from higher up
+  EXPECT_EQ(renderer.timings().given_walk, walk);
+  const RayHits alone = renderer.cast_rays(std::span(moved).subspan(m, 1));
+  EXPECT_NE(alone.t[0], original.t[m]);  // it sees the scene from higher up
   CallerHits expected(moved.size());
   for (size_t k = 0; k < moved.size(); ++k) {
-    const RayHits& source = k == 2 ? alone : original;
-    const size_t n = k == 2 ? 0 : k;
+    const RayHits& source = k == m ? alone : original;
+    const size_t n = k == m ? 0 : k;
     expected.t[k] = source.t[n];
     for (size_t c = 0; c < 3; ++c) expected.normal[3 * k + c] = source.normal[c * source.count + n];
     expected.object[k] = source.object[n];
@@ -182,6 +219,18 @@ TEST(RaysInPlace, RaysTheShaderLeavesAreCastAgain) {
   CallerHits untouched(two_origins.size());
   EXPECT_FALSE(renderer.cast_rays_in_place(two_origins, untouched.arrays()));
   EXPECT_EQ(untouched.object, std::vector<uint32_t>(two_origins.size(), unwritten));
+}
+
+TEST(RaysInPlace, RaysTheShaderLeavesAreCastAgain) {
+  const Scene scene = default_scene();
+  Renderer renderer(device(), scene);
+  if (!renderer.casts_in_place()) GTEST_SKIP() << "no rays in place on " << device().info().name;
+  const bool packets = renderer.scene_stats().search == PrimitiveSearch::bvh_packet;
+  expect_rays_the_shader_leaves_are_cast_again(renderer, sensor_rings(scene),
+                                               packets ? GivenRayWalk::packets_in_order : GivenRayWalk::one_by_one);
+  std::vector<size_t> listed;
+  expect_rays_the_shader_leaves_are_cast_again(renderer, shuffled(sensor_rings(scene), listed),
+                                               packets ? GivenRayWalk::packets_by_direction : GivenRayWalk::one_by_one);
 }
 
 // Rays past the loop budget are finished (cast again, then by the reference) within the envelope;

@@ -346,6 +346,7 @@ nlohmann::json timings_json(const RenderTimings& t, bool constructor) {
   if (t.given_walk != GivenRayWalk::none) {
     json["rays_walk"] = given_ray_walk_name(t.given_walk);
     json["rays_in_place"] = t.rays_in_place;
+    if (t.order_gpu_ms > 0.0) json["order_gpu_ms"] = t.order_gpu_ms;
   }
   json["dispatches"] = t.tiles;
   json["cpu_finished_rays"] = t.unfinished_rays;

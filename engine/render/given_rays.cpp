@@ -238,22 +238,22 @@ bool Renderer::Impl::cast_rays_in_place(std::span<const GivenRay> rays, const Hi
     const GivenRay& ray = rays[(rays.size() - 1) * sample / (origin_samples - 1)];
     if (!std::equal(ray.begin(), ray.begin() + 3, first.begin())) return false;
   }
-  // Packets as cast_rays makes them, where the list needs no sorting: an image's rows in place, or
-  // runs of 64 that stay compact in order; one by one in rows of a workgroup's width.
+  // Packets as cast_rays makes them: an image's rows in place, runs of 64 that stay compact in
+  // order, or any other list ordered by direction (on the device); one by one in rows of a
+  // workgroup's width.
   const bool packets = stats.search == PrimitiveSearch::bvh_packet;
   uint32_t width = options.shader.workgroup_width;
-  bool in_order = false;
+  bool in_order = false, by_direction = false;
   timings.given_walk = GivenRayWalk::one_by_one;
   if (packets) {
     if (const std::optional<uint32_t> rows_width = scan_width(rays)) {
       width = *rows_width;
       timings.given_walk = GivenRayWalk::packets_in_place;
-    } else if (runs_stay_compact(rays, packet_rays)) {
+    } else {
       width = VKRAY_PACKET_GROUP_WIDTH;
       in_order = true;
-      timings.given_walk = GivenRayWalk::packets_in_order;
-    } else {
-      return false;  // ordered by direction first (cast_rays)
+      by_direction = !runs_stay_compact(rays, packet_rays);
+      timings.given_walk = by_direction ? GivenRayWalk::packets_by_direction : GivenRayWalk::packets_in_order;
     }
   }
   const size_t count = rays.size();
@@ -265,14 +265,17 @@ bool Renderer::Impl::cast_rays_in_place(std::span<const GivenRay> rays, const Hi
   // Each array bound whole, from its first entry (the binding's offset alignment).
   const vk::PhysicalDeviceLimits& limits = context.limits;
   const vk::DeviceSize ray_bytes = count * sizeof(GivenRay);
-  const bool rays_bind = options.shader.storage_geometry ? ray_bytes <= limits.maxStorageBufferRange
-                                                          : 3 * count <= limits.maxTexelBufferElements;
+  // Texels for the texel-buffer variant and the ordering pass, a storage buffer for the other variant.
+  const bool ray_texels = !options.shader.storage_geometry || by_direction;
+  const bool rays_bind = (!ray_texels || 3 * count <= limits.maxTexelBufferElements) &&
+                         (!options.shader.storage_geometry || ray_bytes <= limits.maxStorageBufferRange);
   if (tile_rows == 0 || !rays_bind || count * 3 * sizeof(float) > limits.maxStorageBufferRange) return false;
   CallerArrays caller;
   std::optional<ImportedHostMemory> imported_rays = import_host_memory(context, rays.data(), ray_bytes, geometry_usage);
-  const vk::DeviceSize ray_alignment = options.shader.storage_geometry ? limits.minStorageBufferOffsetAlignment
-                                                                         : limits.minTexelBufferOffsetAlignment;
-  if (!imported_rays || imported_rays->offset % ray_alignment != 0) return false;
+  if (!imported_rays || (ray_texels && imported_rays->offset % limits.minTexelBufferOffsetAlignment != 0) ||
+      (options.shader.storage_geometry && imported_rays->offset % limits.minStorageBufferOffsetAlignment != 0)) {
+    return false;
+  }
   caller.rays = std::move(*imported_rays);
   auto import_output = [&](void* data, vk::DeviceSize bytes, std::optional<ImportedHostMemory>& imported) {
     if (!data) return true;
@@ -287,11 +290,12 @@ bool Renderer::Impl::cast_rays_in_place(std::span<const GivenRay> rays, const Hi
   }
   const uint32_t written = (into.t ? VKRAY_CALLER_WRITE_T : 0u) | (into.normal ? VKRAY_CALLER_WRITE_NORMAL : 0u) |
                            (into.object ? VKRAY_CALLER_WRITE_MESH_ID : 0u) |
-                           (into.primitive ? VKRAY_CALLER_WRITE_PRIMITIVE_ID : 0u) | (in_order ? VKRAY_CALLER_IN_ORDER : 0u);
+                           (into.primitive ? VKRAY_CALLER_WRITE_PRIMITIVE_ID : 0u) |
+                           (by_direction ? VKRAY_CALLER_BY_DIRECTION : in_order ? VKRAY_CALLER_IN_ORDER : 0u);
 
   std::vector<uint32_t> listed;  // rays the shader left to the host, by index
   with_vulkan_errors("casting rays", [&] {
-    if (!options.shader.storage_geometry) {
+    if (ray_texels) {
       caller.ray_texels = create_texel_view(context, caller.rays.buffer, vk::Format::eR32G32B32A32Uint, caller.rays.offset, ray_bytes);
     }
     if (!hit_source_table && !hit_sources.slots.empty()) {
@@ -303,8 +307,16 @@ bool Renderer::Impl::cast_rays_in_place(std::span<const GivenRay> rays, const Hi
     const vk::raii::Pipeline& chosen =
         pipeline->pipeline(aovs, needs_lo_parts(anchor, scene_radius, origin), RaycastMode::caller_arrays, timings.pipeline_ms);
     set_planes_above(origin);
-    prepare_tile(width, tile_rows, aovs, nullptr, RaycastMode::caller_arrays, &caller);
     timings.rays_ms += elapsed_ms(start);
+    if (by_direction) {  // the device's time, not the host's
+      if (!direction_order) direction_order.emplace(context);
+      timings.order_gpu_ms = direction_order->run(*caller.ray_texels, static_cast<uint32_t>(count));
+      timings.dispatch_gpu_ms += timings.order_gpu_ms;
+      caller.order = &*direction_order;
+    }
+    const auto bind_start = Clock::now();
+    prepare_tile(width, tile_rows, aovs, nullptr, RaycastMode::caller_arrays, &caller);
+    timings.rays_ms += elapsed_ms(bind_start);
 
     gpu::RayGenParams params = make_ray_gen_params(CameraBasis{origin, {}, {}, {}, 0.0}, anchor, precision(), 0, 0, 0, 0, counts);
     params.counts = counts;
@@ -317,10 +329,8 @@ bool Renderer::Impl::cast_rays_in_place(std::span<const GivenRay> rays, const Hi
       params.image = glm::uvec4(width, static_cast<uint32_t>(count), first_row, rows);
       sizer.measured(rows, dispatch_tile(chosen, params));
       ms_per_ray = sizer.slowest_ms_per_pixel();
-      for (const uint32_t index : listed_rays()) {
-        const auto position = static_cast<uint32_t>(size_t{first_row} * width + index);
-        listed.push_back(in_order ? gpu::packet_order_index(position) : position);
-      }
+      const std::span<const uint32_t> left = listed_rays();  // by the rays' indices
+      listed.insert(listed.end(), left.begin(), left.end());
     }
   });
   timings.rays_in_place = true;

@@ -1,6 +1,7 @@
 #include "engine/render/ray_order.hpp"
 
 #include "engine/parallel.hpp"
+#include "shaders/gpu_layout.h"
 #include "engine/unit_vector.hpp"
 
 #include <algorithm>
@@ -25,72 +26,17 @@ std::optional<glm::dvec3> shared_origin(std::span<const GivenRay> rays) {
 
 namespace {
 
-// Bits per axis of a direction's cell: 4096 x 4096 cells over the octahedral map's square. A
-// 40-degree camera's rays cover about 3% of the square, 500,000 cells: a million of its pixels'
-// rays fall about two to a cell, and 64 consecutive ones along the curve form a compact patch (on
-// the bunny, packets of them took 33 ms where the same pixels' 8x8 blocks took 29, and packets
-// along a Z-order curve over the same cells 40: a Hilbert curve never jumps).
-constexpr int cell_bits = 12;
+// Bits per axis of a direction's cell (gpu::direction_key): 4096 x 4096 cells over the octahedral
+// map's square. A 40-degree camera's rays cover about 3% of the square, 500,000 cells: a million of
+// its pixels' rays fall about two to a cell, and 64 consecutive ones along the curve form a compact
+// patch (on the bunny, packets of them took 33 ms where the same pixels' 8x8 blocks took 29, and
+// packets along a Z-order curve over the same cells 40: a Hilbert curve never jumps).
+constexpr uint32_t cell_bits = 12;
 constexpr int radix_bits = 8;  // three passes over the 24-bit key, 256 counters each
 constexpr int key_bits = 2 * cell_bits;
 static_assert(key_bits % radix_bits == 0);
 
-// The octahedral map of unit direction d onto [-1, 1]^2: continuous over the half z >= 0, the
-// other half folded over the square's corners (Meyer et al., "On floating-point normal vectors",
-// 2010; Cigolle et al., "A survey of efficient representations for independent unit vectors",
-// JCGT 2014). Only nearness matters here, not exact inversion.
-glm::vec2 octahedral(const glm::vec3& d) {
-  const glm::vec2 p = glm::vec2(d.x, d.y) / (std::abs(d.x) + std::abs(d.y) + std::abs(d.z));
-  if (d.z >= 0.0f) return p;
-  return {(1.0f - std::abs(p.y)) * (p.x >= 0.0f ? 1.0f : -1.0f), (1.0f - std::abs(p.x)) * (p.y >= 0.0f ? 1.0f : -1.0f)};
-}
-
-// The Hilbert curve's index of cell (x, y), three bits of each a step through a table. A step's
-// state says how the curve is turned within the current quadrant: whether x and y are swapped
-// (bit 0) and both complemented (bit 1) before the next bits are read. One bit a level: the
-// quadrant (x, y) gives the digit (3x) ^ y; the lower left quadrant swaps, the lower right swaps
-// and complements (Hilbert, 1891, in the usual xy-to-index loop's form).
-constexpr int table_bits = 3;
-static_assert(cell_bits % table_bits == 0);
-struct HilbertStep {
-  uint8_t digits;      // 2 * table_bits bits of the index
-  uint8_t next_state;
-};
-constexpr std::array<HilbertStep, 4 << (2 * table_bits)> hilbert_table = [] {
-  std::array<HilbertStep, 4 << (2 * table_bits)> table{};
-  for (uint32_t state = 0; state < 4; ++state) {
-    for (uint32_t xy = 0; xy < (1u << (2 * table_bits)); ++xy) {
-      uint32_t s = state, digits = 0;
-      for (int level = table_bits - 1; level >= 0; --level) {
-        uint32_t x = (xy >> (table_bits + level)) & 1u, y = (xy >> level) & 1u;
-        if (s & 1u) std::swap(x, y);
-        if (s & 2u) x ^= 1u, y ^= 1u;
-        digits = (digits << 2) | ((3u * x) ^ y);
-        if (y == 0) s ^= x == 1 ? 3u : 1u;
-      }
-      table[(state << (2 * table_bits)) | xy] = {static_cast<uint8_t>(digits), static_cast<uint8_t>(s)};
-    }
-  }
-  return table;
-}();
-
-uint32_t hilbert_index(uint32_t x, uint32_t y) {
-  uint32_t state = 0, index = 0;
-  constexpr uint32_t mask = (1u << table_bits) - 1u;
-  for (int shift = cell_bits - table_bits; shift >= 0; shift -= table_bits) {
-    const HilbertStep step = hilbert_table[(state << (2 * table_bits)) | (((x >> shift) & mask) << table_bits) | ((y >> shift) & mask)];
-    index = (index << (2 * table_bits)) | step.digits;
-    state = step.next_state;
-  }
-  return index;
-}
-
-uint32_t direction_key(const glm::vec3& unit) {
-  const glm::vec2 p = octahedral(unit);
-  constexpr float cells = float{1u << cell_bits};
-  auto cell = [&](float c) { return static_cast<uint32_t>(std::clamp((c + 1.0f) * 0.5f * cells, 0.0f, cells - 1.0f)); };
-  return hilbert_index(cell(p.x), cell(p.y));
-}
+uint32_t direction_key(const glm::vec3& unit) { return gpu::direction_key(unit.x, unit.y, unit.z, cell_bits); }
 
 // Whether groups of `group` rays out of `count`, spanning `mean_span` on average (unit directions),
 // are compact enough to walk as packets: within `allowance` times what a compact patch of `group`

@@ -127,6 +127,7 @@ void Renderer::Impl::prepare_tile(uint32_t width, uint32_t rows, AovSet aovs, co
   resources.buffers[VKRAY_BINDING_CALLER_RAYS] = caller ? *caller->rays.buffer.buffer : *placeholder_texels.buffer.buffer;
   resources.offsets[VKRAY_BINDING_CALLER_RAYS] = caller ? caller->rays.offset : 0;
   resources.buffers[VKRAY_BINDING_HIT_SOURCES] = *(hit_source_table ? *hit_source_table : placeholder).buffer;
+  resources.buffers[VKRAY_BINDING_RAY_ORDER] = *(caller && caller->order ? caller->order->order() : placeholder).buffer;
   // The caller's arrays in place of the outputs, each bound from its first entry.
   for (const auto& [binding, imported] :
        {std::pair{VKRAY_BINDING_DEPTH, caller ? &caller->t : nullptr}, {VKRAY_BINDING_NORMAL, caller ? &caller->normal : nullptr},

@@ -44,6 +44,7 @@ struct RenderTimings {
   double rays_ms = 0.0;            // cast_rays: ordering the rays and writing them for the device
   GivenRayWalk given_walk = GivenRayWalk::none;  // how cast_rays walked the tree
   bool rays_in_place = false;      // cast_rays_in_place: the device read the rays and wrote the hits in the caller's memory
+  double order_gpu_ms = 0.0;       // of dispatch_gpu_ms, ordering the rays by direction on the device
   uint32_t tiles = 0;              // dispatches the image was split into
   double longest_dispatch_ms = 0.0;  // GPU time of the longest (wall time where no timestamps)
   uint64_t unfinished_rays = 0;    // rays that ran out of the device's loop budget, finished on the CPU

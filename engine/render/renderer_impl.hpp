@@ -9,6 +9,7 @@
 #include "engine/render/renderer.hpp"
 #include "engine/vulkan/acceleration_structures.hpp"
 #include "engine/vulkan/buffer.hpp"
+#include "engine/vulkan/direction_order_pass.hpp"
 #include "engine/vulkan/host_import.hpp"
 #include "engine/vulkan/raycast_pipeline.hpp"
 
@@ -82,6 +83,7 @@ struct CallerArrays {
   ImportedHostMemory rays;
   vk::raii::BufferView ray_texels{nullptr};  // RGBA32UI, from the first ray on
   std::optional<ImportedHostMemory> t, normal, object, primitive;
+  const DirectionOrderPass* order = nullptr;  // the rays ordered by direction, where they walk so
 };
 
 // A pixel of a storage-image target written by the host: a ray the CPU finished.
@@ -114,6 +116,7 @@ struct Renderer::Impl {
   // cast_rays_in_place; remade when the scene is uploaded again.
   std::optional<GpuBuffer> hit_source_table;
   bool caller_arrays_bound = false;  // the descriptor set holds a call's imported arrays
+  std::optional<DirectionOrderPass> direction_order;  // made by the first call that orders rays on the device
   std::vector<gpu::GpuPlane> gpu_planes;  // what `planes` holds, its heights set per render
   std::vector<Plane> scene_planes;
   SceneStats stats;
@@ -240,8 +243,8 @@ struct Renderer::Impl {
   // visits tens to hundreds of nodes, the budget is ~65000 on lavapipe.
   // `finish` receives each such ray's index within the tile (row-major).
   void finish_unfinished(const std::function<void(uint32_t index)>& finish);
-  // The indices within the tile the last dispatch listed in the overflow buffer (fetched from the
-  // device first under staging).
+  // What the last dispatch listed in the overflow buffer (fetched from the device first under
+  // staging): indices within the tile, or of the caller's rays (RaycastMode::caller_arrays).
   std::span<const uint32_t> listed_rays();
   // The same for a camera's pixels: `finish` receives each pixel (i, j) and its hit.
   void finish_unfinished_rays(const CameraBasis& basis, uint32_t width, uint32_t height, uint32_t first_row,
