@@ -1,5 +1,6 @@
 """The host's part of cast_rays (README, "On a GPU: transfers and long dispatches"): a call's wall
-time less its dispatches' GPU time (timings['dispatch_gpu_ms']), for a million rays from one origin
+time less its dispatches' GPU time (timings['dispatch_gpu_ms'], which holds ordering the rays by
+direction where the device does it, timings['order_gpu_ms']), for a million rays from one origin
 given two ways: a sensor's 256 rows of 4096 (elevation -15..15 degrees, azimuth -30..30 about the
 view of the bunny) and directions drawn over the whole sphere. Best of CALLS calls each, float64
 rays (the C API's own type: no conversion in Python).
@@ -40,6 +41,8 @@ for name, directions in (("a sensor's 256 rows of 4096", sensor.reshape(-1, 3)),
             best = (wall, dict(renderer.timings))
     wall, timings = best
     gpu = timings["dispatch_gpu_ms"]
-    print(f"{name}: {len(rays)} rays, call {wall:.1f} ms, dispatches {gpu:.1f} ms (GPU time), host's part "
+    where = "the device read the rays and wrote the hits in place" if timings["rays_in_place"] else "through the host"
+    ordered = f", of which ordering them {timings['order_gpu_ms']:.1f} ms" if "order_gpu_ms" in timings else ""
+    print(f"{name}: {len(rays)} rays, call {wall:.1f} ms, dispatches {gpu:.1f} ms (GPU time{ordered}), host's part "
           f"{100 * (wall - gpu) / wall:.0f}% (ordering and writing the rays {timings['rays_ms']:.1f} ms, reading hits "
-          f"back {timings['readback_ms']:.1f} ms; walk: {timings['rays_walk']})")
+          f"back {timings['readback_ms']:.1f} ms; walk: {timings['rays_walk']}, {where})")

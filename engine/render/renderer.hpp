@@ -174,7 +174,8 @@ class Renderer {
   // rays from several origins, arrays the device cannot bind); cast_rays then does the work.
   bool cast_rays_in_place(std::span<const GivenRay> rays, const HitArrays& into);
   // Whether cast_rays_in_place takes rays here at all: the device imports host memory, and the
-  // float32 shader takes double edge functions (lavapipe; a GPU's variant reads no doubles yet).
+  // float32 shader takes double edge functions (where doubles are fast: lavapipe, the H100 and H200),
+  // the variant that reads the caller's doubles.
   bool casts_in_place() const;
 
   // Whether each ray hits anything within its range (1) or not (0): an occlusion query, whose walk
