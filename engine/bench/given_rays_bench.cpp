@@ -151,11 +151,17 @@ GivenRaysRow bench_given_rays(GpuDevice& device, const Scene& scene, const std::
   const std::vector<ReferenceHit> reference = trace_reference_rays(reference_scene, rays, ranges);
 
   Renderer renderer(device, scene);
-  // An occlusion query's answer as a distance: 0 where it is occluded.
+  // What Python's cast_rays runs: in place where the device takes the rays so (its four default
+  // outputs into arrays of the caller's), else cast_rays. Only t is compared; an occlusion query's
+  // answer as a distance, 0 where it is occluded.
   UninitializedVector<float> found;
+  std::vector<float> t_in_place(rays.size()), normal(3 * rays.size());
+  std::vector<uint32_t> object(rays.size()), primitive(rays.size());
+  bool in_place = false;
   auto cast = [&] {
     if (!occlusion) {
-      found = std::move(renderer.cast_rays(rays, ranges).t);  // only t is compared
+      in_place = renderer.cast_rays_in_place(rays, {t_in_place.data(), normal.data(), object.data(), primitive.data()});
+      if (!in_place) found = std::move(renderer.cast_rays(rays, ranges).t);
       return;
     }
     const std::vector<uint8_t> blocked = renderer.occluded(rays, ranges);
@@ -168,7 +174,7 @@ GivenRaysRow bench_given_rays(GpuDevice& device, const Scene& scene, const std::
     cast();
     return elapsed_ms(start);
   }));
-  row.walk = given_ray_walk_name(renderer.timings().given_walk);
+  row.walk = std::string(given_ray_walk_name(renderer.timings().given_walk)) + (in_place ? " (imported)" : "");
   const EmbreeRays embree =
       trace_rays_with_embree(scene, rays, timing.frames, ranges, occlusion ? HitQuery::any : HitQuery::nearest);
   row.embree = embree.time;
@@ -179,7 +185,7 @@ GivenRaysRow bench_given_rays(GpuDevice& device, const Scene& scene, const std::
     if (occlusion) return occlusion_flips(reference, t);
     return distance_errors(reference, [&](size_t k) { return double{t[k]}; });
   };
-  const DistanceErrors vkray_errors = errors(found);
+  const DistanceErrors vkray_errors = errors(in_place ? std::span<const float>(t_in_place) : std::span<const float>(found));
   row.hit_mismatches = vkray_errors.mismatches;
   row.both_hit = vkray_errors.both_hit;
   row.t_rel_p99 = vkray_errors.p99;
@@ -192,7 +198,7 @@ GivenRaysRow bench_given_rays(GpuDevice& device, const Scene& scene, const std::
 
 std::string given_rays_table_header() {
   char line[256];
-  std::snprintf(line, sizeof line, "%-28s %-11s %8s  %-20s %10s %10s %8s %6s %9s %7s\n", "scene", "rays", "count", "walk",
+  std::snprintf(line, sizeof line, "%-28s %-11s %8s  %-32s %10s %10s %8s %6s %9s %7s\n", "scene", "rays", "count", "walk",
                 "vkray ms", "Embree ms", "E/vkray", "flips", "t p99", "E flips");
   return line;
 }
@@ -200,7 +206,7 @@ std::string given_rays_table_header() {
 std::string given_rays_table_row(const std::string& scene, const GivenRaysRow& row) {
   char line[512];
   const std::string t_p99 = row.both_hit > 0 ? (std::snprintf(line, sizeof line, "%.2e", row.t_rel_p99), std::string(line)) : "-";
-  std::snprintf(line, sizeof line, "%-28s %-11s %8zu  %-20s %10.1f %10.1f %8.2f %6zu %9s %7zu\n", scene.c_str(),
+  std::snprintf(line, sizeof line, "%-28s %-11s %8zu  %-32s %10.1f %10.1f %8.2f %6zu %9s %7zu\n", scene.c_str(),
                 row.kind.c_str(), row.rays, row.walk.c_str(), row.vkray.median_ms, row.embree.median_ms,
                 row.embree.median_ms / row.vkray.median_ms, row.hit_mismatches, t_p99.c_str(), row.embree_hit_mismatches);
   return line;

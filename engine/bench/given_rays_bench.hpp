@@ -1,6 +1,7 @@
 // Rays that are not an image's pixels, timed against Embree on the same rays and measured against
 // the reference in the same run: the rays of LiDAR and depth-sensor simulation, visibility and
-// sampling, cast through Renderer::cast_rays (what Python's cast_rays runs).
+// sampling, cast as Python's cast_rays casts them: in place where the device takes them so
+// (Renderer::cast_rays_in_place), else through Renderer::cast_rays.
 #pragma once
 
 #include "engine/bench/bench.hpp"
@@ -44,7 +45,7 @@ std::vector<double> segment_ends(std::span<const GivenRay> rays);
 struct GivenRaysRow {
   std::string kind;
   size_t rays = 0;
-  std::string walk;  // how cast_rays walked them (given_ray_walk_name)
+  std::string walk;  // how cast_rays walked them (given_ray_walk_name), " (imported)" where in place
   // Wall time of a whole cast_rays call (occluded for occlusion rays): ordering, writing, dispatch,
   // reading back.
   TimeStats vkray;
