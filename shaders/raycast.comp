@@ -169,9 +169,10 @@ void main() {
     tile_pixel[r] = first_pixel + uvec2(0, r);
     uint row = params.image.z + tile_pixel[r].y;
     uint ray_index = row * width + tile_pixel[r].x;  // RAY_INPUT: rows of `width` rays, `height` in all
-    bool by_direction = (params.camera[5].x & VKRAY_CALLER_BY_DIRECTION) != 0u;
-    bool in_order = (params.camera[5].x & VKRAY_CALLER_IN_ORDER) != 0u || by_direction;
-    if (CALLER_ARRAYS && in_order) ray_index = packet_order_index(ray_index);  // the place in the order
+    // (camera[5] holds these bits only with CALLER_ARRAYS; the float64 shader's camera fills it.)
+    bool by_direction = CALLER_ARRAYS && (params.camera[5].x & VKRAY_CALLER_BY_DIRECTION) != 0u;
+    bool in_order = CALLER_ARRAYS && ((params.camera[5].x & VKRAY_CALLER_IN_ORDER) != 0u || by_direction);
+    if (in_order) ray_index = packet_order_index(ray_index);  // the place in the order
     inside[r] = tile_pixel[r].x < width && tile_pixel[r].y < params.image.w && (!RAY_INPUT || ray_index < height);
     caller_index[r] = by_direction && inside[r] ? ray_order[ray_index] : ray_index;
     traceable[r] = true;

@@ -47,9 +47,10 @@ TEST(Spirv, TheDecorationCountIsReadFromTheModules) {
 
 // Every module the build embeds is there once, and its bindings, read from its SPIR-V, are what
 // gpu_layout.h numbers them: geometry as texel buffers, or storage buffers in the storage-geometry
-// modules; the ray-query modules with their top-level structure last; the preview's ramps a uniform buffer.
+// modules; the ray-query modules with their top-level structure last; the preview's ramps a uniform
+// buffer; the ray order's caller rays texels beside storage buffers.
 TEST(Spirv, TheBindingsAreReadFromEachModule) {
-  EXPECT_EQ(vkray::embedded_shaders().size(), 8u);
+  EXPECT_EQ(vkray::embedded_shaders().size(), 9u);
   for (const vkray::EmbeddedShader& shader : vkray::embedded_shaders()) {
     SCOPED_TRACE(std::string(shader.source) + " " + shader.defines);
     EXPECT_EQ(&embedded_shader(shader.source, {}) == &shader, std::string(shader.defines).empty());
@@ -60,6 +61,14 @@ TEST(Spirv, TheBindingsAreReadFromEachModule) {
       EXPECT_EQ(types[VKRAY_PREVIEW_BINDING_VALUES], vk::DescriptorType::eStorageImage);
       continue;
     }
+    if (std::string(shader.source) == "direction_order.comp") {
+      ASSERT_EQ(types.size(), 4u);
+      EXPECT_EQ(types[VKRAY_ORDER_BINDING_RAYS], vk::DescriptorType::eUniformTexelBuffer);
+      for (const uint32_t binding : {VKRAY_ORDER_BINDING_CELLS, VKRAY_ORDER_BINDING_RANKS, VKRAY_ORDER_BINDING_ORDER}) {
+        EXPECT_EQ(types[binding], vk::DescriptorType::eStorageBuffer);
+      }
+      continue;
+    }
     const std::string defines = shader.defines;
     const bool ray_query = defines.find("VKRAY_RAY_QUERY") != std::string::npos;
     ASSERT_EQ(types.size(), ray_query ? VKRAY_BINDING_COUNT : VKRAY_BINDING_TOP_STRUCTURE);
@@ -67,6 +76,8 @@ TEST(Spirv, TheBindingsAreReadFromEachModule) {
     EXPECT_EQ(types[VKRAY_BINDING_VERTICES], storage ? vk::DescriptorType::eStorageBuffer : vk::DescriptorType::eUniformTexelBuffer);
     EXPECT_EQ(types[VKRAY_BINDING_DEPTH], vk::DescriptorType::eStorageBuffer);
     EXPECT_EQ(types[VKRAY_BINDING_IMAGE], vk::DescriptorType::eStorageImage);
+    EXPECT_EQ(types[VKRAY_BINDING_CALLER_RAYS], storage ? vk::DescriptorType::eStorageBuffer : vk::DescriptorType::eUniformTexelBuffer);
+    EXPECT_EQ(types[VKRAY_BINDING_RAY_ORDER], vk::DescriptorType::eStorageBuffer);
     if (ray_query) {
       EXPECT_EQ(types[VKRAY_BINDING_TOP_STRUCTURE], vk::DescriptorType::eAccelerationStructureKHR);
     }

@@ -262,32 +262,11 @@ bool Renderer::Impl::cast_rays_in_place(std::span<const GivenRay> rays, const Hi
   const AovSet aovs{Aov::depth, Aov::normal};
   uint32_t tile_rows = rows_per_tile(width, total_rows, aovs, RaycastMode::caller_arrays);
   if (in_order) tile_rows = tile_rows / VKRAY_PACKET_ROWS * VKRAY_PACKET_ROWS;
-  // Each array bound whole, from its first entry (the binding's offset alignment).
-  const vk::PhysicalDeviceLimits& limits = context.limits;
-  const vk::DeviceSize ray_bytes = count * sizeof(GivenRay);
   // Texels for the texel-buffer variant and the ordering pass, a storage buffer for the other variant.
   const bool ray_texels = !options.shader.storage_geometry || by_direction;
-  const bool rays_bind = (!ray_texels || 3 * count <= limits.maxTexelBufferElements) &&
-                         (!options.shader.storage_geometry || ray_bytes <= limits.maxStorageBufferRange);
-  if (tile_rows == 0 || !rays_bind || count * 3 * sizeof(float) > limits.maxStorageBufferRange) return false;
-  CallerArrays caller;
-  std::optional<ImportedHostMemory> imported_rays = import_host_memory(context, rays.data(), ray_bytes, geometry_usage);
-  if (!imported_rays || (ray_texels && imported_rays->offset % limits.minTexelBufferOffsetAlignment != 0) ||
-      (options.shader.storage_geometry && imported_rays->offset % limits.minStorageBufferOffsetAlignment != 0)) {
-    return false;
-  }
-  caller.rays = std::move(*imported_rays);
-  auto import_output = [&](void* data, vk::DeviceSize bytes, std::optional<ImportedHostMemory>& imported) {
-    if (!data) return true;
-    imported = import_host_memory(context, data, bytes, vk::BufferUsageFlagBits::eStorageBuffer);
-    return imported && imported->offset % limits.minStorageBufferOffsetAlignment == 0;
-  };
-  if (!import_output(into.t, count * sizeof(float), caller.t) ||
-      !import_output(into.normal, 3 * count * sizeof(float), caller.normal) ||
-      !import_output(into.object, count * sizeof(uint32_t), caller.object) ||
-      !import_output(into.primitive, count * sizeof(uint32_t), caller.primitive)) {
-    return false;
-  }
+  std::optional<CallerArrays> imported = tile_rows > 0 ? import_caller_arrays(rays, into, ray_texels) : std::nullopt;
+  if (!imported) return false;
+  CallerArrays& caller = *imported;
   const uint32_t written = (into.t ? VKRAY_CALLER_WRITE_T : 0u) | (into.normal ? VKRAY_CALLER_WRITE_NORMAL : 0u) |
                            (into.object ? VKRAY_CALLER_WRITE_MESH_ID : 0u) |
                            (into.primitive ? VKRAY_CALLER_WRITE_PRIMITIVE_ID : 0u) |
@@ -295,9 +274,6 @@ bool Renderer::Impl::cast_rays_in_place(std::span<const GivenRay> rays, const Hi
 
   std::vector<uint32_t> listed;  // rays the shader left to the host, by index
   with_vulkan_errors("casting rays", [&] {
-    if (ray_texels) {
-      caller.ray_texels = create_texel_view(context, caller.rays.buffer, vk::Format::eR32G32B32A32Uint, caller.rays.offset, ray_bytes);
-    }
     if (!hit_source_table && !hit_sources.slots.empty()) {
       static_assert(sizeof(ObjectPrimitive) == 2 * sizeof(uint32_t));  // the shader's uvec2
       hit_source_table = upload_buffer(context, hit_sources.slots.data(), hit_sources.slots.size() * sizeof(ObjectPrimitive),
@@ -336,6 +312,41 @@ bool Renderer::Impl::cast_rays_in_place(std::span<const GivenRay> rays, const Hi
   timings.rays_in_place = true;
   if (!listed.empty()) cast_listed_again(rays, listed, into);
   return true;
+}
+
+std::optional<CallerArrays> Renderer::Impl::import_caller_arrays(std::span<const GivenRay> rays, const HitArrays& into,
+                                                                 bool ray_texels) {
+  // Each array bound whole, from its first entry (the binding's offset alignment).
+  const vk::PhysicalDeviceLimits& limits = context.limits;
+  const size_t count = rays.size();
+  const vk::DeviceSize ray_bytes = count * sizeof(GivenRay);
+  const bool rays_bind = (!ray_texels || 3 * count <= limits.maxTexelBufferElements) &&
+                         (!options.shader.storage_geometry || ray_bytes <= limits.maxStorageBufferRange);
+  if (!rays_bind || count * 3 * sizeof(float) > limits.maxStorageBufferRange) return std::nullopt;
+  CallerArrays caller;
+  std::optional<ImportedHostMemory> imported_rays = import_host_memory(context, rays.data(), ray_bytes, geometry_usage);
+  if (!imported_rays || (ray_texels && imported_rays->offset % limits.minTexelBufferOffsetAlignment != 0) ||
+      (options.shader.storage_geometry && imported_rays->offset % limits.minStorageBufferOffsetAlignment != 0)) {
+    return std::nullopt;
+  }
+  caller.rays = std::move(*imported_rays);
+  auto import_output = [&](void* data, vk::DeviceSize bytes, std::optional<ImportedHostMemory>& imported) {
+    if (!data) return true;
+    imported = import_host_memory(context, data, bytes, vk::BufferUsageFlagBits::eStorageBuffer);
+    return imported && imported->offset % limits.minStorageBufferOffsetAlignment == 0;
+  };
+  if (!import_output(into.t, count * sizeof(float), caller.t) ||
+      !import_output(into.normal, 3 * count * sizeof(float), caller.normal) ||
+      !import_output(into.object, count * sizeof(uint32_t), caller.object) ||
+      !import_output(into.primitive, count * sizeof(uint32_t), caller.primitive)) {
+    return std::nullopt;
+  }
+  if (ray_texels) {
+    with_vulkan_errors("binding the caller's rays", [&] {
+      caller.ray_texels = create_texel_view(context, caller.rays.buffer, vk::Format::eR32G32B32A32Uint, caller.rays.offset, ray_bytes);
+    });
+  }
+  return caller;
 }
 
 void Renderer::Impl::cast_listed_again(std::span<const GivenRay> rays, std::vector<uint32_t>& listed, const HitArrays& into) {

@@ -230,6 +230,9 @@ struct Renderer::Impl {
   bool cast_rays_in_place(std::span<const GivenRay> rays, const HitArrays& into);
   // Whether this device and shader can (the lists themselves aside).
   bool casts_in_place() const;
+  // `rays` and the arrays of `into` imported and bound as the shader reads them (the rays as texels
+  // too where `ray_texels`), or none where the device refuses any or cannot bind it whole.
+  std::optional<CallerArrays> import_caller_arrays(std::span<const GivenRay> rays, const HitArrays& into, bool ray_texels);
   // The rays at `listed` (indices into `rays`; sorted here) cast by cast_rays and written into `into`:
   // those cast_rays_in_place's shader left to the host. InputError names the first bad one.
   void cast_listed_again(std::span<const GivenRay> rays, std::vector<uint32_t>& listed, const HitArrays& into);
