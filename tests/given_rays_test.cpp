@@ -219,17 +219,7 @@ TEST(GivenRays, SensorRingsWalkInTheirOrder) {
   const Scene scene = default_scene();
   Renderer renderer(device(), scene);
   if (renderer.scene_stats().search != PrimitiveSearch::bvh_packet) GTEST_SKIP() << "no packet walk on this device";
-  const CameraBasis basis = make_camera_basis(scene.camera, 1, 1);
-  std::vector<GivenRay> rays;
-  for (int ring = 0; ring < 16; ++ring) {
-    const double elevation = (ring - 7.5) * 0.03;
-    for (int a = 0; a < 1024; ++a) {
-      const double azimuth = 2.0 * M_PI * a / 1024.0;
-      const glm::dvec3 d = std::cos(elevation) * (std::cos(azimuth) * -basis.forward + std::sin(azimuth) * basis.right) +
-                           std::sin(elevation) * basis.up;
-      rays.push_back({basis.origin.x, basis.origin.y, basis.origin.z, d.x, d.y, d.z});
-    }
-  }
+  const std::vector<GivenRay> rays = sensor_rings(scene);
   const RayHits in_order = renderer.cast_rays(rays);
   EXPECT_EQ(renderer.timings().given_walk, GivenRayWalk::packets_in_order);
   std::vector<size_t> listed(rays.size());

@@ -46,23 +46,6 @@ std::vector<GivenRay> pixel_rays(const Scene& scene) {
   return rays;
 }
 
-// A spinning sensor at the scene camera: 16 rings of 1024 azimuths, ring by ring (runs of 64 stay
-// compact: the packet walk takes them in their order).
-std::vector<GivenRay> sensor_rings(const Scene& scene) {
-  const CameraBasis basis = make_camera_basis(scene.camera, 1, 1);
-  std::vector<GivenRay> rays;
-  for (int ring = 0; ring < 16; ++ring) {
-    const double elevation = (ring - 7.5) * 0.03;
-    for (int a = 0; a < 1024; ++a) {
-      const double azimuth = 2.0 * M_PI * a / 1024.0;
-      const glm::dvec3 d = std::cos(elevation) * (std::cos(azimuth) * -basis.forward + std::sin(azimuth) * basis.right) +
-                           std::sin(elevation) * basis.up;
-      rays.push_back({basis.origin.x, basis.origin.y, basis.origin.z, d.x, d.y, d.z});
-    }
-  }
-  return rays;
-}
-
 // `rays` in a fixed random order: listed[n] is the index in `rays` of the n-th.
 std::vector<GivenRay> shuffled(const std::vector<GivenRay>& rays, std::vector<size_t>& listed) {
   listed.resize(rays.size());

@@ -3,6 +3,7 @@
 #pragma once
 
 #include "engine/scene/bvh.hpp"
+#include "engine/scene/camera.hpp"
 #include "engine/scene/mesh_generators.hpp"
 #include "engine/scene/obj_loader.hpp"
 #include "engine/scene/scene.hpp"
@@ -41,6 +42,23 @@ inline Scene translated(Scene scene, const glm::dvec3& offset) {
     for (auto& p : mesh.positions) p += offset;
   }
   return scene;
+}
+
+// A spinning sensor at `scene`'s camera: 16 rings of 1024 azimuths all the way round, 0.03 radians
+// of elevation apart about the view direction, listed ring by ring.
+inline std::vector<GivenRay> sensor_rings(const Scene& scene) {
+  const CameraBasis basis = make_camera_basis(scene.camera, 1, 1);
+  std::vector<GivenRay> rays;
+  for (int ring = 0; ring < 16; ++ring) {
+    const double elevation = (ring - 7.5) * 0.03;
+    for (int a = 0; a < 1024; ++a) {
+      const double azimuth = 2.0 * M_PI * a / 1024.0;
+      const glm::dvec3 d = std::cos(elevation) * (std::cos(azimuth) * -basis.forward + std::sin(azimuth) * basis.right) +
+                           std::sin(elevation) * basis.up;
+      rays.push_back({basis.origin.x, basis.origin.y, basis.origin.z, d.x, d.y, d.z});
+    }
+  }
+  return rays;
 }
 
 inline Mesh quad_grid(glm::dvec3 corner, glm::dvec3 edge_u, glm::dvec3 edge_v, int cells) {
