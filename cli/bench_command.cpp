@@ -9,6 +9,7 @@
 #include "engine/bench/bench_suites.hpp"
 #include "engine/bench/given_rays_bench.hpp"
 #include "engine/bench/host_bench.hpp"
+#include "engine/bench/moving_bench.hpp"
 #include "engine/io/image_io.hpp"
 #include "engine/typed_names.hpp"
 
@@ -84,6 +85,25 @@ int run_given_rays(const BenchOptions& options, const std::vector<BenchScene>& s
   return 0;
 }
 
+// --suite moving: each model's first mesh deformed, refitted against rebuilt, and rendered after
+// (engine/bench/moving_bench.hpp), a table row each.
+int run_moving(const BenchOptions& options, const std::vector<BenchScene>& scenes) {
+  GpuDevice device(options.device_options.device, options.device_options.transfer_mode());
+  print_cpu_device_note(device.info());
+  std::printf("vkray bench --suite moving on %s\n%zu model%s at %ux%u, every vertex moved by up to 1%% of the model's size; "
+              "medians of %u calls after a first; render: GPU ms; the depth's relative error p99 against the reference, and the "
+              "pixels outside the error envelope, on the refitted tree and on one built for the moved model\n%s",
+              device.info().name.c_str(), scenes.size(), scenes.size() == 1 ? "" : "s", scenes.front().scene.width,
+              scenes.front().scene.height, options.frames, moving_table_header().c_str());
+  std::fflush(stdout);
+  for (const auto& scene : scenes) {
+    if (scene.scene.meshes.empty()) throw InputError(scene.name + ": --suite moving deforms a mesh; the scene has none");
+    std::fputs(moving_table_row(scene.name, bench_moving(device, scene.scene, options.frames)).c_str(), stdout);
+    std::fflush(stdout);
+  }
+  return 0;
+}
+
 // --suite host: the host's stages alone on a frame made on the host, at --size: no device is opened.
 int run_host_stages(const BenchOptions& options) {
   for (const auto& [value, name] : {std::pair{options.variants, "--variants"}, std::pair{options.markdown, "--markdown"},
@@ -103,6 +123,12 @@ int run_bench(const BenchOptions& options) {
     for (const auto& [value, name] : {std::pair{options.variants, "--variants"},
                                       std::pair{options.markdown, "--markdown"}, std::pair{options.plot, "--plot"}}) {
       if (!value.empty()) throw InputError(std::string(name) + ": not for --suite rays, whose rows are kinds of rays, not variants");
+    }
+  }
+  if (options.suite == moving_suite) {
+    for (const auto& [value, name] : {std::pair{options.variants, "--variants"}, std::pair{options.markdown, "--markdown"},
+                                      std::pair{options.plot, "--plot"}, std::pair{options.json, "--json"}, std::pair{options.csv, "--csv"}}) {
+      if (!value.empty()) throw InputError(std::string(name) + ": not for --suite moving, whose rows are a table of models");
     }
   }
   const auto [width, height] = parse_size(options.size);
@@ -131,6 +157,7 @@ int run_bench(const BenchOptions& options) {
   }
   if (scenes.empty()) scenes.push_back({"built-in", load_scene_argument("", width, height)});
   if (options.suite == given_rays_suite) return run_given_rays(options, scenes);
+  if (options.suite == moving_suite) return run_moving(options, scenes);
 
   GpuDevice device(options.device_options.device, options.device_options.transfer_mode());
   print_cpu_device_note(device.info());

@@ -1194,6 +1194,34 @@ TEST_F(CliTest, BenchRaysSuitePrintsARowPerKindOfRays) {
                {"--suite rays", "/nonexistent/vkray-models"});
 }
 
+// --suite moving: a row for the bunny (the dragon absent from the folder is named as skipped) with
+// refit and rebuild times, the renders after, and each frame's error against the reference; the
+// files and variants of the other suites are refused.
+TEST_F(CliTest, BenchMovingSuitePrintsARowPerModel) {
+  const fs::path bunny = fs::path(VKRAY_MODELS_DIR) / "stanford-bunny.obj";
+  if (!fs::exists(bunny)) GTEST_SKIP() << bunny << " is absent: the shared models folder is not beside the project";
+  fs::create_directory(path("models"));
+  fs::create_symlink(bunny, path("models/stanford-bunny.obj"));
+  const RunResult run = vkray({"bench", "--suite", "moving", "--models", path("models").string(), "--size", "96x64", "--frames", "2"});
+  ASSERT_EQ(run.exit_code, 0) << run.out << run.err;
+  EXPECT_NE(run.err.find("skipped stanford-dragon-100k.obj"), std::string::npos) << run.err;
+  const size_t row = run.out.find("stanford-bunny.obj");
+  ASSERT_NE(row, std::string::npos) << run.out;
+  std::istringstream fields(run.out.substr(row, run.out.find('\n', row) - row));
+  std::string model;
+  size_t vertices = 0;
+  double refit = 0, rebuild = 0, ratio = 0, render_refit = 0, render_built = 0;
+  fields >> model >> vertices >> refit >> rebuild >> ratio >> render_refit >> render_built;
+  EXPECT_EQ(vertices, 35947u);
+  EXPECT_GT(refit, 0.0);
+  EXPECT_GT(rebuild, 0.0);
+  EXPECT_GT(render_refit, 0.0);
+  EXPECT_GT(render_built, 0.0);
+  EXPECT_EQ(run.out.find("fell back"), std::string::npos) << run.out;  // every call refitted
+  expect_error(vkray({"bench", "--suite", "moving", "--models", path("models").string(), "--json", "moving.json"}), 2,
+               {"--json", "--suite moving"});
+}
+
 // The basic suite's JSON: every field of every row present and sane. Times are only required to be
 // positive and consistent with each other, never fast.
 TEST_F(CliTest, BenchBasicSuiteJsonHasEveryFieldAndSaneFigures) {

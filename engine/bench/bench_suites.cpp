@@ -132,6 +132,11 @@ std::vector<BenchScene> bench_suite(const std::string& suite, uint32_t width, ui
     }
     return scenes;
   }
+  if (suite == moving_suite) {
+    std::vector<BenchScene> scenes;
+    for (const char* name : {"stanford-bunny.obj", "stanford-dragon-100k.obj"}) add_model(scenes, name, width, height, models_dir, skipped);
+    return scenes;
+  }
   throw InputError("--suite: unknown suite '" + suite + "' (choose from " + bench_suite_names + ")");
 }
 
