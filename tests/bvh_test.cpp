@@ -14,6 +14,9 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <bit>
+#include <cmath>
+#include <limits>
 #include <cstdio>
 #include <cstring>
 #include <functional>
@@ -137,6 +140,29 @@ std::vector<Box> random_boxes(size_t count, uint64_t seed, double size = 0.1, do
     boxes.push_back({centre - half, centre + half});
   }
   return boxes;
+}
+
+// The inline next-float steps are std::nextafter's, and the outward roundings built on them hold the
+// double they round: at zero, subnormals, powers of two (where the step changes size), both signs
+// and the ends of the finite range.
+TEST(FloatSteps, AreNextafterAndRoundOutward) {
+  const float largest = std::numeric_limits<float>::max(), tiny = std::numeric_limits<float>::denorm_min();
+  const float floats[] = {0.0f, -0.0f, tiny, -tiny, std::numeric_limits<float>::min(), 1.0f, -1.0f, 0.75f, 2.0f,
+                          -2.0f, 1e15f, -1e15f, largest, -largest, 3.0e-39f, -3.0e-39f};
+  const float infinity = std::numeric_limits<float>::infinity();
+  for (const float value : floats) {
+    EXPECT_EQ(std::bit_cast<uint32_t>(next_float_down(value)), std::bit_cast<uint32_t>(std::nextafter(value, -infinity))) << value;
+    EXPECT_EQ(std::bit_cast<uint32_t>(next_float_up(value)), std::bit_cast<uint32_t>(std::nextafter(value, infinity))) << value;
+  }
+  const double doubles[] = {0.0, 1e-300, -1e-300, 0.1, -0.1, 1.0 + 1e-12, -(1.0 + 1e-12), 1e15 + 0.5, -1e15 - 0.5, 1.0, 3e-39};
+  for (const double value : doubles) {
+    EXPECT_LE(double{float_below(value)}, value) << value;
+    EXPECT_GE(double{float_above(value)}, value) << value;
+    EXPECT_EQ(float_below(value), static_cast<float>(value) <= value ? static_cast<float>(value)
+                                                                    : std::nextafter(static_cast<float>(value), -infinity)) << value;
+    EXPECT_EQ(float_above(value), static_cast<float>(value) >= value ? static_cast<float>(value)
+                                                                    : std::nextafter(static_cast<float>(value), infinity)) << value;
+  }
 }
 
 TEST(BvhBuild, RandomBoxesGiveValidTrees) {

@@ -42,12 +42,10 @@ struct FloatBox {
 
 // At least one float step and VKRAY_BOX_MARGIN outward (see safe_inverse in shaders/intersect.glsl).
 float step_down(float value) {
-  return float_below(std::min<double>(std::nextafter(value, -std::numeric_limits<float>::infinity()),
-                                      double{value} - VKRAY_BOX_MARGIN));
+  return float_below(std::min<double>(next_float_down(value), double{value} - VKRAY_BOX_MARGIN));
 }
 float step_up(float value) {
-  return float_above(std::max<double>(std::nextafter(value, std::numeric_limits<float>::infinity()),
-                                      double{value} + VKRAY_BOX_MARGIN));
+  return float_above(std::max<double>(next_float_up(value), double{value} + VKRAY_BOX_MARGIN));
 }
 FloatBox widened(const FloatBox& box) {
   return {{step_down(box.lower.x), step_down(box.lower.y), step_down(box.lower.z)},
@@ -74,24 +72,33 @@ struct EncodedPrimitive {
 // so the order is free, and fixing it makes copies of a triangle with another winding or starting
 // vertex give bit-identical distances: coincident copies tie exactly (see VKRAY_COINCIDENT_GAP).
 struct CanonicalTriangle {
-  std::array<glm::dvec3, 3> v;     // the corners relative to the anchor, in canonical order
-  std::array<uint32_t, 3> vertex;  // each one's index in the mesh
+  std::array<glm::dvec3, 3> v;   // the corners relative to the anchor, in canonical order
+  std::array<uint32_t, 3> vertex;  // each one's index as given (in the mesh, or in the vertex buffer)
   glm::dvec3 normal{0.0};          // the unit normal; 0 for a triangle of zero area (left out)
   FloatBox box() const { return outward(glm::min(v[0], glm::min(v[1], v[2])), glm::max(v[0], glm::max(v[1], v[2]))); }
 };
 
-CanonicalTriangle canonical_triangle(const Mesh& mesh, uint32_t triangle, const glm::dvec3& anchor) {
-  const auto& corners = mesh.triangles[triangle];
-  std::array<std::pair<glm::dvec3, uint32_t>, 3> sorted;
-  for (size_t c = 0; c < 3; ++c) sorted[c] = {mesh.positions[corners[c]] - anchor, corners[c]};
-  std::sort(sorted.begin(), sorted.end(), [](const auto& a, const auto& b) {
-    return std::tie(a.first.x, a.first.y, a.first.z) < std::tie(b.first.x, b.first.y, b.first.z);
-  });
+// The triangle of corners `vertex`, each at position(index) relative to the anchor.
+template <typename Position>
+CanonicalTriangle canonical_triangle(const std::array<uint32_t, 3>& vertex, Position position) {
   CanonicalTriangle result;
-  for (size_t c = 0; c < 3; ++c) result.v[c] = sorted[c].first, result.vertex[c] = sorted[c].second;
+  result.vertex = vertex;
+  for (size_t c = 0; c < 3; ++c) result.v[c] = position(vertex[c]);
+  // Three compare-and-swaps (a refit makes every triangle again: std::sort of pairs took a tenth of it).
+  const auto order = [&](size_t a, size_t b) {
+    if (std::tie(result.v[b].x, result.v[b].y, result.v[b].z) < std::tie(result.v[a].x, result.v[a].y, result.v[a].z)) {
+      std::swap(result.v[a], result.v[b]);
+      std::swap(result.vertex[a], result.vertex[b]);
+    }
+  };
+  order(0, 1), order(1, 2), order(0, 1);
   const glm::dvec3 cross = glm::cross(result.v[1] - result.v[0], result.v[2] - result.v[0]);
   if (cross != glm::dvec3(0.0)) result.normal = unit_vector(cross);
   return result;
+}
+
+CanonicalTriangle canonical_triangle(const Mesh& mesh, uint32_t triangle, const glm::dvec3& anchor) {
+  return canonical_triangle(mesh.triangles[triangle], [&](uint32_t k) { return mesh.positions[k] - anchor; });
 }
 
 // A sphere's box relative to the anchor.
@@ -431,14 +438,15 @@ bool refit_in_place(GpuScene& gpu, const Scene& scene, const ShaderVariant& shad
         boxes[slot] = sphere_box(centre, sphere.radius);
         continue;
       }
-      const CanonicalTriangle triangle = canonical_triangle(scene.meshes[source.object], source.primitive, gpu.anchor);
+      // From the stored corners the record names, which the loop above placed: the mesh's triangle
+      // and its vertices' indices are a cache miss each (they took a quarter of the refit).
+      const CanonicalTriangle triangle = canonical_triangle({record.indices.x, record.indices.y, record.indices.z},
+                                                            [&](uint32_t stored) { return position[stored]; });
       if (triangle.normal == glm::dvec3(0.0)) {
         fits = false;
         break;
       }
-      const std::vector<uint32_t>& stored = gpu.stored_vertex[source.object];
-      record.indices = glm::uvec4(stored[triangle.vertex[0]], stored[triangle.vertex[1]], stored[triangle.vertex[2]],
-                                  VKRAY_PRIMITIVE_TRIANGLE);
+      record.indices = glm::uvec4(triangle.vertex[0], triangle.vertex[1], triangle.vertex[2], VKRAY_PRIMITIVE_TRIANGLE);
       write_normal(gpu.normal_texels.data() + slot * texels, triangle.normal, gpu.precision);
       boxes[slot] = triangle.box();
     }

@@ -77,16 +77,6 @@ class Flattener {
 
 }  // namespace
 
-float float_below(double value) {
-  const auto rounded = static_cast<float>(value);
-  return static_cast<double>(rounded) <= value ? rounded : std::nextafter(rounded, -std::numeric_limits<float>::infinity());
-}
-
-float float_above(double value) {
-  const auto rounded = static_cast<float>(value);
-  return static_cast<double>(rounded) >= value ? rounded : std::nextafter(rounded, std::numeric_limits<float>::infinity());
-}
-
 uint32_t make_leaf(uint32_t first, uint32_t count) {
   return VKRAY_BVH_LEAF_BIT | (first << VKRAY_BVH_LEAF_COUNT_BITS) | (count - 1u);
 }
