@@ -7,9 +7,11 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <random>
+#include <tuple>
 
 namespace vkray {
 namespace {
@@ -180,6 +182,104 @@ TEST(SetVertices, InDoublePrecision) {
   EXPECT_EQ(frame.depth64, expected.depth64);
   EXPECT_EQ(frame.normal64, expected.normal64);
   expect_same_hits(renderer.cast_rays(rays_from_above()), fresh.cast_rays(rays_from_above()));
+}
+
+// two_meshes() with two small triangles at opposite corners, out of the camera's view: they hold the
+// scene's box (and its centre, the anchor every stored position is relative to) while the sphere
+// and the grid move within it.
+Scene boxed_meshes() {
+  Scene scene = two_meshes();
+  Mesh corners;
+  corners.positions = {{-6, -3, -6}, {-5.9, -3, -6}, {-6, -3, -5.9}, {6, 3, 6}, {5.9, 3, 6}, {6, 3, 5.9}};
+  corners.triangles = {{0, 1, 2}, {3, 4, 5}};
+  scene.meshes.push_back(corners);
+  return scene;
+}
+
+// The sphere turned about y by `angle` and carried by `offset`, then jittered (moved_positions).
+std::vector<glm::dvec3> carried(const Mesh& mesh, double angle, glm::dvec3 offset, uint32_t seed) {
+  std::vector<glm::dvec3> positions = moved_positions(mesh, 0.002, seed);
+  for (glm::dvec3& p : positions) {
+    p = glm::dvec3(std::cos(angle) * p.x + std::sin(angle) * p.z, p.y, -std::sin(angle) * p.x + std::cos(angle) * p.z) + offset;
+  }
+  return positions;
+}
+
+// Where the anchor stays, refit_in_place redoes only the moved mesh's vertices, slots and the nodes
+// above them, and leaves the arrays as make_gpu_scene leaves them with the same tree, bit for bit;
+// where the anchor moves, everything.
+TEST(SetVertices, OneMeshMovedWithinTheScenesBoxIsRedoneAlone) {
+  const Scene scene = boxed_meshes();
+  GpuSceneOptions options;
+  options.search = PrimitiveSearch::bvh_per_ray;
+  const ShaderVariant shader;
+  GpuScene gpu = make_gpu_scene(scene, options, shader);
+  const GpuScene built = gpu;  // its tree and slots, for the conversions compared with
+  Scene moved = scene;
+  struct Move {
+    uint32_t mesh;
+    std::vector<glm::dvec3> positions;
+    bool one_mesh;
+  };
+  const std::vector<Move> moves{
+      {0, carried(scene.meshes[0], 0.3, {0.2, 0.1, 0.0}, 31), false},   // the first call makes what the next ones keep
+      {0, carried(scene.meshes[0], 0.9, {-0.4, 0.0, 0.3}, 37), true},
+      {1, moved_positions(scene.meshes[1], 0.002, 41), true},
+      {0, carried(scene.meshes[0], 1.5, {0.1, -0.2, -0.3}, 43), true},
+      {2, {{-7, -3, -6}, {-5.9, -3, -6}, {-6, -3, -5.9}, {6, 3, 6}, {5.9, 3, 6}, {6, 3, 5.9}}, false},  // the box grows
+  };
+  for (size_t k = 0; k < moves.size(); ++k) {
+    SCOPED_TRACE(testing::Message() << "move " << k << " (mesh " << moves[k].mesh << ")");
+    moved.meshes[moves[k].mesh].positions = moves[k].positions;
+    const SceneExtent extent = scene_extent(moved);
+    ASSERT_TRUE(refit_in_place(gpu, moved, shader, extent, moves[k].mesh));
+    EXPECT_EQ(gpu.rewritten.spheres_and_planes, !moves[k].one_mesh);
+    const GpuScene want = make_gpu_scene(moved, options, shader, extent, RefitSource{*built.tree, built.hit_sources});
+    ASSERT_TRUE(want.refitted);
+    EXPECT_EQ(gpu.anchor, want.anchor);
+    EXPECT_EQ(gpu.radius, want.radius);
+    auto same_bytes = [](const auto& got, const auto& expected) {
+      return got.size() == expected.size() && std::memcmp(got.data(), expected.data(), got.size() * sizeof(got[0])) == 0;
+    };
+    // Each slot's record with its corners' stored points (the vertex buffer keeps its former order in
+    // a refit, where a conversion numbers the vertices as the moved triangles first name them).
+    auto corners = [](const GpuScene& g) {
+      std::vector<std::array<gpu::GpuPoint, 3>> points;
+      for (const gpu::GpuPrimitive& record : g.primitives) {
+        EXPECT_EQ(record.indices.w, uint32_t{VKRAY_PRIMITIVE_TRIANGLE});
+        points.push_back({g.vertices[record.indices.x], g.vertices[record.indices.y], g.vertices[record.indices.z]});
+      }
+      return points;
+    };
+    EXPECT_TRUE(same_bytes(corners(gpu), corners(want)));
+    EXPECT_TRUE(same_bytes(gpu.normal_texels, want.normal_texels));
+    EXPECT_TRUE(same_bytes(gpu.bvh_nodes, want.bvh_nodes));
+    EXPECT_TRUE(same_bytes(gpu.planes, want.planes));
+    if (moves[k].one_mesh) {  // the rewritten slots begin and end with the mesh's
+      ASSERT_FALSE(gpu.rewritten.slots.empty());
+      EXPECT_EQ(gpu.hit_sources.slots[gpu.rewritten.slots.first].object, moves[k].mesh);
+      EXPECT_EQ(gpu.hit_sources.slots[gpu.rewritten.slots.end - 1].object, moves[k].mesh);
+    }
+  }
+}
+
+// The same moves through a Renderer: each render and cast after a move is a Renderer made from the
+// moved scene's, bit for bit (what write_refitted uploads of the rewritten ranges is all that changed).
+TEST(SetVertices, MovesWithinTheScenesBoxRenderAsTheMovedScene) {
+  const Scene scene = boxed_meshes();
+  Renderer renderer(device(), scene);
+  Scene moved = scene;
+  for (const auto& [angle, offset, seed] : {std::tuple{0.3, glm::dvec3(0.2, 0.1, 0.0), 51u},
+                                            {0.9, glm::dvec3(-0.4, 0.0, 0.3), 53u}, {2.0, glm::dvec3(0.5, 0.2, -0.2), 57u}}) {
+    SCOPED_TRACE(testing::Message() << "seed " << seed);
+    moved.meshes[0].positions = carried(scene.meshes[0], angle, offset, seed);
+    renderer.set_vertices(0, moved.meshes[0].positions);
+    const Frame frame = renderer.render(moved.camera, width, height, {Aov::depth, Aov::normal});
+    test::expect_frame_matches_reference(moved, frame);
+    Renderer fresh(device(), moved);
+    expect_same_frame(frame, fresh.render(moved.camera, width, height, {Aov::depth, Aov::normal}));
+    expect_same_hits(renderer.cast_rays(rays_from_above()), fresh.cast_rays(rays_from_above()));
+  }
 }
 
 TEST(SetVertices, BadInputLeavesTheSceneAsItWas) {

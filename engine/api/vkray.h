@@ -104,7 +104,7 @@ VKRAY_API const char* vkray_renderer_device_name(const vkray_renderer* renderer)
 /* Moves the vertices of mesh `mesh` (its mesh_id) to `positions`, `count` x 3 doubles in the mesh's
  * vertex order: the next call renders the moved scene, as a renderer made from it would. The GPU's
  * tree keeps its shape, its boxes recomputed, while the same triangles keep a non-zero area; else it
- * is built anew (vkray_renderer_timings: "scene_update_ms", "tree_refitted"). A bad mesh, count or
+ * is built anew. Where the scene's box stays, only this mesh's part is redone (vkray_renderer_timings: "scene_update_ms", "tree_refitted"). A bad mesh, count or
  * coordinate: VKRAY_INPUT_ERROR, the scene unchanged. */
 VKRAY_API vkray_status vkray_renderer_set_vertices(vkray_renderer* renderer, uint32_t mesh, const double* positions,
                                                    uint64_t count);

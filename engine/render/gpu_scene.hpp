@@ -8,6 +8,9 @@
 #include "engine/vulkan/shader_variant.hpp"
 #include "shaders/gpu_layout.h"
 
+#include <algorithm>
+#include <cstdint>
+#include <memory>
 #include <optional>
 #include <string_view>
 #include <vector>
@@ -43,6 +46,8 @@ struct GpuSceneShape {
   bool tree_has_spheres = false;
   bool operator==(const GpuSceneShape&) const = default;
 };
+
+struct RefitState;  // gpu_scene.cpp
 
 struct GpuScene {
   // Every position on the GPU is stored relative to this point (see GpuPoint in gpu_layout.h): the
@@ -93,6 +98,21 @@ struct GpuScene {
   static constexpr uint32_t no_vertex = UINT32_MAX;
   std::vector<std::vector<uint32_t>> stored_vertex;
   std::vector<ObjectPrimitive> left_out;
+  // What refit_in_place keeps from one call to the next (made at its first): the double positions,
+  // the slots' and nodes' boxes, which slots each mesh's triangles hold, and the tree's parents, so
+  // that a later call redoes only a moved mesh's part.
+  std::shared_ptr<RefitState> refit_state;
+  // The items of each array the last refit_in_place rewrote, [first, end) (what an upload writes).
+  struct ItemRange {
+    size_t first = SIZE_MAX, end = 0;
+    void add(size_t item) { first = std::min(first, item), end = std::max(end, item + 1); }
+    bool empty() const { return end <= first; }
+  };
+  struct Rewritten {
+    ItemRange vertices, slots, nodes;
+    bool spheres_and_planes = true;
+  };
+  Rewritten rewritten;
 
   // A tree or the device's structures find the primitives: no brute-force loop.
   bool has_tree() const { return search != PrimitiveSearch::brute_force; }
@@ -137,9 +157,13 @@ GpuScene make_gpu_scene(const Scene& scene, const GpuSceneOptions& options = {},
 // meshes, triangles and spheres), brought up to `scene` where it lies: every stored position, triangle
 // record, normal and box found again from `extent` (scene_extent(scene)) on every core, the tree's
 // shape kept and its boxes refitted; the same arrays as make_gpu_scene's with that tree would hold,
-// their vertices in their former order. False, `gpu` then unusable, where it cannot be: a triangle's
-// area became or stopped being zero, or vertices that shared a stored position no longer coincide.
-bool refit_in_place(GpuScene& gpu, const Scene& scene, const ShaderVariant& shader, const SceneExtent& extent);
+// their vertices in their former order. With `moved_mesh`, the only mesh that moved since the last
+// call: where the anchor stayed and the mesh shares no stored vertex with another, only its vertices,
+// its triangles' slots and the nodes above them (GpuScene::rewritten says which). False, `gpu` then
+// unusable, where it cannot be: a triangle's area became or stopped being zero, or vertices that
+// shared a stored position no longer coincide.
+bool refit_in_place(GpuScene& gpu, const Scene& scene, const ShaderVariant& shader, const SceneExtent& extent,
+                    std::optional<uint32_t> moved_mesh = std::nullopt);
 
 // Every plane's normal_height for a camera at `origin` (see GpuPlane): `scene_planes` are the
 // scene's, in the same order as `planes`.

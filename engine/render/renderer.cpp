@@ -92,7 +92,7 @@ void Renderer::set_vertices(uint32_t mesh, std::span<const glm::dvec3> positions
     // shape kept where it can be: in place from the second call on, else converted anew.
     const SceneExtent extent = scene_extent(r.host_scene);
     const auto refit_start = Clock::now();
-    if (r.moving && refit_in_place(*r.moving, r.host_scene, r.options.shader, extent)) {
+    if (r.moving && refit_in_place(*r.moving, r.host_scene, r.options.shader, extent, mesh)) {
       r.write_refitted(*r.moving);
       r.reset_timings();
       r.timings.bvh_build_ms = elapsed_ms(refit_start);

@@ -193,7 +193,9 @@ class Renderer {
   // Moves the vertices of mesh `mesh` (the scene's meshes[mesh], its mesh_id) to `positions`, one a
   // vertex in its order (a deforming mesh: a skinned arm, cloth): the next call renders the moved
   // scene, exactly as a Renderer made from it would. Its tree keeps its shape and only its boxes are
-  // recomputed (a refit) while the same triangles keep a non-zero area; else it is built anew.
+  // recomputed (a refit) while the same triangles keep a non-zero area; else it is built anew. From
+  // the third call on, where the scene's box stays (the centre every stored position is relative to:
+  // an object moving inside a room's walls), only this mesh's part of the tree is redone and uploaded.
   // timings() then says which (tree_refitted) and what it took (scene_update_ms). Throws InputError
   // for a mesh out of range, a count other than the mesh's or a coordinate not finite or beyond
   // max_coordinate, the scene unchanged.

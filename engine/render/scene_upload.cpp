@@ -88,15 +88,23 @@ void Renderer::Impl::upload_scene(const GpuScene& gpu_scene, const Scene& scene)
 }
 
 void Renderer::Impl::write_refitted(const GpuScene& gpu_scene) {
-  auto write = [&]<typename T>(std::optional<TexelBuffer>& target, const std::vector<T>& items) {
-    if (target) write_buffer(context, target->buffer, items.data(), items.size() * sizeof(T));
+  // The items the refit rewrote (`per_item` array entries each), or all of them.
+  auto write = [&]<typename T>(std::optional<TexelBuffer>& target, const std::vector<T>& items,
+                                std::optional<GpuScene::ItemRange> range = std::nullopt, size_t per_item = 1) {
+    const GpuScene::ItemRange whole{0, items.size() / per_item};
+    const GpuScene::ItemRange written = range.value_or(whole);
+    if (!target || written.empty()) return;
+    const size_t item_bytes = per_item * sizeof(T);
+    write_buffer(context, target->buffer, items.data() + written.first * per_item, (written.end - written.first) * item_bytes,
+                 written.first * item_bytes);
   };
-  write(spheres, gpu_scene.spheres);
-  write(primitives, gpu_scene.primitives);
-  write(vertices, gpu_scene.vertices);
-  write(normals, gpu_scene.normal_texels);
-  write(bvh_nodes, gpu_scene.bvh_nodes);
-  if (planes) {  // their offsets from the anchor (the heights above the camera are set per render)
+  const GpuScene::Rewritten& rewritten = gpu_scene.rewritten;
+  write(primitives, gpu_scene.primitives, rewritten.slots);
+  write(vertices, gpu_scene.vertices, rewritten.vertices);
+  write(normals, gpu_scene.normal_texels, rewritten.slots, gpu_scene.normal_texels.size() / gpu_scene.primitives.size());
+  write(bvh_nodes, gpu_scene.bvh_nodes, rewritten.nodes);
+  if (rewritten.spheres_and_planes) write(spheres, gpu_scene.spheres);
+  if (planes && rewritten.spheres_and_planes) {  // their offsets from the anchor (the heights above the camera are set per render)
     gpu_planes = gpu_scene.planes;
     std::memcpy(planes->buffer.mapped, gpu_planes.data(), gpu_planes.size() * sizeof(gpu::GpuPlane));
   }

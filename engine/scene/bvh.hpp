@@ -79,11 +79,13 @@ struct Bvh {
 // Embree fails and std::length_error beyond VKRAY_BVH_MAX_PRIMITIVES.
 Bvh build_bvh(const std::vector<Box>& boxes, const BvhBuildOptions& options = {});
 
-// Bounds of every node's two children in one pass from the leaves up, from `primitive_box(index
-// into primitive_order)`; BoxType is any type with lower/upper members of a vector type.
-template <typename BoxType, typename PrimitiveBox>
-std::vector<std::array<BoxType, 2>> child_bounds(const Bvh& bvh, PrimitiveBox primitive_box) {
-  std::vector<std::array<BoxType, 2>> bounds(bvh.nodes.size());
+// Bounds of the children of every node `update(node)` selects, in one pass from the leaves up, from
+// `primitive_box(index into primitive_order)` and the bounds of the nodes below; BoxType is any type
+// with lower/upper members of a vector type. `update` must select a node's parent with it (a refit
+// of what moved: the nodes above the moved leaves); `bounds` holds one entry a node.
+template <typename BoxType, typename PrimitiveBox, typename Update>
+void update_child_bounds(const Bvh& bvh, std::vector<std::array<BoxType, 2>>& bounds, PrimitiveBox primitive_box,
+                         Update update) {
   auto merge = [](BoxType a, const BoxType& b) {
     for (int axis = 0; axis < 3; ++axis) {
       a.lower[axis] = a.lower[axis] < b.lower[axis] ? a.lower[axis] : b.lower[axis];
@@ -100,8 +102,16 @@ std::vector<std::array<BoxType, 2>> child_bounds(const Bvh& bvh, PrimitiveBox pr
   // Children always have larger indices than their parent (depth-first order), so a reverse sweep
   // sees every child before its parent.
   for (size_t node = bvh.nodes.size(); node-- > 0;) {
+    if (!update(node)) continue;
     for (int side = 0; side < 2; ++side) bounds[node][side] = box_of(bvh.nodes[node][side]);
   }
+}
+
+// Bounds of every node's two children (update_child_bounds of them all).
+template <typename BoxType, typename PrimitiveBox>
+std::vector<std::array<BoxType, 2>> child_bounds(const Bvh& bvh, PrimitiveBox primitive_box) {
+  std::vector<std::array<BoxType, 2>> bounds(bvh.nodes.size());
+  update_child_bounds(bvh, bounds, primitive_box, [](size_t) { return true; });
   return bounds;
 }
 

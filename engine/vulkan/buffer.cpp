@@ -1,5 +1,6 @@
 #include "engine/vulkan/buffer.hpp"
 
+#include <cstddef>
 #include <cstring>
 
 namespace vkray {
@@ -61,15 +62,15 @@ GpuBuffer upload_buffer(VulkanContext& context, const void* data, size_t bytes, 
   return target;
 }
 
-void write_buffer(VulkanContext& context, GpuBuffer& target, const void* data, size_t bytes) {
+void write_buffer(VulkanContext& context, GpuBuffer& target, const void* data, size_t bytes, size_t offset) {
   if (target.mapped) {
-    std::memcpy(target.mapped, data, bytes);
+    std::memcpy(static_cast<std::byte*>(target.mapped) + offset, data, bytes);
     return;
   }
   GpuBuffer staging = create_buffer(context, bytes, vk::BufferUsageFlagBits::eTransferSrc, host_access_flags, {}, Side::host);
   std::memcpy(staging.mapped, data, bytes);
   context.submit_and_wait([&](const vk::raii::CommandBuffer& commands) {
-    commands.copyBuffer(*staging.buffer, *target.buffer, vk::BufferCopy(0, 0, bytes));
+    commands.copyBuffer(*staging.buffer, *target.buffer, vk::BufferCopy(0, offset, bytes));
     // The copy's writes made available to every later shader read on this queue: a fence wait
     // orders the submissions but makes no device write visible to another stage.
     const vk::MemoryBarrier copied(vk::AccessFlagBits::eTransferWrite, vk::AccessFlagBits::eShaderRead);

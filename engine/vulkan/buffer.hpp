@@ -37,9 +37,9 @@ GpuBuffer create_upload_buffer(VulkanContext& context, vk::DeviceSize size,
 // A device-local buffer for `usage` holding `bytes` of `data` (through a staging buffer if needed).
 GpuBuffer upload_buffer(VulkanContext& context, const void* data, size_t bytes, vk::BufferUsageFlags usage);
 
-// `bytes` of `data` into the start of `target`, a buffer upload_buffer made: a copy where it is
-// mapped, else through a staging buffer; every later shader read sees them.
-void write_buffer(VulkanContext& context, GpuBuffer& target, const void* data, size_t bytes);
+// `bytes` of `data` into `target`, a buffer upload_buffer made, from byte `offset` on: a copy where
+// it is mapped, else through a staging buffer; every later shader read sees them.
+void write_buffer(VulkanContext& context, GpuBuffer& target, const void* data, size_t bytes, size_t offset = 0);
 
 // A view of a uniform texel buffer as texels of `format`: the whole of it, or `range` bytes from
 // `offset` (a multiple of minTexelBufferOffsetAlignment).
