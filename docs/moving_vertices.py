@@ -13,16 +13,13 @@ import sys
 import numpy as np
 
 import vkray
+from obj_arrays import load_obj
 
 MODEL = sys.argv[1] if len(sys.argv) > 1 else "../shared/models/stanford-bunny.obj"
 CALLS = int(sys.argv[2]) if len(sys.argv) > 2 else 5
 
 scene = vkray.load(MODEL, 1920, 1080)  # for its framed camera
-# The model's arrays (an OBJ of triangles, 'v' and 'f' lines, as the Stanford bunny is).
-with open(MODEL) as obj:
-    lines = [line.split() for line in obj if line.startswith(("v ", "f "))]
-vertices = np.array([[float(x) for x in line[1:4]] for line in lines if line[0] == "v"])
-triangles = np.array([[int(corner.split("/")[0]) - 1 for corner in line[1:4]] for line in lines if line[0] == "f"])
+vertices, triangles = load_obj(MODEL)
 scene = vkray.Scene(vertices, triangles, camera=scene.camera, width=1920, height=1080)
 size = np.linalg.norm(vertices.max(axis=0) - vertices.min(axis=0))
 rng = np.random.default_rng(1)
