@@ -11,8 +11,11 @@ Then the last pose of loop 2 against the double-precision reference made from a 
 the bunny where it was moved: the hits' distances' relative error and the rays that hit in one and
 missed in the other. Best of ROUNDS rounds of each loop.
 
+With `open`, the room has no walls and ceiling: the bunny then changes the scene's box, and every
+set_vertices refits the whole scene.
+
 Run from the repository root after building:
-    PYTHONPATH=build/python python3 docs/robot_loop.py [POSES] [ROUNDS]
+    PYTHONPATH=build/python python3 docs/robot_loop.py [POSES] [ROUNDS] [open]
 """
 import math
 import os
@@ -26,6 +29,7 @@ from obj_arrays import load_obj, room
 
 POSES = int(sys.argv[1]) if len(sys.argv) > 1 else 100
 ROUNDS = int(sys.argv[2]) if len(sys.argv) > 2 else 3
+OPEN = len(sys.argv) > 3 and sys.argv[3] == "open"
 MODELS = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "shared", "models")
 
 
@@ -59,7 +63,7 @@ walls, wall_triangles = room(5.0, 3.0)
 meshes = [{"vertices": posed(bunny, 0), "triangles": bunny_triangles},
           {"vertices": dragon + [3.0, 0.0, 1.0], "triangles": dragon_triangles},
           {"vertices": armadillo + [-1.0, 0.0, -3.0], "triangles": armadillo_triangles},
-          {"vertices": walls, "triangles": wall_triangles}]
+          {"vertices": walls, "triangles": wall_triangles}][:3 if OPEN else 4]
 floor = [[0.0, 0.0, 0.0, 0.0, 1.0, 0.0]]
 scene = vkray.Scene(meshes=meshes, planes=floor)
 directions = sensor_directions()
