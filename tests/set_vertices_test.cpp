@@ -209,7 +209,10 @@ std::vector<glm::dvec3> carried(const Mesh& mesh, double angle, glm::dvec3 offse
 // above them, and leaves the arrays as make_gpu_scene leaves them with the same tree, bit for bit;
 // where the anchor moves, everything.
 TEST(SetVertices, OneMeshMovedWithinTheScenesBoxIsRedoneAlone) {
-  const Scene scene = boxed_meshes();
+  Scene scene = boxed_meshes();
+  for (int k = 0; k < 12; ++k) {  // more than are tested apart: the tree holds them beside the triangles
+    scene.spheres.push_back({{-2.5 + 0.4 * k, -1.0, -2.5}, 0.15});
+  }
   GpuSceneOptions options;
   options.search = PrimitiveSearch::bvh_per_ray;
   const ShaderVariant shader;
@@ -233,7 +236,7 @@ TEST(SetVertices, OneMeshMovedWithinTheScenesBoxIsRedoneAlone) {
     moved.meshes[moves[k].mesh].positions = moves[k].positions;
     const SceneExtent extent = scene_extent(moved);
     ASSERT_TRUE(refit_in_place(gpu, moved, shader, extent, moves[k].mesh));
-    EXPECT_EQ(gpu.rewritten.spheres_and_planes, !moves[k].one_mesh);
+    EXPECT_EQ(gpu.rewritten.mesh_alone, moves[k].one_mesh);
     const GpuScene want = make_gpu_scene(moved, options, shader, extent, RefitSource{*built.tree, built.hit_sources});
     ASSERT_TRUE(want.refitted);
     EXPECT_EQ(gpu.anchor, want.anchor);
@@ -246,8 +249,9 @@ TEST(SetVertices, OneMeshMovedWithinTheScenesBoxIsRedoneAlone) {
     auto corners = [](const GpuScene& g) {
       std::vector<std::array<gpu::GpuPoint, 3>> points;
       for (const gpu::GpuPrimitive& record : g.primitives) {
-        EXPECT_EQ(record.indices.w, uint32_t{VKRAY_PRIMITIVE_TRIANGLE});
-        points.push_back({g.vertices[record.indices.x], g.vertices[record.indices.y], g.vertices[record.indices.z]});
+        const bool sphere = record.indices.w == VKRAY_PRIMITIVE_SPHERE;  // its centre and radius alone
+        points.push_back({g.vertices[record.indices.x], sphere ? gpu::GpuPoint{} : g.vertices[record.indices.y],
+                          sphere ? gpu::GpuPoint{} : g.vertices[record.indices.z]});
       }
       return points;
     };
@@ -261,6 +265,34 @@ TEST(SetVertices, OneMeshMovedWithinTheScenesBoxIsRedoneAlone) {
       EXPECT_EQ(gpu.hit_sources.slots[gpu.rewritten.slots.end - 1].object, moves[k].mesh);
     }
   }
+  // A triangle of the moved mesh collapsed on the one-mesh path: the tree cannot keep its shape.
+  moved.meshes[0].positions = carried(scene.meshes[0], 0.2, {0.0, 0.1, 0.0}, 47);
+  ASSERT_TRUE(refit_in_place(gpu, moved, shader, scene_extent(moved), 0));
+  const auto& collapsed = moved.meshes[0].triangles[3];
+  moved.meshes[0].positions[collapsed[1]] = moved.meshes[0].positions[collapsed[2]] = moved.meshes[0].positions[collapsed[0]];
+  EXPECT_FALSE(refit_in_place(gpu, moved, shader, scene_extent(moved), 0));
+}
+
+// A mesh with a vertex at a position another mesh's vertex has (stored once, shared): moving it
+// redoes the whole scene, which checks that the shared position still coincides.
+TEST(SetVertices, AMeshSharingAStoredVertexIsNotRedoneAlone) {
+  Scene scene = boxed_meshes();
+  Mesh touching;  // a triangle with a corner on a vertex of the grid
+  const glm::dvec3 shared = scene.meshes[1].positions[10];
+  touching.positions = {shared, shared + glm::dvec3(0.3, 0.2, 0.0), shared + glm::dvec3(0.0, 0.2, 0.3)};
+  touching.triangles = {{0, 1, 2}};
+  scene.meshes.push_back(touching);
+  GpuSceneOptions options;
+  options.search = PrimitiveSearch::bvh_per_ray;
+  GpuScene gpu = make_gpu_scene(scene, options, ShaderVariant{});
+  Scene moved = scene;
+  for (const double lift : {0.01, 0.02, 0.03}) {  // the shared corner stays; the others rise
+    moved.meshes[3].positions[1].y = scene.meshes[3].positions[1].y + lift;
+    ASSERT_TRUE(refit_in_place(gpu, moved, ShaderVariant{}, scene_extent(moved), 3));
+    EXPECT_FALSE(gpu.rewritten.mesh_alone);
+  }
+  moved.meshes[3].positions[0].y += 0.01;  // the shared corner leaves the grid's vertex
+  EXPECT_FALSE(refit_in_place(gpu, moved, ShaderVariant{}, scene_extent(moved), 3));
 }
 
 // The same moves through a Renderer: each render and cast after a move is a Renderer made from the
@@ -269,11 +301,15 @@ TEST(SetVertices, MovesWithinTheScenesBoxRenderAsTheMovedScene) {
   const Scene scene = boxed_meshes();
   Renderer renderer(device(), scene);
   Scene moved = scene;
+  int call = 0;
   for (const auto& [angle, offset, seed] : {std::tuple{0.3, glm::dvec3(0.2, 0.1, 0.0), 51u},
                                             {0.9, glm::dvec3(-0.4, 0.0, 0.3), 53u}, {2.0, glm::dvec3(0.5, 0.2, -0.2), 57u}}) {
     SCOPED_TRACE(testing::Message() << "seed " << seed);
     moved.meshes[0].positions = carried(scene.meshes[0], angle, offset, seed);
     renderer.set_vertices(0, moved.meshes[0].positions);
+    // The first call converts the scene, the second refits all of it, the third the sphere alone.
+    EXPECT_TRUE(renderer.timings().tree_refitted);
+    EXPECT_EQ(renderer.timings().refit_mesh_alone, ++call == 3);
     const Frame frame = renderer.render(moved.camera, width, height, {Aov::depth, Aov::normal});
     test::expect_frame_matches_reference(moved, frame);
     Renderer fresh(device(), moved);

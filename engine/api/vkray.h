@@ -104,8 +104,10 @@ VKRAY_API const char* vkray_renderer_device_name(const vkray_renderer* renderer)
 /* Moves the vertices of mesh `mesh` (its mesh_id) to `positions`, `count` x 3 doubles in the mesh's
  * vertex order: the next call renders the moved scene, as a renderer made from it would. The GPU's
  * tree keeps its shape, its boxes recomputed, while the same triangles keep a non-zero area; else it
- * is built anew. Where the scene's box stays, only this mesh's part is redone (vkray_renderer_timings: "scene_update_ms", "tree_refitted"). A bad mesh, count or
- * coordinate: VKRAY_INPUT_ERROR, the scene unchanged. */
+ * is built anew. Where the centre of the scene's box stays and the mesh shares no vertex position
+ * with another, only this mesh's part is redone (vkray_renderer_timings: "scene_update_ms",
+ * "tree_refitted", "refit_mesh_alone"). A bad mesh, count or coordinate: VKRAY_INPUT_ERROR, the scene
+ * unchanged. */
 VKRAY_API vkray_status vkray_renderer_set_vertices(vkray_renderer* renderer, uint32_t mesh, const double* positions,
                                                    uint64_t count);
 /* What the last call's time went to, as JSON ({"dispatch_gpu_ms": ..., ...}, milliseconds); the

@@ -353,6 +353,7 @@ nlohmann::json timings_json(const RenderTimings& t, bool constructor) {
   if (t.scene_update_ms > 0.0) {  // set_vertices
     json["scene_update_ms"] = t.scene_update_ms;
     json["tree_refitted"] = t.tree_refitted;
+    json["refit_mesh_alone"] = t.refit_mesh_alone;
     json["bvh_build_ms"] = t.bvh_build_ms;
   }
   return json;

@@ -111,7 +111,7 @@ std::vector<GivenRay> make_rays(RayKind kind, const Scene& scene, size_t count) 
     }
     case RayKind::incoherent:
     case RayKind::occlusion: {
-      const glm::dvec3 centre = scene_anchor(scene);
+      const glm::dvec3 centre = scene_centre(scene);
       const double radius = std::max(scene_radius(scene, centre), 1e-300);
       std::mt19937_64 random(kind == RayKind::incoherent ? 20261126 : 20261127);
       std::normal_distribution<double> gaussian;

@@ -136,10 +136,7 @@ class VertexTable {
   std::unordered_map<glm::dvec3, uint32_t, BitHash> indices_;
 };
 
-// Texels a slot's normal takes (VKRAY_TEXELS_PER_NORMAL_*), and them written at `at`.
-size_t texels_a_normal(Precision precision) {
-  return precision == Precision::float64 ? VKRAY_TEXELS_PER_NORMAL_FLOAT64 : VKRAY_TEXELS_PER_NORMAL_FLOAT32;
-}
+// A slot's normal written at `at` (texels_per_normal texels).
 void write_normal(glm::vec4* at, const glm::dvec3& normal, Precision precision) {
   if (precision == Precision::float64) {
     const gpu::GpuPoint point = encode_point(glm::dvec4(normal, 0.0), precision);
@@ -149,8 +146,8 @@ void write_normal(glm::vec4* at, const glm::dvec3& normal, Precision precision) 
   }
 }
 void append_normal(std::vector<glm::vec4>& texels, const glm::dvec3& normal, Precision precision) {
-  texels.resize(texels.size() + texels_a_normal(precision));
-  write_normal(texels.data() + texels.size() - texels_a_normal(precision), normal, precision);
+  texels.resize(texels.size() + texels_per_normal(precision));
+  write_normal(texels.data() + texels.size() - texels_per_normal(precision), normal, precision);
 }
 
 // A tree node as the shader reads it: its two children's boxes, widened (see safe_inverse in
@@ -433,20 +430,34 @@ struct RefitState {
   }
 };
 
+GpuScene::RefitStateHandle::RefitStateHandle() = default;
+GpuScene::RefitStateHandle::RefitStateHandle(const RefitStateHandle&) {}
+GpuScene::RefitStateHandle& GpuScene::RefitStateHandle::operator=(const RefitStateHandle&) {
+  state.reset();
+  return *this;
+}
+GpuScene::RefitStateHandle::RefitStateHandle(RefitStateHandle&&) noexcept = default;
+GpuScene::RefitStateHandle& GpuScene::RefitStateHandle::operator=(RefitStateHandle&&) noexcept = default;
+GpuScene::RefitStateHandle::~RefitStateHandle() = default;
+
+size_t texels_per_normal(Precision precision) {
+  return precision == Precision::float64 ? VKRAY_TEXELS_PER_NORMAL_FLOAT64 : VKRAY_TEXELS_PER_NORMAL_FLOAT32;
+}
+
 bool refit_in_place(GpuScene& gpu, const Scene& scene, const ShaderVariant& shader, const SceneExtent& extent,
                     std::optional<uint32_t> moved_mesh) {
   if (!gpu.tree || gpu.stored_vertex.size() != scene.meshes.size()) return false;
   const SceneExtent anchored = anchored_extent(scene, shader, extent);
   // One mesh's part alone where nothing else can have changed: the anchor (every stored position is
   // relative to it) and the positions it shares with other meshes.
-  const bool one_mesh = moved_mesh && gpu.refit_state && anchored.anchor == gpu.anchor &&
-                        !gpu.refit_state->shares_vertices[*moved_mesh];
-  if (!gpu.refit_state) gpu.refit_state = std::make_shared<RefitState>(gpu);
-  RefitState& state = *gpu.refit_state;
+  std::unique_ptr<RefitState>& kept = gpu.refit_state.state;
+  const bool one_mesh = moved_mesh && kept && anchored.anchor == gpu.anchor && !kept->shares_vertices[*moved_mesh];
+  if (!kept) kept = std::make_unique<RefitState>(gpu);
+  RefitState& state = *kept;
   gpu.anchor = anchored.anchor;
   gpu.radius = anchored.radius;
   gpu.rewritten = {};
-  gpu.rewritten.spheres_and_planes = !one_mesh;
+  gpu.rewritten.mesh_alone = one_mesh;
   const auto updated = [&](size_t mesh) { return !one_mesh || mesh == *moved_mesh; };
   std::atomic<bool> fits = true;
   // The stored positions: every mesh vertex that shares one must still lie where the others do.
@@ -482,7 +493,7 @@ bool refit_in_place(GpuScene& gpu, const Scene& scene, const ShaderVariant& shad
     for (uint32_t slot = 0; slot < all_slots.size(); ++slot) all_slots[slot] = slot;
   }
   const std::vector<uint32_t>& slots = one_mesh ? state.mesh_slots[*moved_mesh] : all_slots;
-  const size_t texels = texels_a_normal(gpu.precision);
+  const size_t texels = texels_per_normal(gpu.precision);
   parallel_for_chunks(slots.size(), [&](size_t begin, size_t end) {
     for (size_t k = begin; k < end && fits; ++k) {
       const uint32_t slot = slots[k];

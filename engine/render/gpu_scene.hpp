@@ -50,9 +50,10 @@ struct GpuSceneShape {
 struct RefitState;  // gpu_scene.cpp
 
 struct GpuScene {
-  // Every position on the GPU is stored relative to this point (see GpuPoint in gpu_layout.h): the
-  // centre of the scene's box, so that the split into hi and lo float parts covers the scene with
-  // the fewest bits; the world origin for float64 shaders and the absolute-coordinates variant.
+  // Every position on the GPU is stored relative to this point (see GpuPoint in gpu_layout.h):
+  // scene_anchor, the centre of the scene's box on a grid, so that the split into hi and lo float
+  // parts covers the scene with about the fewest bits; the world origin for float64 shaders and the
+  // absolute-coordinates variant.
   glm::dvec3 anchor{0.0};
   Precision precision = Precision::float32;
   // The largest distance from the anchor of a sphere's surface or a mesh vertex (0 without either).
@@ -100,9 +101,21 @@ struct GpuScene {
   std::vector<ObjectPrimitive> left_out;
   // What refit_in_place keeps from one call to the next (made at its first): the double positions,
   // the slots' and nodes' boxes, which slots each mesh's triangles hold, and the tree's parents, so
-  // that a later call redoes only a moved mesh's part.
-  std::shared_ptr<RefitState> refit_state;
-  // The items of each array the last refit_in_place rewrote, [first, end) (what an upload writes).
+  // that a later call redoes only a moved mesh's part. A copy of the scene starts without it (its
+  // first refit then redoes everything): two scenes never share it.
+  class RefitStateHandle {
+   public:
+    RefitStateHandle();
+    RefitStateHandle(const RefitStateHandle&);
+    RefitStateHandle& operator=(const RefitStateHandle&);
+    RefitStateHandle(RefitStateHandle&&) noexcept;
+    RefitStateHandle& operator=(RefitStateHandle&&) noexcept;
+    ~RefitStateHandle();  // these where RefitState is complete (gpu_scene.cpp)
+    std::unique_ptr<RefitState> state;
+  };
+  RefitStateHandle refit_state;
+  // The items of each array the last refit_in_place rewrote, [first, end): from the first to the
+  // last, what an upload writes (other meshes' items may lie between them).
   struct ItemRange {
     size_t first = SIZE_MAX, end = 0;
     void add(size_t item) { first = std::min(first, item), end = std::max(end, item + 1); }
@@ -110,7 +123,7 @@ struct GpuScene {
   };
   struct Rewritten {
     ItemRange vertices, slots, nodes;
-    bool spheres_and_planes = true;
+    bool mesh_alone = false;  // only one mesh's part: the spheres and planes left as they were
   };
   Rewritten rewritten;
 
@@ -164,6 +177,9 @@ GpuScene make_gpu_scene(const Scene& scene, const GpuSceneOptions& options = {},
 // shared a stored position no longer coincide.
 bool refit_in_place(GpuScene& gpu, const Scene& scene, const ShaderVariant& shader, const SceneExtent& extent,
                     std::optional<uint32_t> moved_mesh = std::nullopt);
+
+// Texels a slot's normal takes in GpuScene::normal_texels (VKRAY_TEXELS_PER_NORMAL_*).
+size_t texels_per_normal(Precision precision);
 
 // Every plane's normal_height for a camera at `origin` (see GpuPlane): `scene_planes` are the
 // scene's, in the same order as `planes`.

@@ -97,8 +97,10 @@ void Renderer::set_vertices(uint32_t mesh, std::span<const glm::dvec3> positions
       r.reset_timings();
       r.timings.bvh_build_ms = elapsed_ms(refit_start);
       r.timings.tree_refitted = true;
+      r.timings.refit_mesh_alone = r.moving->rewritten.mesh_alone;
       return;
     }
+    r.moving.reset();  // a refit that could not finish left its arrays half rewritten
     GpuScene gpu_scene = make_gpu_scene(r.host_scene, r.scene_options, r.options.shader, extent,
                                         r.tree ? std::optional<RefitSource>({*r.tree, r.hit_sources}) : std::nullopt);
     r.upload_scene(gpu_scene, r.host_scene);
@@ -106,7 +108,6 @@ void Renderer::set_vertices(uint32_t mesh, std::span<const glm::dvec3> positions
     r.choose_pipeline(gpu_scene, none);
     r.reset_timings();  // keeps the tree's time (and the structures'), which upload_scene set anew
     r.timings.tree_refitted = gpu_scene.refitted;
-    r.moving.reset();
     if (gpu_scene.tree) r.moving = std::move(gpu_scene);
   });
   r.timings.scene_update_ms = elapsed_ms(start);

@@ -49,10 +49,12 @@ struct RenderTimings {
   double longest_dispatch_ms = 0.0;  // GPU time of the longest (wall time where no timestamps)
   uint64_t unfinished_rays = 0;    // rays that ran out of the device's loop budget, finished on the CPU
   double cpu_finish_ms = 0.0;      // time spent finishing them
-  // set_vertices: its whole time (the scene converted, its tree refitted or built, the upload), and
-  // whether the tree kept its shape (refitted) or was built anew.
+  // set_vertices: its whole time (the scene converted, its tree refitted or built, the upload),
+  // whether the tree kept its shape (refitted) or was built anew, and whether only the moved mesh's
+  // part of it was redone (refit_in_place's mesh_alone).
   double scene_update_ms = 0.0;
   bool tree_refitted = false;
+  bool refit_mesh_alone = false;
   // A later engine call's times and counts added, for a call made of several (the walk and the
   // constructor's figures stay this one's).
   void add(const RenderTimings& later);
@@ -194,8 +196,10 @@ class Renderer {
   // vertex in its order (a deforming mesh: a skinned arm, cloth): the next call renders the moved
   // scene, exactly as a Renderer made from it would. Its tree keeps its shape and only its boxes are
   // recomputed (a refit) while the same triangles keep a non-zero area; else it is built anew. From
-  // the third call on, where the scene's box stays (the centre every stored position is relative to:
-  // an object moving inside a room's walls), only this mesh's part of the tree is redone and uploaded.
+  // the third call on, only this mesh's vertices, slots and the nodes above them are redone (and the
+  // span of each array from the first to the last of them uploaded) where the anchor stays (the
+  // centre of the scene's box, which an object moving inside a room's walls keeps; the world origin
+  // in double precision) and the mesh shares no vertex position with another mesh (refit_mesh_alone).
   // timings() then says which (tree_refitted) and what it took (scene_update_ms). Throws InputError
   // for a mesh out of range, a count other than the mesh's or a coordinate not finite or beyond
   // max_coordinate, the scene unchanged.

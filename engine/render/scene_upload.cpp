@@ -101,10 +101,10 @@ void Renderer::Impl::write_refitted(const GpuScene& gpu_scene) {
   const GpuScene::Rewritten& rewritten = gpu_scene.rewritten;
   write(primitives, gpu_scene.primitives, rewritten.slots);
   write(vertices, gpu_scene.vertices, rewritten.vertices);
-  write(normals, gpu_scene.normal_texels, rewritten.slots, gpu_scene.normal_texels.size() / gpu_scene.primitives.size());
+  write(normals, gpu_scene.normal_texels, rewritten.slots, texels_per_normal(gpu_scene.precision));
   write(bvh_nodes, gpu_scene.bvh_nodes, rewritten.nodes);
-  if (rewritten.spheres_and_planes) write(spheres, gpu_scene.spheres);
-  if (planes && rewritten.spheres_and_planes) {  // their offsets from the anchor (the heights above the camera are set per render)
+  if (!rewritten.mesh_alone) write(spheres, gpu_scene.spheres);
+  if (planes && !rewritten.mesh_alone) {  // their offsets from the anchor (the heights above the camera are set per render)
     gpu_planes = gpu_scene.planes;
     std::memcpy(planes->buffer.mapped, gpu_planes.data(), gpu_planes.size() * sizeof(gpu::GpuPlane));
   }

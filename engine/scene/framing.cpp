@@ -24,7 +24,7 @@ std::optional<FramingView> framing_view_from_name(std::string_view name) {
 
 Camera frame_scene(const Scene& scene, uint32_t width, uint32_t height, const FramingView& view) {
   if (finite_bounds(scene).empty()) throw InputError("nothing to frame: the scene has no mesh or sphere");
-  const glm::dvec3 centre = scene_anchor(scene);
+  const glm::dvec3 centre = scene_centre(scene);
   double radius = scene_radius(scene, centre);
   // A single point still needs a camera somewhere: one unit away.
   if (radius == 0.0) radius = 0.5;

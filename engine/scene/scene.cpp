@@ -235,12 +235,25 @@ Bounds finite_bounds(const Scene& scene) {
   return bounds;
 }
 
-glm::dvec3 scene_anchor(const Scene& scene) {
+glm::dvec3 scene_centre(const Scene& scene) {
   Bounds bounds = finite_bounds(scene);
   // Only a scene of planes alone has no bounds; its camera is then the natural origin. The camera
   // is otherwise left out, so a Renderer gives the same bits whatever camera it was built with.
   if (bounds.empty()) bounds.add(scene.camera.from);
   return 0.5 * (bounds.lower + bounds.upper);
+}
+
+glm::dvec3 scene_anchor(const Scene& scene) {
+  const glm::dvec3 centre = scene_centre(scene);
+  const Bounds bounds = finite_bounds(scene);
+  if (bounds.empty()) return centre;
+  const glm::dvec3 half = 0.5 * (bounds.upper - bounds.lower);
+  const double largest = std::max({half.x, half.y, half.z});
+  if (!(largest > 0.0)) return centre;
+  // A power of two: centre / spacing and the product back are exact, so the anchor is an exact
+  // multiple of it, the same on every machine.
+  const double spacing = std::ldexp(1.0, std::ilogb(largest) - 4);
+  return glm::round(centre / spacing) * spacing;
 }
 
 double scene_radius(const Scene& scene, const glm::dvec3& anchor) {

@@ -122,8 +122,14 @@ struct Bounds {
 // The box of the finite primitives: every sphere and mesh vertex (planes are infinite).
 Bounds finite_bounds(const Scene& scene);
 
-// The centre of finite_bounds: where the GPU's positions are stored from and the framed camera
-// looks; the camera for a scene of planes alone.
+// The centre of finite_bounds, where the framed camera looks; the camera for a scene of planes alone.
+glm::dvec3 scene_centre(const Scene& scene);
+
+// Where the GPU's positions are stored from: scene_centre rounded to a grid of spacing s = 2^(k - 4),
+// 2^k <= h < 2^(k+1) for h the box's largest half-size, so within s / 2 <= h / 32 of the centre on
+// each axis (the radius about it at most sqrt(3) / 32 of h longer). An object moving inside the box
+// moves its centre, if at all, seldom out of its grid cell: set_vertices then finds every other
+// object's stored positions as they were and redoes the moved one's part alone.
 glm::dvec3 scene_anchor(const Scene& scene);
 
 // The largest distance from `anchor` of a sphere's surface or a mesh vertex (0 without either).

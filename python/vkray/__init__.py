@@ -423,9 +423,10 @@ class _Caster:
         """Moves the vertices of mesh `mesh` (its mesh_id) to `positions`, an N x 3 array of the mesh's N
         vertices in its order (a skinned arm, cloth): the next call renders the moved scene, as a
         renderer made from it would. The tree keeps its shape and only its boxes are recomputed while
-        every triangle keeps a non-zero area, else it is built anew; where the scene's box stays (an
-        object moving within a room's walls), only this mesh's part is redone (timings: 'scene_update_ms',
-        'tree_refitted'). ValueError for a bad mesh, count or coordinate, the scene unchanged."""
+        every triangle keeps a non-zero area, else it is built anew; where the centre of the scene's box
+        stays (an object moving within a room's walls) and the mesh shares no vertex position with
+        another, only this mesh's part is redone (timings: 'scene_update_ms',
+        'tree_refitted', 'refit_mesh_alone'). ValueError for a bad mesh, count or coordinate, the scene unchanged."""
         if isinstance(mesh, bool) or not isinstance(mesh, (int, np.integer)) or not 0 <= mesh < 2**32:
             raise ValueError(f"mesh: expected a mesh_id (0 for the first mesh), got {mesh!r}")
         moved = _rows(positions, "positions", 3)
