@@ -235,17 +235,21 @@ Bounds finite_bounds(const Scene& scene) {
   return bounds;
 }
 
-glm::dvec3 scene_centre(const Scene& scene) {
-  Bounds bounds = finite_bounds(scene);
-  // Only a scene of planes alone has no bounds; its camera is then the natural origin. The camera
-  // is otherwise left out, so a Renderer gives the same bits whatever camera it was built with.
-  if (bounds.empty()) bounds.add(scene.camera.from);
-  return 0.5 * (bounds.lower + bounds.upper);
+namespace {
+
+// The centre of `bounds` (finite_bounds); the camera for a scene of planes alone, which has none. The
+// camera is otherwise left out, so a Renderer gives the same bits whatever camera it was built with.
+glm::dvec3 centre_of(const Bounds& bounds, const Scene& scene) {
+  return bounds.empty() ? scene.camera.from : 0.5 * (bounds.lower + bounds.upper);
 }
 
+}  // namespace
+
+glm::dvec3 scene_centre(const Scene& scene) { return centre_of(finite_bounds(scene), scene); }
+
 glm::dvec3 scene_anchor(const Scene& scene) {
-  const glm::dvec3 centre = scene_centre(scene);
-  const Bounds bounds = finite_bounds(scene);
+  const Bounds bounds = finite_bounds(scene);  // one pass over the vertices: set_vertices finds it every call
+  const glm::dvec3 centre = centre_of(bounds, scene);
   if (bounds.empty()) return centre;
   const glm::dvec3 half = 0.5 * (bounds.upper - bounds.lower);
   const double largest = std::max({half.x, half.y, half.z});
