@@ -65,10 +65,13 @@ using uvec4 = glm::uvec4;
 // the order's scattered writes of 16 bytes a ray took longer than the walk's reads all over the
 // caller's rays, 40 ms against 14 of a million rays' 70.)
 #define VKRAY_BINDING_RAY_ORDER 19       // storage buffer
+// With VKRAY_SPEC_MASKS: the masks of the spheres tested one by one, then of the planes, one a
+// texel (x; the tree's primitives carry theirs in GpuPrimitive).
+#define VKRAY_BINDING_APART_MASKS 20     // texels, RGBA32UI
 // The ray-query traversal's top-level acceleration structure (VKRAY_SEARCH_RAY_QUERY): in its
 // pipelines' descriptor sets alone, the last binding.
-#define VKRAY_BINDING_TOP_STRUCTURE 20
-#define VKRAY_BINDING_COUNT 21
+#define VKRAY_BINDING_TOP_STRUCTURE 21
+#define VKRAY_BINDING_COUNT 22
 
 // How the shader finds the nearest triangle or sphere (VKRAY_SPEC_SEARCH_MODE). Planes are
 // infinite: they stay outside the tree, in their own loop.
@@ -214,7 +217,11 @@ VKRAY_SHARED_FUNCTION uint direction_key(float x, float y, float z, uint bits) {
 // Occlusion queries (Renderer::occluded): a ray's walk stops at its first hit, whichever it is;
 // only whether it hit means anything then, not its depth or normal.
 #define VKRAY_SPEC_ANY_HIT 23
-#define VKRAY_SPEC_COUNT 24
+// The scene gives some mesh, sphere or plane a mask other than every bit (see Mask in
+// engine/scene/scene.hpp): a primitive counts only where its mask shares a bit with the call's ray
+// mask (RayGenParams.counts.w). Without, no mask is read or tested.
+#define VKRAY_SPEC_MASKS 24
+#define VKRAY_SPEC_COUNT 25
 #define VKRAY_STACK_REGISTERS_MAX 32
 
 #define VKRAY_SPHERE_STABLE 0               // Ray Tracing Gems ch. 7 (intersect.glsl)
@@ -289,6 +296,8 @@ VKRAY_CHECK_SIZE(GpuPlane, 64);
 //   Its unit geometric normal is in the normal buffer at the same slot, computed in double on the
 //   host so that needle triangles get an accurate one; the shader reads it only for the winner.
 // - Sphere: x = the vertex holding (centre, radius), w = VKRAY_PRIMITIVE_SPHERE.
+// Above the kind, w holds the primitive's mask (its mesh's, or the sphere's) from bit
+// VKRAY_PRIMITIVE_MASK_SHIFT: read with no other fetch where the scene has masks.
 // Primitives are stored in the order of the BVH's leaves, so a leaf is a contiguous range of slots.
 struct GpuPrimitive {
   uvec4 indices;
@@ -296,6 +305,8 @@ struct GpuPrimitive {
 VKRAY_CHECK_SIZE(GpuPrimitive, 16);
 #define VKRAY_PRIMITIVE_TRIANGLE 0u
 #define VKRAY_PRIMITIVE_SPHERE 1u
+#define VKRAY_PRIMITIVE_KIND_BITS 0xffu
+#define VKRAY_PRIMITIVE_MASK_SHIFT 8
 #define VKRAY_TEXELS_PER_POINT 2
 // A triangle's normal: (x, y, z, 0) in float32 shaders; in float64 shaders a GpuPoint holding the
 // doubles (x, y, z, 0), two texels.
@@ -358,9 +369,13 @@ struct RayGenParams {
   // Width, height, first row of this tile, rows in this tile. With RAY_INPUT the rays are laid out
   // as rows of `width` and `height` is the number of rays.
   uvec4 image;
-  uvec4 counts;  // read by the generic variant only: spheres, planes, triangle slots, search mode
+  // Spheres, planes, triangle slots and (w's low byte) the search mode, read by the generic variant
+  // only; in w above them, from bit VKRAY_RAY_MASK_SHIFT, the call's ray mask (VKRAY_SPEC_MASKS).
+  uvec4 counts;
 };
 VKRAY_CHECK_SIZE(RayGenParams, 128);
+#define VKRAY_SEARCH_MODE_BITS 0xffu
+#define VKRAY_RAY_MASK_SHIFT 8
 // VKRAY_RAY_INPUT_CALLER_DIRECTIONS: camera[5] holds the VKRAY_CALLER_* bits (x), and the mesh ids
 // of the first sphere tested one by one (z) and of the first plane (w), as HitSources has them.
 #define VKRAY_CALLER_WRITE_T 1u

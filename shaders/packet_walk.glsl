@@ -72,7 +72,7 @@ struct PacketPrimitive {
 PacketPrimitive prepare_packet_primitive(uint slot, Origin origin) {
   PacketPrimitive primitive;
   uvec4 record = FETCH(primitives, int(slot));
-  primitive.sphere = TREE_SPHERES && (!TREE_TRIANGLES || record.w == VKRAY_PRIMITIVE_SPHERE);
+  primitive.sphere = TREE_SPHERES && (!TREE_TRIANGLES || (record.w & VKRAY_PRIMITIVE_KIND_BITS) == VKRAY_PRIMITIVE_SPHERE);
   primitive.center_radius = TREE_SPHERES ? fetch_point(vertices, int(record.x)) : Point(vec4(0.0), vec4(0.0));
   if (TREE_TRIANGLES) {
     // Floats to double are exact, and so is each product of two of them (48 of 53 bits): every
@@ -208,8 +208,11 @@ void nearest_primitives_packet(Origin origin, vec3 dirs[VKRAY_PACKET_ROWS], inou
       uint count = (current & ((1u << VKRAY_BVH_LEAF_COUNT_BITS) - 1u)) + 1u;
       // Lanes past the leaf's end prepare its last primitive again: every lane has work, none reads
       // past the buffer.
-      PacketPrimitive mine = prepare_packet_primitive(first + min(lane, count - 1u), origin);
-      bool mine_missed = TREE_TRIANGLES && !mine.sphere && packet_misses_triangle(mine, packet_dirs);
+      uint mine_slot = first + min(lane, count - 1u);
+      PacketPrimitive mine = prepare_packet_primitive(mine_slot, origin);
+      // A primitive the call's mask hides is missed by every ray, as one the packet misses.
+      bool mine_missed = (TREE_TRIANGLES && !mine.sphere && packet_misses_triangle(mine, packet_dirs)) ||
+                         !slot_visible(mine_slot);
       // One line a slot, since a broadcast's lane must be a constant.
 #define VKRAY_TEST_LEAF_SLOT(k) \
   if (count > k && !subgroupBroadcast(mine_missed, k)) test_packet_primitive(VKRAY_BROADCAST_PRIMITIVE(mine, k), first + k, origin, dirs, double_dirs, t_max, slots)

@@ -20,6 +20,7 @@ layout(constant_id = VKRAY_SPEC_LOOP_BUDGET) const uint LOOP_BUDGET = 0;
 layout(constant_id = VKRAY_SPEC_GENERIC) const bool GENERIC = false;
 layout(constant_id = VKRAY_SPEC_STACK_REGISTERS) const uint STACK_REGISTERS = 0;
 layout(constant_id = VKRAY_SPEC_ANY_HIT) const bool ANY_HIT = false;
+layout(constant_id = VKRAY_SPEC_MASKS) const bool MASKS = false;
 // What the tree may hold: in the generic variant, both kinds.
 const bool TREE_TRIANGLES = GENERIC || TREE_HAS_TRIANGLES;
 const bool TREE_SPHERES = GENERIC || TREE_HAS_SPHERES;
@@ -49,6 +50,17 @@ GEOMETRY_BUFFER(VKRAY_BINDING_VERTICES, GeometryTexel, GeometrySampler, vertices
 GEOMETRY_BUFFER(VKRAY_BINDING_NORMALS, GeometryTexel, GeometrySampler, normals);    // by primitive slot
 GEOMETRY_BUFFER(VKRAY_BINDING_BVH_BOUNDS, vec4, samplerBuffer, bvh_bounds);        // GpuBvhNode: 4 texels
 GEOMETRY_BUFFER(VKRAY_BINDING_BVH_LINKS, uvec4, usamplerBuffer, bvh_links);        // the same, as uints
+GEOMETRY_BUFFER(VKRAY_BINDING_APART_MASKS, uvec4, usamplerBuffer, apart_masks);    // MASKS only
+
+// The call's ray mask (RayGenParams.counts.w), set by main before any search. A primitive counts
+// only where its mask shares a bit with it: tested after the intersection, which leaves every
+// walk's arithmetic as it is without masks.
+uint ray_mask = 0xffu;
+bool mask_hits(uint mask) { return !MASKS || (mask & ray_mask) != 0u; }
+// The primitive in `slot` (its record's mask), and sphere `index` tested one by one or plane
+// `index` after them (VKRAY_BINDING_APART_MASKS).
+bool slot_visible(uint slot) { return !MASKS || mask_hits(FETCH(primitives, int(slot)).w >> VKRAY_PRIMITIVE_MASK_SHIFT); }
+bool apart_visible(uint index) { return !MASKS || mask_hits(FETCH(apart_masks, int(index)).x); }
 
 // A GpuPoint as stored: hi and lo parts in float32 shaders, the position and w in float64 shaders.
 struct Point {
@@ -140,7 +152,7 @@ void test_triangle(RayFrame frame, Origin origin, real3 dir, uint slot, inout Sl
   real3 v0, v1, v2;
   fetch_triangle(int(slot), origin, v0, v1, v2);
   real t = intersect_triangle(frame, dir, v0, v1, v2, hit.t);
-  if (t < hit.t) {
+  if (t < hit.t && slot_visible(slot)) {
     hit.t = t;
     hit.slot = slot;
   }
@@ -150,7 +162,7 @@ void test_triangle(RayFrame frame, Origin origin, real3 dir, uint slot, inout Sl
 bool is_sphere(int slot) {
   if (!TREE_TRIANGLES) return true;
   if (!TREE_SPHERES) return false;
-  return FETCH(primitives, slot).w == VKRAY_PRIMITIVE_SPHERE;
+  return (FETCH(primitives, slot).w & VKRAY_PRIMITIVE_KIND_BITS) == VKRAY_PRIMITIVE_SPHERE;
 }
 
 // One primitive slot. Specialized on what the tree holds: a tree of triangles alone has no sphere
@@ -161,7 +173,7 @@ void test_primitive(RayFrame frame, Origin origin, real3 dir, uint slot, inout S
   if (TREE_SPHERES && sphere) {
     real3 normal;
     real t = intersect_sphere_point(fetch_sphere(int(slot)), origin, dir, hit.t, normal);
-    if (t < hit.t) {
+    if (t < hit.t && slot_visible(slot)) {
       hit.t = t;
       hit.slot = slot;
     }
@@ -187,7 +199,7 @@ PrimitiveHit nearest_primitive_brute_force(RayFrame frame, Origin origin, real3 
   for (uint i = 0; i < sphere_count; ++i) {
     real3 normal;
     real t = intersect_sphere_point(fetch_point(spheres, int(i)), origin, dir, result.t, normal);
-    if (t < result.t) {
+    if (t < result.t && apart_visible(i)) {
       result.t = t;
       result.normal = normal;
       result.id = VKRAY_HIT_SPHERE_APART | i;

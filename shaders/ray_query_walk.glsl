@@ -42,7 +42,9 @@ PrimitiveHit nearest_primitive_ray_query(RayFrame frame, Origin origin, vec3 dir
   rayQueryEXT query;
   // The structures hold the hi parts of positions relative to the anchor, as float32: the query's
   // ray starts at the origin rounded to them. Its far end stays finite (3.4e38 for no hit yet).
-  rayQueryInitializeEXT(query, top_structure, gl_RayFlagsNoneEXT, 0xffu, origin.hi + origin.lo, 0.0, dir,
+  // The device's instance masks are the meshes' (engine/vulkan/acceleration_structures.hpp): it
+  // proposes no triangle the call's mask hides; a sphere's own mask is tested with it.
+  rayQueryInitializeEXT(query, top_structure, gl_RayFlagsNoneEXT, ray_mask, origin.hi + origin.lo, 0.0, dir,
                         min(t_max, 3.4e38));
   uint iterations = 0;
   while (next_candidate(query, iterations, unfinished)) {
@@ -55,7 +57,7 @@ PrimitiveHit nearest_primitive_ray_query(RayFrame frame, Origin origin, vec3 dir
     test_primitive(frame, origin, dir, slot, own);
     if (own.slot != no_primitive && own.t < hit.t) hit = own;
     const bool triangle = rayQueryGetIntersectionTypeEXT(query, false) == gl_RayQueryCandidateIntersectionTriangleEXT;
-    if (triangle && own.slot == no_primitive) {
+    if (triangle && own.slot == no_primitive && slot_visible(slot)) {
       // The device's triangle test hit what vkray's rejects: the ray passes within rounding of an
       // edge. At an edge shared with a triangle vkray's test would take, the device may never
       // propose that one (its own tie-break, or none: lavapipe's is not watertight), so the
@@ -88,7 +90,7 @@ PrimitiveHit nearest_primitive_ray_query(RayFrame frame, Origin origin, vec3 dir
     // that culls boxes by the far end alone (lavapipe) would walk every node up to the hit again.
     const float window = exp2(-12.0) * (length(origin.hi) / length(dir) + hit.t);
     const float start = max(hit.t - window, 0.0);
-    rayQueryInitializeEXT(query, top_structure, gl_RayFlagsNoneEXT, 0xffu, origin.hi + origin.lo + start * dir,
+    rayQueryInitializeEXT(query, top_structure, gl_RayFlagsNoneEXT, ray_mask, origin.hi + origin.lo + start * dir,
                           0.0, dir, min(hit.t + window, 3.4e38) - start);
     while (next_candidate(query, iterations, unfinished)) test_primitive(frame, origin, dir, candidate_slot(query), hit);
   }

@@ -104,7 +104,7 @@ const bool PACKET_WALK = false;
 // bounds the walk.
 PrimitiveHit nearest_primitive(Origin origin, real3 dir, real t_max, uvec4 counts) {
   RayFrame frame = make_ray_frame(dir);
-  uint search_mode = GENERIC ? counts.w : SEARCH_MODE;
+  uint search_mode = GENERIC ? counts.w & VKRAY_SEARCH_MODE_BITS : SEARCH_MODE;
   uint sphere_count = GENERIC ? counts.x : SPHERE_COUNT;
   if (search_mode == VKRAY_SEARCH_BRUTE_FORCE) {
     return nearest_primitive_brute_force(frame, origin, dir, t_max, sphere_count, GENERIC ? counts.z : TRIANGLE_SLOTS);
@@ -125,6 +125,7 @@ PrimitiveHit nearest_primitive(Origin origin, real3 dir, real t_max, uvec4 count
 const uint RAYS = PACKET_WALK ? VKRAY_PACKET_ROWS : 1u;
 
 void main() {
+  if (MASKS) ray_mask = params.counts.w >> VKRAY_RAY_MASK_SHIFT;
   uint width = params.image.x;
   uint height = params.image.y;
   // Where this invocation's first ray goes, relative to the tile, and the step to its next one.
@@ -259,6 +260,7 @@ void main() {
     // surfaces: the plane wins; see gpu_layout.h).
     primitive_t_max[r] = t_best[r];
     uint plane_count = GENERIC ? params.counts.y : PLANE_COUNT;
+    uint spheres_apart = GENERIC ? params.counts.x : SPHERE_COUNT;  // whose masks come before the planes'
     for (uint i = 0; i < plane_count; ++i) {
       // The height above the camera, set by the host per render (see GpuPlane). Plain float
       // coordinates subtract the camera from the anchored offset instead, and so does each given
@@ -277,7 +279,7 @@ void main() {
       if (GIVEN_ORIGINS) height += plane.lo.w - dot(plane_normal, origin.lo);
 #endif
       real t = intersect_plane(plane_normal, height, dir, t_best[r]);
-      if (t < t_best[r]) {
+      if (t < t_best[r] && apart_visible(spheres_apart + i)) {
         t_best[r] = t;
         normal[r] = dot(plane_normal, dir) > 0.0 ? -plane_normal : plane_normal;
         primitive_t_max[r] = VKRAY_PRIMITIVE_T_MAX(t, abs(dot(plane_normal, dir)));

@@ -249,7 +249,7 @@ TEST(SetVertices, OneMeshMovedWithinTheScenesBoxIsRedoneAlone) {
     auto corners = [](const GpuScene& g) {
       std::vector<std::array<gpu::GpuPoint, 3>> points;
       for (const gpu::GpuPrimitive& record : g.primitives) {
-        const bool sphere = record.indices.w == VKRAY_PRIMITIVE_SPHERE;  // its centre and radius alone
+        const bool sphere = (record.indices.w & VKRAY_PRIMITIVE_KIND_BITS) == VKRAY_PRIMITIVE_SPHERE;  // its centre and radius alone
         points.push_back({g.vertices[record.indices.x], sphere ? gpu::GpuPoint{} : g.vertices[record.indices.y],
                           sphere ? gpu::GpuPoint{} : g.vertices[record.indices.z]});
       }

@@ -127,9 +127,9 @@ std::string EnvelopeReport::describe() const {
 }
 
 EnvelopeReport check_against_reference(const Scene& scene, const Frame& frame, uint32_t row_step,
-                                       const std::vector<ObjectPrimitive>* hit_ids) {
+                                       const std::vector<ObjectPrimitive>* hit_ids, Mask ray_mask) {
   const uint32_t width = frame.width, height = frame.height;
-  const ReferenceScene reference(scene);
+  const ReferenceScene reference(scene, ray_mask);
   const CameraBasis camera = make_camera_basis(scene.camera, width, height);
   const bool pinhole = scene.camera.projection == Projection::perspective;
   const double radius = reach_radius(scene, scene_anchor(scene));

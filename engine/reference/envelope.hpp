@@ -24,8 +24,11 @@ struct EnvelopeReport {
 // Renders the reference for `scene` at the frame's size and checks every pixel of `frame`, or
 // those of every row_step-th row (for images too large to trace five times on the CPU).
 // `hit_ids`, when given, holds what each pixel's ray hit (ObjectPrimitive): it must be the
-// reference's where all five samples hit the same primitive, one of theirs elsewhere.
+// reference's where all five samples hit the same primitive, one of theirs elsewhere. `ray_mask`:
+// the frame's rays' (Renderer::set_ray_mask); the envelope's error scale stays the whole scene's,
+// whose anchor the GPU stores every position from.
 EnvelopeReport check_against_reference(const Scene& scene, const Frame& frame, uint32_t row_step = 1,
-                                       const std::vector<ObjectPrimitive>* hit_ids = nullptr);
+                                       const std::vector<ObjectPrimitive>* hit_ids = nullptr,
+                                       Mask ray_mask = every_mask_bit);
 
 }  // namespace vkray

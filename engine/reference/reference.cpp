@@ -69,11 +69,16 @@ double intersect_triangle(const glm::dvec3& v0, const glm::dvec3& v1, const glm:
   return (t > 0.0 && t < t_max) ? t : t_max;
 }
 
-ReferenceScene::ReferenceScene(const Scene& scene) : spheres_(scene.spheres), planes_(scene.planes) {
+ReferenceScene::ReferenceScene(const Scene& scene, Mask ray_mask)
+    : spheres_(scene.spheres), planes_(scene.planes), ray_mask_(ray_mask) {
   uint32_t index = 0;
   std::vector<Box> boxes;
   for (const auto& mesh : scene.meshes) {
     first_triangle_of_mesh_.push_back(index);
+    if (!mask_hits(mesh.mask, ray_mask)) {
+      index += static_cast<uint32_t>(mesh.triangles.size());
+      continue;
+    }
     for (const auto& corners : mesh.triangles) {
       const glm::dvec3& v0 = mesh.positions[corners[0]];
       const glm::dvec3& v1 = mesh.positions[corners[1]];
@@ -98,6 +103,7 @@ ReferenceScene::ReferenceScene(const Scene& scene) : spheres_(scene.spheres), pl
   auto below = [&](const glm::dvec3& v) { return glm::dvec3(step(v.x, -1), step(v.y, -1), step(v.z, -1)); };
   auto above = [&](const glm::dvec3& v) { return glm::dvec3(step(v.x, 1), step(v.y, 1), step(v.z, 1)); };
   for (uint32_t i = 0; i < spheres_.size(); ++i) {
+    if (!mask_hits(spheres_[i].mask, ray_mask)) continue;
     tree_entries_.push_back({PrimitiveKind::sphere, i});
     boxes.push_back({below(spheres_[i].center - spheres_[i].radius), above(spheres_[i].center + spheres_[i].radius)});
   }
@@ -206,6 +212,7 @@ ReferenceHit ReferenceScene::trace_with(const glm::dvec3& origin, const glm::dve
   ReferenceHit plane_hit;
   plane_hit.t = t_max;
   for (uint32_t i = 0; i < planes_.size(); ++i) {
+    if (!mask_hits(planes_[i].mask, ray_mask_)) continue;
     const double t = intersect_plane(planes_[i].normal, planes_[i].point, origin, dir, plane_hit.t);
     if (t < plane_hit.t) plane_hit = {t, planes_[i].normal, PrimitiveKind::plane, i};
   }
@@ -213,7 +220,9 @@ ReferenceHit ReferenceScene::trace_with(const glm::dvec3& origin, const glm::dve
   hit.t = plane_hit.kind != PrimitiveKind::none ? VKRAY_PRIMITIVE_T_MAX(plane_hit.t, std::abs(glm::dot(plane_hit.normal, dir)))
                                                 : t_max;
   if (brute_force) {
-    for (uint32_t i = 0; i < spheres_.size(); ++i) test_sphere(i, origin, dir, hit);
+    for (uint32_t i = 0; i < spheres_.size(); ++i) {
+      if (mask_hits(spheres_[i].mask, ray_mask_)) test_sphere(i, origin, dir, hit);
+    }
     for (const auto& triangle : triangles_) test_triangle(triangle, origin, dir, hit);
   } else if (!nodes_.empty()) {
     nearest_in_tree(origin, dir, hit);

@@ -40,7 +40,9 @@ struct ReferenceHit {
 
 class ReferenceScene {
  public:
-  explicit ReferenceScene(const Scene& scene);
+  // The scene as rays with `ray_mask` see it: what shares no bit of it is left out (see Mask),
+  // numbered as in the whole scene.
+  explicit ReferenceScene(const Scene& scene, Mask ray_mask = every_mask_bit);
   // The nearest hit before `t_max` (a miss where there is none). Among triangles at exactly the same
   // distance the lowest index wins, so the tree and brute force agree on the triangle, not only on
   // the distance.
@@ -66,8 +68,9 @@ class ReferenceScene {
   ReferenceHit trace_with(const glm::dvec3& origin, const glm::dvec3& dir, double t_max, bool brute_force) const;
 
   std::vector<uint32_t> first_triangle_of_mesh_;  // in the numbering of ReferenceHit::index
-  std::vector<Sphere> spheres_;
+  std::vector<Sphere> spheres_;  // all of them, those the mask leaves out too (their index is their place)
   std::vector<Plane> planes_;
+  Mask ray_mask_;
   std::vector<Triangle> triangles_;  // zero-area triangles left out: no ray can hit them
   // The BVH over triangles and spheres (planes are infinite: always tested one by one).
   std::vector<TreeEntry> tree_entries_;           // in leaf order

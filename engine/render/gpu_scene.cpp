@@ -22,6 +22,9 @@ namespace {
 
 glm::vec4 to_float4(const glm::dvec3& v, double w = 0.0) { return glm::vec4(glm::dvec4(v, w)); }
 
+// GpuPrimitive's w: the primitive's kind, its mask above it.
+uint32_t primitive_word(uint32_t kind, Mask mask) { return kind | uint32_t{mask} << VKRAY_PRIMITIVE_MASK_SHIFT; }
+
 // `value` (relative to the anchor) as the shader of `precision` reads it: see GpuPoint.
 gpu::GpuPoint encode_point(const glm::dvec4& value, Precision precision) {
   gpu::GpuPoint point;
@@ -251,7 +254,8 @@ void lay_out_for_ray_queries(GpuScene& gpu, const Scene& scene, std::vector<Enco
   for (size_t k : morton_order(centres)) {
     const Sphere& sphere = scene.spheres[k];
     const glm::dvec3 centre_offset = sphere.center - gpu.anchor;
-    gpu.primitives.push_back(gpu::GpuPrimitive{glm::uvec4(vertex_table.add(centre_offset, sphere.radius), 0, 0, VKRAY_PRIMITIVE_SPHERE)});
+    gpu.primitives.push_back(gpu::GpuPrimitive{
+        glm::uvec4(vertex_table.add(centre_offset, sphere.radius), 0, 0, primitive_word(VKRAY_PRIMITIVE_SPHERE, sphere.mask))});
     append_normal(gpu.normal_texels, glm::dvec3(0.0), gpu.precision);
     gpu.hit_sources.slots.push_back({gpu.hit_sources.first_sphere_object + static_cast<uint32_t>(k), static_cast<uint32_t>(k)});
     const FloatBox box = widened(sphere_box(centre_offset, sphere.radius));
@@ -262,9 +266,10 @@ void lay_out_for_ray_queries(GpuScene& gpu, const Scene& scene, std::vector<Enco
 
 // What the scene's counts decide (GpuSceneShape), for plan_gpu_scene before anything is built and
 // for make_gpu_scene with the triangles it keeps: one set of decisions, so the two agree.
-GpuSceneShape shape_for_counts(size_t triangles, size_t spheres, size_t planes, const GpuSceneOptions& options) {
+GpuSceneShape shape_for_counts(size_t triangles, size_t spheres, size_t planes, bool masks, const GpuSceneOptions& options) {
   GpuSceneShape shape;
   shape.planes = static_cast<uint32_t>(planes);
+  shape.masks = masks;
   shape.search = options.search == PrimitiveSearch::automatic ? choose_search(triangles, spheres, options.packet_walk)
                                                               : options.search;
   if (triangles == 0 && spheres == 0) shape.search = PrimitiveSearch::brute_force;
@@ -286,7 +291,7 @@ GpuSceneShape shape_for_counts(size_t triangles, size_t spheres, size_t planes, 
 }  // namespace
 
 GpuSceneShape plan_gpu_scene(const Scene& scene, const GpuSceneOptions& options) {
-  return shape_for_counts(scene.triangle_count(), scene.spheres.size(), scene.planes.size(), options);
+  return shape_for_counts(scene.triangle_count(), scene.spheres.size(), scene.planes.size(), scene.has_masks(), options);
 }
 
 GpuScene make_gpu_scene(const Scene& scene, const GpuSceneOptions& options, const ShaderVariant& shader,
@@ -318,15 +323,21 @@ GpuScene make_gpu_scene(const Scene& scene, const GpuSceneOptions& options, cons
       }
       std::array<uint32_t, 3> index;
       for (size_t c = 0; c < 3; ++c) stored[triangle.vertex[c]] = index[c] = vertex_table.index(triangle.v[c]);
-      const gpu::GpuPrimitive record{glm::uvec4(index[0], index[1], index[2], VKRAY_PRIMITIVE_TRIANGLE)};
+      const gpu::GpuPrimitive record{glm::uvec4(index[0], index[1], index[2], primitive_word(VKRAY_PRIMITIVE_TRIANGLE, mesh.mask))};
       triangles.push_back({record, triangle.normal, triangle.box(), {mesh_index, triangle_index}});
     }
   }
   gpu.triangle_count = static_cast<uint32_t>(triangles.size());
-  const GpuSceneShape shape = shape_for_counts(triangles.size(), scene.spheres.size(), scene.planes.size(), options);
+  const GpuSceneShape shape =
+      shape_for_counts(triangles.size(), scene.spheres.size(), scene.planes.size(), scene.has_masks(), options);
   gpu.search = shape.search;
   gpu.tree_has_triangles = shape.tree_has_triangles;
   gpu.tree_has_spheres = shape.tree_has_spheres;
+  gpu.masks = shape.masks;
+  if (gpu.masks) {
+    for (uint32_t k = 0; k < shape.spheres_apart; ++k) gpu.apart_masks.emplace_back(scene.spheres[k].mask, 0, 0, 0);
+    for (const Plane& plane : scene.planes) gpu.apart_masks.emplace_back(plane.mask, 0, 0, 0);
+  }
 
   if (gpu.search == PrimitiveSearch::brute_force) {
     for (const auto& sphere : scene.spheres) gpu.spheres.push_back({encode(sphere.center - gpu.anchor, sphere.radius)});
@@ -354,7 +365,7 @@ GpuScene make_gpu_scene(const Scene& scene, const GpuSceneOptions& options, cons
   for (uint32_t k = 0; k < (spheres_apart ? 0 : scene.spheres.size()); ++k) {
     const Sphere& sphere = scene.spheres[k];
     const glm::dvec3 centre = sphere.center - gpu.anchor;
-    const gpu::GpuPrimitive record{glm::uvec4(vertex_table.add(centre, sphere.radius), 0, 0, VKRAY_PRIMITIVE_SPHERE)};
+    const gpu::GpuPrimitive record{glm::uvec4(vertex_table.add(centre, sphere.radius), 0, 0, primitive_word(VKRAY_PRIMITIVE_SPHERE, sphere.mask))};
     unordered.push_back({record, glm::dvec3(0.0), sphere_box(centre, sphere.radius), {gpu.hit_sources.first_sphere_object + k, k}});
   }
   if (spheres_apart) {
@@ -499,7 +510,7 @@ bool refit_in_place(GpuScene& gpu, const Scene& scene, const ShaderVariant& shad
       const uint32_t slot = slots[k];
       const ObjectPrimitive source = gpu.hit_sources.slots[slot];
       gpu::GpuPrimitive& record = gpu.primitives[slot];
-      if (record.indices.w == VKRAY_PRIMITIVE_SPHERE) {
+      if ((record.indices.w & VKRAY_PRIMITIVE_KIND_BITS) == VKRAY_PRIMITIVE_SPHERE) {
         const Sphere& sphere = scene.spheres[source.primitive];
         const glm::dvec3 centre = sphere.center - gpu.anchor;
         gpu.vertices[record.indices.x] = encode_point(glm::dvec4(centre, sphere.radius), gpu.precision);
@@ -514,7 +525,7 @@ bool refit_in_place(GpuScene& gpu, const Scene& scene, const ShaderVariant& shad
         fits = false;
         break;
       }
-      record.indices = glm::uvec4(triangle.vertex[0], triangle.vertex[1], triangle.vertex[2], VKRAY_PRIMITIVE_TRIANGLE);
+      record.indices = glm::uvec4(triangle.vertex[0], triangle.vertex[1], triangle.vertex[2], record.indices.w);
       write_normal(gpu.normal_texels.data() + slot * texels, triangle.normal, gpu.precision);
       state.slot_box[slot] = triangle.box();
     }
@@ -573,7 +584,8 @@ GpuSceneShape GpuScene::shape() const {
           static_cast<uint32_t>(planes.size()),
           brute_force_triangle_slots(),
           tree_has_triangles,
-          tree_has_spheres};
+          tree_has_spheres,
+          masks};
 }
 
 void set_plane_heights(std::vector<gpu::GpuPlane>& planes, const std::vector<Plane>& scene_planes,
@@ -584,9 +596,10 @@ void set_plane_heights(std::vector<gpu::GpuPlane>& planes, const std::vector<Pla
   }
 }
 
-glm::uvec4 run_time_counts(const GpuScene& scene) {
+glm::uvec4 run_time_counts(const GpuScene& scene, Mask ray_mask) {
   return {static_cast<uint32_t>(scene.spheres.size()), static_cast<uint32_t>(scene.planes.size()),
-          scene.brute_force_triangle_slots(), search_info(scene.search).shader_mode};
+          scene.brute_force_triangle_slots(),
+          search_info(scene.search).shader_mode | uint32_t{ray_mask} << VKRAY_RAY_MASK_SHIFT};
 }
 
 bool needs_lo_parts(const glm::dvec3& anchor, double radius, const glm::dvec3& origin) {

@@ -44,6 +44,7 @@ struct GpuSceneShape {
   uint32_t brute_force_triangle_slots = 0;
   bool tree_has_triangles = false;
   bool tree_has_spheres = false;
+  bool masks = false;  // Scene::has_masks (VKRAY_SPEC_MASKS)
   bool operator==(const GpuSceneShape&) const = default;
 };
 
@@ -72,6 +73,10 @@ struct GpuScene {
   // spheres and padding).
   std::vector<glm::vec4> normal_texels;
   std::vector<gpu::GpuBvhNode> bvh_nodes;  // empty without the tree
+  // Where the scene has masks (Scene::has_masks): the masks of `spheres`, then of `planes`, a texel
+  // each (VKRAY_BINDING_APART_MASKS); the primitives carry theirs. Empty without.
+  bool masks = false;
+  std::vector<glm::uvec4> apart_masks;
   // Ray queries: each mesh's triangles are the consecutive slots [first, first + count), in Morton
   // order of their centroids (lavapipe's builder makes far better structures from ordered input:
   // the bunny at 1920x1080 traced 0.65 s a frame so against 72-86 s in the OBJ's order); the
@@ -190,8 +195,9 @@ void set_plane_heights(std::vector<gpu::GpuPlane>& planes, const std::vector<Pla
 // normalized in double, the end of its range (+infinity for none).
 gpu::GpuRay encode_ray(const glm::dvec3& origin, const glm::dvec3& direction, double range_end,
                        const glm::dvec3& anchor, Precision precision);
-// RayGenParams.counts: what the generic shader variant reads instead of specialization constants.
-glm::uvec4 run_time_counts(const GpuScene& scene);
+// RayGenParams.counts: what the generic shader variant reads instead of specialization constants,
+// and the rays' mask.
+glm::uvec4 run_time_counts(const GpuScene& scene, Mask ray_mask);
 
 // Whether a float32 camera-relative shader must add the lo parts of positions for a camera at
 // `origin`: only while the camera is within 2 radii of the anchor. Farther, everything is at least

@@ -108,6 +108,7 @@ void Renderer::Impl::prepare_tile(uint32_t width, uint32_t rows, AovSet aovs, co
   resources.buffers[VKRAY_BINDING_HITS] = output(tile.hits);
   resources.texel_views[VKRAY_BINDING_BVH_BOUNDS] = floats(bvh_nodes);
   resources.texel_views[VKRAY_BINDING_BVH_LINKS] = uints(bvh_nodes);
+  resources.texel_views[VKRAY_BINDING_APART_MASKS] = uints(apart_masks);
   // The same buffers whole, for the storage-geometry variant (pipeline->binding_type picks which
   // one a binding takes).
   auto whole = [&](const std::optional<TexelBuffer>& texels) {
@@ -116,7 +117,8 @@ void Renderer::Impl::prepare_tile(uint32_t width, uint32_t rows, AovSet aovs, co
   for (const auto& [binding, texels] : {std::pair{VKRAY_BINDING_SPHERES, &spheres}, {VKRAY_BINDING_PLANES, &planes},
                                         {VKRAY_BINDING_PRIMITIVES, &primitives}, {VKRAY_BINDING_VERTICES, &vertices},
                                         {VKRAY_BINDING_NORMALS, &normals}, {VKRAY_BINDING_BVH_BOUNDS, &bvh_nodes},
-                                        {VKRAY_BINDING_BVH_LINKS, &bvh_nodes}, {VKRAY_BINDING_RAYS, &tile.rays}}) {
+                                        {VKRAY_BINDING_BVH_LINKS, &bvh_nodes}, {VKRAY_BINDING_RAYS, &tile.rays},
+                                        {VKRAY_BINDING_APART_MASKS, &apart_masks}}) {
     resources.buffers[binding] = whole(*texels);
   }
   resources.buffers[VKRAY_BINDING_DEPTH] = output(tile.depth);

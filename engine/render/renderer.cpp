@@ -81,6 +81,17 @@ void Renderer::Impl::choose_pipeline(const GpuScene& gpu_scene, std::optional<Ra
   }
 }
 
+void Renderer::set_ray_mask(Mask mask) {
+  if (mask == 0) throw InputError("mask: 0 shares no bit with any object's, so its rays would hit nothing; give 1..255");
+  Impl& r = *impl_;
+  if (mask == r.ray_mask) return;
+  r.ray_mask = mask;
+  r.counts.w = (r.counts.w & VKRAY_SEARCH_MODE_BITS) | uint32_t{mask} << VKRAY_RAY_MASK_SHIFT;
+  r.reference.reset();  // made again for this mask where a ray needs it
+}
+
+Mask Renderer::ray_mask() const { return impl_->ray_mask; }
+
 void Renderer::set_vertices(uint32_t mesh, std::span<const glm::dvec3> positions) {
   Impl& r = *impl_;
   const auto start = Clock::now();

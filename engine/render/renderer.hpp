@@ -192,6 +192,13 @@ class Renderer {
   // timings().pipeline_ms; the call timings its runs left are cleared.
   void prepare_pipelines(const Camera& camera, uint32_t width, uint32_t height);
 
+  // The mask of every later call's rays (see Mask): a ray hits only the meshes, spheres and planes
+  // whose mask shares a bit with it; every bit by default. Where no object of the scene has a mask
+  // the shaders test none, and any mask sees everything. Throws InputError for 0, which would see
+  // nothing.
+  void set_ray_mask(Mask mask);
+  Mask ray_mask() const;
+
   // Moves the vertices of mesh `mesh` (the scene's meshes[mesh], its mesh_id) to `positions`, one a
   // vertex in its order (a deforming mesh: a skinned arm, cloth): the next call renders the moved
   // scene, exactly as a Renderer made from it would. Its tree keeps its shape and only its boxes are

@@ -105,11 +105,12 @@ struct Renderer::Impl {
   std::optional<GpuScene> moving;
   glm::dvec3 anchor{0.0};
   double scene_radius = 0.0;  // GpuScene::radius
-  glm::uvec4 counts{0};  // RayGenParams.counts
+  glm::uvec4 counts{0};  // RayGenParams.counts, the ray mask in them
+  Mask ray_mask = every_mask_bit;  // set_ray_mask's
   // Bound wherever the scene lacks a primitive type or an output is off.
   GpuBuffer placeholder;
   TexelBuffer placeholder_texels;
-  std::optional<TexelBuffer> spheres, planes, primitives, vertices, normals, bvh_nodes;
+  std::optional<TexelBuffer> spheres, planes, primitives, vertices, normals, bvh_nodes, apart_masks;
   std::optional<AccelerationStructures> structures;  // the ray-query traversal's
   HitSources hit_sources;
   // hit_sources.slots as the shader reads them (VKRAY_BINDING_HIT_SOURCES), made by the first
@@ -121,7 +122,7 @@ struct Renderer::Impl {
   std::vector<Plane> scene_planes;
   SceneStats stats;
   // The scene on the host: the surface outputs read its meshes, and rays the device leaves
-  // unfinished (a loop budget) are traced by a reference made from it.
+  // unfinished (a loop budget) are traced by a reference made from it, for rays of `ray_mask`.
   Scene host_scene;
   std::optional<ReferenceScene> reference;
   std::optional<RaycastPipeline> pipeline;

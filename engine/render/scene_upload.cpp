@@ -50,6 +50,7 @@ void Renderer::Impl::upload_scene(const GpuScene& gpu_scene, const Scene& scene)
                               : vk::BufferUsageFlags{});
   normals = upload(gpu_scene.normal_texels, "triangle normals");
   bvh_nodes = upload(gpu_scene.bvh_nodes, "BVH nodes");
+  apart_masks = upload(gpu_scene.apart_masks, "masks");
   hit_sources = gpu_scene.hit_sources;
   hit_source_table.reset();
   stats = SceneStats{gpu_scene.triangle_count, static_cast<uint32_t>(scene.spheres.size()),
@@ -61,7 +62,9 @@ void Renderer::Impl::upload_scene(const GpuScene& gpu_scene, const Scene& scene)
     input.vertex_count = static_cast<uint32_t>(gpu_scene.vertices.size());
     input.vertex_stride = sizeof(gpu::GpuPoint);
     for (const auto& mesh : gpu_scene.structure_meshes) {
-      input.meshes.push_back({mesh.first, mesh.count});
+      // The mesh's mask, as each of its triangles' records carries it.
+      const auto mask = static_cast<uint8_t>(gpu_scene.primitives[mesh.first].indices.w >> VKRAY_PRIMITIVE_MASK_SHIFT);
+      input.meshes.push_back({mesh.first, mesh.count, mask});
       for (uint32_t slot = mesh.first; slot < mesh.first + mesh.count; ++slot) {
         const glm::uvec4& record = gpu_scene.primitives[slot].indices;
         input.triangles.push_back({record.x, record.y, record.z});
@@ -77,7 +80,7 @@ void Renderer::Impl::upload_scene(const GpuScene& gpu_scene, const Scene& scene)
   if (&host_scene != &scene) host_scene = scene;
   anchor = gpu_scene.anchor;
   scene_radius = gpu_scene.radius;
-  counts = run_time_counts(gpu_scene);
+  counts = run_time_counts(gpu_scene, ray_mask);
   checked_count(gpu_scene.spheres.size(), "spheres");
   checked_count(gpu_scene.planes.size(), "planes");
   timings.bvh_build_ms = gpu_scene.bvh_build_ms;

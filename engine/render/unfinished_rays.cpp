@@ -24,7 +24,7 @@ void Renderer::Impl::finish_unfinished(const std::function<void(uint32_t index)>
   const auto start = Clock::now();
   const std::span<const uint32_t> listed = listed_rays();
   if (listed.empty()) return;
-  if (!reference) reference.emplace(host_scene);
+  if (!reference) reference.emplace(host_scene, ray_mask);
   for (const uint32_t index : listed) finish(index);
   timings.unfinished_rays += listed.size();
   timings.cpu_finish_ms += elapsed_ms(start);

@@ -305,6 +305,45 @@ void add_geometry(Fnv1a& fnv, const Scene& scene) {
     fnv.add(uint64_t{mesh.triangles.size()});
     fnv.add_bytes(mesh.triangles.data(), mesh.triangles.size() * sizeof(mesh.triangles[0]));
   }
+  // Masks change what a call sees; a scene without them keeps the hash it had before masks existed.
+  if (scene.has_masks()) {
+    const size_t objects = scene.meshes.size() + scene.spheres.size() + scene.planes.size();
+    for (uint32_t object = 0; object < objects; ++object) fnv.add(uint64_t{object_mask(scene, object)});
+  }
+}
+
+bool Scene::has_masks() const {
+  const auto masked = [](const auto& item) { return item.mask != every_mask_bit; };
+  return std::ranges::any_of(meshes, masked) || std::ranges::any_of(spheres, masked) || std::ranges::any_of(planes, masked);
+}
+
+namespace {
+// The mask field of object `object`, null out of range.
+template <typename SceneType>
+auto* object_mask_field(SceneType& scene, uint32_t object) {
+  size_t index = object;
+  if (index < scene.meshes.size()) return &scene.meshes[index].mask;
+  index -= scene.meshes.size();
+  if (index < scene.spheres.size()) return &scene.spheres[index].mask;
+  index -= scene.spheres.size();
+  return index < scene.planes.size() ? &scene.planes[index].mask : nullptr;
+}
+}  // namespace
+
+Mask object_mask(const Scene& scene, uint32_t object) {
+  const Mask* mask = object_mask_field(scene, object);
+  if (!mask) throw std::out_of_range("object_mask: no object " + std::to_string(object));
+  return *mask;
+}
+
+void set_object_mask(Scene& scene, uint32_t object, Mask mask) {
+  Mask* field = object_mask_field(scene, object);
+  if (!field) {
+    throw InputError("mask: no object " + std::to_string(object) + " (the scene has " +
+                     std::to_string(scene.meshes.size() + scene.spheres.size() + scene.planes.size()) +
+                     ": its meshes, then spheres, then planes)");
+  }
+  *field = mask;
 }
 
 std::vector<std::string> object_names(const Scene& scene) {

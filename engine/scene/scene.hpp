@@ -32,14 +32,23 @@ class InputError : public std::runtime_error {
   explicit InputError(const std::string& message) : std::runtime_error(one_line_message(message)) {}
 };
 
+// Ray masks: every mesh, sphere and plane has a mask of 8 bits, and a ray hits only what shares a
+// bit with its own (the rays of one call share one: Renderer::set_ray_mask). Eight bits, as Vulkan's
+// instance masks and a ray query's cull mask have them (and Embree's low byte), so that the device's
+// own masks can take them. By default every bit: a scene that sets none is traced without them.
+using Mask = uint8_t;
+inline constexpr Mask every_mask_bit = 0xff;
+
 struct Sphere {
   glm::dvec3 center;
   double radius;
+  Mask mask = every_mask_bit;
 };
 
 struct Plane {
   glm::dvec3 point;
   glm::dvec3 normal;  // unit length
+  Mask mask = every_mask_bit;
 };
 
 // A triangle corner's vn or vt that its face does not give (Mesh::normal_corners, texcoord_corners).
@@ -58,6 +67,7 @@ struct Mesh {
   // Where the mesh comes from, naming its mesh_id in the outputs: the model file ("bunny.ply"), a
   // glTF's node ("scene.glb#Wheel"), or a scene file's entry ("scene.json: meshes[2]").
   std::string source;
+  Mask mask = every_mask_bit;
 };
 
 // Largest coordinate or radius magnitude accepted. The shader squares distances in float32 (max
@@ -85,7 +95,18 @@ struct Scene {
   // exactly 0 in double). No ray can hit them; the renderer and the reference leave them out, and
   // the command line says how many.
   size_t zero_area_triangle_count() const;
+  // Whether any mesh, sphere or plane has a mask other than every bit: only then do the shaders test
+  // masks (VKRAY_SPEC_MASKS).
+  bool has_masks() const;
 };
+
+// The mask of the object `object` (ObjectPrimitive's numbering: meshes, spheres, planes); setting
+// it throws InputError for an object out of range.
+Mask object_mask(const Scene& scene, uint32_t object);
+void set_object_mask(Scene& scene, uint32_t object, Mask mask);
+
+// Whether a ray with `ray_mask` hits an object with `mask`.
+inline bool mask_hits(Mask mask, Mask ray_mask) { return (mask & ray_mask) != 0; }
 
 struct Fnv1a;
 

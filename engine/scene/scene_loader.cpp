@@ -149,6 +149,9 @@ class Node {
     return static_cast<uint32_t>(result);
   }
 
+  // A ray mask (see Mask): a whole number 0..255.
+  Mask mask() const { return static_cast<Mask>(index(uint64_t{every_mask_bit} + 1, "mask")); }
+
   std::string string() const {
     if (!value_.is_string()) fail("expected a string, got " + describe(value_));
     return value_.get<std::string>();
@@ -270,15 +273,18 @@ void parse_image(const Node& node, Scene& scene) {
 }
 
 Sphere parse_sphere(const Node& node) {
-  node.expect_object({"center", "radius"});
+  node.expect_object({"center", "radius", "mask"});
   Sphere sphere{node.at("center").point(), node.at("radius").coordinate()};
   if (!(sphere.radius > 0.0)) node.at("radius").fail("must be > 0, got " + describe(node.at("radius").json()));
+  if (node.has("mask")) sphere.mask = node.at("mask").mask();
   return sphere;
 }
 
 Plane parse_plane(const Node& node) {
-  node.expect_object({"point", "normal"});
-  return Plane{node.at("point").point(), unit_vector(node.at("normal").nonzero_vec3())};
+  node.expect_object({"point", "normal", "mask"});
+  Plane plane{node.at("point").point(), unit_vector(node.at("normal").nonzero_vec3())};
+  if (node.has("mask")) plane.mask = node.at("mask").mask();
+  return plane;
 }
 
 void apply_transform(const Node& node, Mesh& mesh) {
@@ -305,7 +311,7 @@ void apply_transform(const Node& node, Mesh& mesh) {
 // A mesh entry's meshes: its own positions and triangles, or those of the model file it names (a
 // glTF's nodes give several), each through the entry's transform.
 std::vector<Mesh> parse_meshes(const Node& node, const std::filesystem::path& base_dir, const ModelFileLoader& load_model) {
-  node.expect_object({"positions", "triangles", "model", "obj", "transform"});
+  node.expect_object({"positions", "triangles", "model", "obj", "transform", "mask"});
   std::vector<Mesh> meshes;
   if (node.has("model") || node.has("obj")) {
     if (node.has("model") && node.has("obj")) node.fail("give 'model' ('obj' is its older name), not both");
@@ -336,6 +342,7 @@ std::vector<Mesh> parse_meshes(const Node& node, const std::filesystem::path& ba
     mesh.source = node.where();
   }
   for (Mesh& mesh : meshes) {
+    if (node.has("mask")) mesh.mask = node.at("mask").mask();
     if (node.has("transform")) apply_transform(node.at("transform"), mesh);
     for (size_t i = 0; i < mesh.positions.size(); ++i) {
       const glm::dvec3& p = mesh.positions[i];

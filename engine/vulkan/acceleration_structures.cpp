@@ -35,6 +35,7 @@ struct AccelerationStructures::Build {
   uint32_t primitives = 0;
   uint32_t primitive_offset = 0;  // bytes into the index data
   uint32_t first_slot = 0;
+  uint8_t mask = 0xff;  // the instance's
 };
 
 // What to build, a structure per mesh and one for the spheres; throws where one is more than the
@@ -55,6 +56,7 @@ std::vector<AccelerationStructures::Build> AccelerationStructures::describe_buil
     build.primitives = mesh.count;
     build.primitive_offset = triangles_before * static_cast<uint32_t>(sizeof(input.triangles[0]));
     build.first_slot = mesh.first_slot;
+    build.mask = mesh.mask;
     builds.push_back(build);
     triangles_before += mesh.count;
   }
@@ -188,7 +190,7 @@ void AccelerationStructures::build_top(VulkanContext& context, const std::vector
   for (size_t k = 0; k < bottom_.size(); ++k) {
     const vk::DeviceAddress address =
         device.getAccelerationStructureAddressKHR(vk::AccelerationStructureDeviceAddressInfoKHR(*bottom_[k].handle));
-    instances.emplace_back(identity, builds[k].first_slot, 0xff, 0,
+    instances.emplace_back(identity, builds[k].first_slot, builds[k].mask, 0,
                            vk::GeometryInstanceFlagBitsKHR::eForceNoOpaque, address);
   }
   GpuBuffer instance_buffer;

@@ -19,8 +19,12 @@ struct StructureInput {
   uint32_t vertex_count = 0;
   vk::DeviceSize vertex_stride = 0;
   std::vector<std::array<uint32_t, 3>> triangles;
+  // Each mesh's instance mask is its ray mask (8 bits, as Vulkan's): a ray query whose cull mask
+  // shares no bit with it is never proposed its triangles. The spheres' instance takes every bit;
+  // the shader tests each sphere's own mask.
   struct Range {
     uint32_t first_slot, count;
+    uint8_t mask = 0xff;
   };
   std::vector<Range> meshes;
   // The spheres' boxes (min x, y, z, max x, y, z) and their first slot.

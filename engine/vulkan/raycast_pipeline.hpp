@@ -26,6 +26,7 @@ struct PipelineSpecialization {
   bool tree_has_spheres = false;
   uint32_t loop_budget = 0;
   uint32_t stack_registers = 0;  // VKRAY_SPEC_STACK_REGISTERS
+  bool masks = false;            // VKRAY_SPEC_MASKS
   ShaderVariant variant;
   bool operator==(const PipelineSpecialization&) const = default;
 };
