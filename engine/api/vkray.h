@@ -25,7 +25,7 @@
 extern "C" {
 #endif
 
-#define VKRAY_API_VERSION 1
+#define VKRAY_API_VERSION 2
 #define VKRAY_API __attribute__((visibility("default")))
 
 /* mesh_id and primitive_id of a ray that hit nothing. */
@@ -79,12 +79,17 @@ VKRAY_API vkray_status vkray_scene_add_mesh(vkray_scene* scene, const double* ve
 VKRAY_API vkray_status vkray_scene_add_spheres(vkray_scene* scene, const double* spheres, uint64_t count);
 /* count x 6: a point, the normal. */
 VKRAY_API vkray_status vkray_scene_add_planes(vkray_scene* scene, const double* planes, uint64_t count);
+/* The ray mask (0..255) of object `object`, numbered as mesh_id numbers them (the meshes, then the
+ * spheres, then the planes, each in the order added): rays hit it only where their mask
+ * (vkray_renderer_set_ray_mask) shares a bit with it. Every bit by default. */
+VKRAY_API vkray_status vkray_scene_set_mask(vkray_scene* scene, uint32_t object, uint32_t mask);
 /* The camera in the scene file's form, as JSON: {"from": [0, 1, 5], "to": [0, 0, 0], "fovy": 40}. */
 VKRAY_API vkray_status vkray_scene_set_camera(vkray_scene* scene, const char* camera_json);
 /* Checks the scene as a scene file is checked; frames the geometry where no camera was set. */
 VKRAY_API vkray_status vkray_scene_finish(vkray_scene* scene);
 /* The finished scene as JSON: {"width", "height", "meshes", "triangles", "spheres", "planes",
- * "camera" (the scene file's form), "object_names" (what each mesh_id stands for)}. */
+ * "camera" (the scene file's form), "object_names" (what each mesh_id stands for), "masks" (each
+ * one's mask)}. */
 VKRAY_API const char* vkray_scene_describe(vkray_scene* scene);
 VKRAY_API void vkray_scene_free(vkray_scene* scene);
 
@@ -110,6 +115,9 @@ VKRAY_API const char* vkray_renderer_device_name(const vkray_renderer* renderer)
  * unchanged. */
 VKRAY_API vkray_status vkray_renderer_set_vertices(vkray_renderer* renderer, uint32_t mesh, const double* positions,
                                                    uint64_t count);
+/* The mask (1..255) of every later call's rays: they hit only the objects whose mask shares a bit
+ * with it (vkray_scene_set_mask; a scene file's "mask"). Every bit (255) at first. */
+VKRAY_API vkray_status vkray_renderer_set_ray_mask(vkray_renderer* renderer, uint32_t mask);
 /* What the last call's time went to, as JSON ({"dispatch_gpu_ms": ..., ...}, milliseconds); the
  * constructor's own (upload, BVH build, pipelines) under "setup". */
 VKRAY_API const char* vkray_renderer_timings(vkray_renderer* renderer);

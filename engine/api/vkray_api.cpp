@@ -47,7 +47,8 @@ struct vkray_renderer {
   Scene scene;  // the surface outputs of given rays read its meshes
   std::unique_ptr<GpuDevice> device;
   std::unique_ptr<Renderer> renderer;
-  std::unique_ptr<ReferenceScene> reference;  // the reference's, where renderer is none
+  std::unique_ptr<ReferenceScene> reference;  // the reference's, where renderer is none: for rays of ray_mask
+  Mask ray_mask = every_mask_bit;
   bool doubles = false;
   std::string device_name;
   std::string timings;  // vkray_renderer_timings'
@@ -359,6 +360,14 @@ nlohmann::json timings_json(const RenderTimings& t, bool constructor) {
   return json;
 }
 
+// A mask from the C API's 32-bit argument: 8 bits (see Mask).
+Mask checked_mask(uint32_t mask, const char* what) {
+  if (mask > every_mask_bit) {
+    throw InputError(std::string(what) + ": " + std::to_string(mask) + " is no mask of 8 bits (0..255)");
+  }
+  return static_cast<Mask>(mask);
+}
+
 }  // namespace
 
 extern "C" {
@@ -486,6 +495,13 @@ vkray_status vkray_scene_add_planes(vkray_scene* scene, const double* planes, ui
   });
 }
 
+vkray_status vkray_scene_set_mask(vkray_scene* scene, uint32_t object, uint32_t mask) {
+  return guarded([&] {
+    require(scene, "scene");
+    set_object_mask(scene->scene, object, checked_mask(mask, "mask"));
+  });
+}
+
 vkray_status vkray_scene_set_camera(vkray_scene* scene, const char* camera_json) {
   return guarded([&] {
     require(scene, "scene");
@@ -517,6 +533,9 @@ const char* vkray_scene_describe(vkray_scene* scene) {
   json["planes"] = s.planes.size();
   json["camera"] = camera_description(s.camera, s.width, s.height)["camera"];
   json["object_names"] = object_names(s);
+  std::vector<uint32_t> masks;
+  for (uint32_t object = 0; object < object_names(s).size(); ++object) masks.push_back(object_mask(s, object));
+  json["masks"] = masks;
   scene->description = json.dump();
   return scene->description.c_str();
 }
@@ -586,10 +605,25 @@ vkray_status vkray_renderer_set_vertices(vkray_renderer* renderer, uint32_t mesh
       renderer->last_call = renderer->renderer->timings();
     } else {
       const auto start = std::chrono::steady_clock::now();
-      renderer->reference = std::make_unique<ReferenceScene>(renderer->scene);
+      renderer->reference = std::make_unique<ReferenceScene>(renderer->scene, renderer->ray_mask);
       renderer->reference_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
     }
     renderer->called = true;
+  });
+}
+
+vkray_status vkray_renderer_set_ray_mask(vkray_renderer* renderer, uint32_t mask) {
+  return guarded([&] {
+    require(renderer, "renderer");
+    const Mask ray_mask = checked_mask(mask, "mask");
+    const std::lock_guard one_call_at_a_time(renderer->busy);
+    if (renderer->renderer) {
+      renderer->renderer->set_ray_mask(ray_mask);
+    } else if (ray_mask != renderer->ray_mask) {
+      if (ray_mask == 0) throw InputError("mask: 0 shares no bit with any object's, so its rays would hit nothing; give 1..255");
+      renderer->reference = std::make_unique<ReferenceScene>(renderer->scene, ray_mask);
+    }
+    renderer->ray_mask = ray_mask;
   });
 }
 

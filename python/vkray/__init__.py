@@ -121,6 +121,13 @@ def _camera_json(camera: Optional[Mapping[str, Any]]) -> Optional[bytes]:
     return json.dumps(dict(camera), default=plain, allow_nan=False).encode()
 
 
+def _mask(value: Any, what: str, least: int = 1) -> int:
+    """A ray mask: a whole number of 8 bits (rays' masks from 1: 0 would hit nothing)."""
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or not least <= value <= 255:
+        raise ValueError(f"{what}: expected a mask, a whole number {least}..255, got {value!r}")
+    return int(value)
+
+
 def _size(value: Optional[int], what: str) -> int:
     """A side in pixels, 0 for the default."""
     if value is None:
@@ -134,11 +141,13 @@ class Scene:
     """A scene from arrays: one mesh (vertices N x 3, triangles M x 3), or meshes, a list of dicts
     {'vertices', 'triangles', 'transform' (4 x 4, optional)}; spheres K x 4 (centre, radius); planes
     P x 6 (point, normal); camera in the scene file's form ({'from': [0, 1, 5], 'to': [0, 0, 0],
-    'fovy': 40}, degrees), or None to frame the geometry; width and height in pixels."""
+    'fovy': 40}, degrees), or None to frame the geometry; width and height in pixels. masks: ray masks
+    (0..255) by mesh_id, {mesh_id: mask} or one for every mesh, sphere and plane in that order: a call's
+    rays (mask=) hit only what shares a bit with theirs; every bit (255) where none is given."""
 
     def __init__(self, vertices: Any = None, triangles: Any = None, *, meshes: Optional[Iterable[Mapping[str, Any]]] = None,
                  spheres: Any = None, planes: Any = None, camera: Optional[Mapping[str, Any]] = None,
-                 width: int = 800, height: int = 600):
+                 width: int = 800, height: int = 600, masks: Union[None, Mapping[int, int], Sequence[int]] = None):
         handle = ctypes.c_void_p()
         _check(_native.lib.vkray_scene_new(int(width), int(height), ctypes.byref(handle)))
         self._handle = handle
@@ -165,6 +174,12 @@ class Scene:
         if planes is not None:
             rows = _rows(planes, "planes", 6)
             _check(_native.lib.vkray_scene_add_planes(self._handle, _pointer(rows), len(rows)))
+        if masks is not None:
+            by_id = masks.items() if isinstance(masks, Mapping) else enumerate(masks)
+            for object_id, mask in by_id:
+                if isinstance(object_id, bool) or not isinstance(object_id, (int, np.integer)) or not 0 <= object_id < 2**32:
+                    raise ValueError(f"masks: expected mesh_ids as keys, got {object_id!r}")
+                _check(_native.lib.vkray_scene_set_mask(self._handle, int(object_id), _mask(mask, f"masks[{object_id}]", 0)))
         if camera is not None:
             _check(_native.lib.vkray_scene_set_camera(self._handle, _camera_json(camera)))
         _check(_native.lib.vkray_scene_finish(self._handle))
@@ -195,6 +210,7 @@ class Scene:
         self._counts = (described["meshes"], described["triangles"], described["spheres"], described["planes"])
         self._camera = described["camera"]
         self._object_names = described["object_names"]
+        self._masks = described["masks"]
 
     @classmethod
     def _loaded(cls, handle: ctypes.c_void_p) -> "Scene":
@@ -246,6 +262,11 @@ class Scene:
         'file#node', 'meshes[i]' for arrays), then 'spheres[i]', then 'planes[i]'."""
         return list(self._object_names)
 
+    @property
+    def masks(self) -> list:
+        """Each object's ray mask, by mesh_id (a scene file's "mask"; 255, every bit, by default)."""
+        return list(self._masks)
+
     def __repr__(self) -> str:
         meshes, triangles, spheres, planes = self._counts
         return (f"<vkray.Scene: {meshes} meshes, {triangles} triangles, {spheres} spheres, {planes} planes, "
@@ -288,7 +309,7 @@ def _output_names(names: Union[str, Iterable[str]], what: str) -> list:
 
 def _render_help() -> str:
     text = ("camera: a dict as the scene file's, each key optional over the scene's; width, height in pixels; aovs: a "
-            "list of output names (or one string, comma-separated). A dict of arrays, H x W, C-contiguous, with a last "
+            "list of output names (or one string, comma-separated); mask: the rays' mask, 1..255, as cast_rays'. A dict of arrays, H x W, C-contiguous, with a last "
             "axis of the components where there are several:")
     for output in outputs:
         parts = [output["description"]]
@@ -320,8 +341,9 @@ class _Caster:
         return bool(_native.lib.vkray_renderer_doubles(self._handle))
 
     def render(self, camera: Optional[Mapping[str, Any]] = None, width: Optional[int] = None, height: Optional[int] = None,
-               aovs: Union[str, Iterable[str]] = ("depth", "normal")) -> Dict[str, np.ndarray]:
+               aovs: Union[str, Iterable[str]] = ("depth", "normal"), mask: int = 255) -> Dict[str, np.ndarray]:
         names = _output_names(aovs, "aovs")
+        self._set_mask(mask)
         camera_json = _camera_json(camera)
         w = _size(width, "width") or self._scene_size[0]
         h = _size(height, "height") or self._scene_size[1]
@@ -340,6 +362,9 @@ class _Caster:
         _check(_native.lib.vkray_render(self._handle, camera_json, w if width is not None else 0, h if height is not None else 0,
                                         len(names), c_names, c_results))
         return dict(zip(keys, results))
+
+    def _set_mask(self, mask: int) -> None:
+        _check(_native.lib.vkray_renderer_set_ray_mask(self._handle, _mask(mask, "mask")))
 
     def _rays_and_ranges(self, rays: Any, t_min: Any, t_max: Any):
         given = np.asarray(rays)
@@ -376,7 +401,7 @@ class _Caster:
 
     def cast_rays(self, rays: Any, *, t_min: Any = None, t_max: Any = None,
                   outputs: Union[str, Iterable[str]] = ("t", "normal", "primitive_id", "mesh_id"),
-                  t_along: str = "unit", bad_rays: str = "miss") -> Dict[str, np.ndarray]:
+                  t_along: str = "unit", bad_rays: str = "miss", mask: int = 255) -> Dict[str, np.ndarray]:
         """rays: any shape (..., 6), each an origin and a direction (any length but 0). t_min, t_max: None
         (0 and inf), a number, or one value a ray (broadcast over the leading shape): a hit counts at
         t_min < t < t_max. t_along: 'unit' (default), distances along the normalized direction; or
@@ -386,8 +411,11 @@ class _Caster:
         the first. outputs: any of t (float32; float64 in double precision; inf on a miss), normal (3, the
         geometric normal facing the ray; 0 on a miss), primitive_id and mesh_id (uint32, NO_HIT on a
         miss), position (3, the hit point), barycentric (2), front_facing (uint32), shading_normal (3),
-        texcoord (2): as render() gives them. A dict of C-contiguous arrays of shape (...) or (..., C)."""
+        texcoord (2): as render() gives them. mask: the rays' mask, 1..255 (every bit by default): they hit
+        only the meshes, spheres and planes whose mask (Scene's masks) shares a bit with it. A dict of
+        C-contiguous arrays of shape (...) or (..., C)."""
         names = _output_names(outputs, "outputs")
+        self._set_mask(mask)
         flat, leading, lo, hi = self._rays_and_ranges(rays, t_min, t_max)
         flags = self._flags(t_along, bad_rays)
         results, keys = [], []
@@ -407,13 +435,14 @@ class _Caster:
         return dict(zip(keys, results))
 
     def occluded(self, rays: Any, *, t_min: Any = None, t_max: Any = None, t_along: str = "unit",
-                 bad_rays: str = "miss") -> np.ndarray:
-        """Occlusion queries, with cast_rays' rays, t_min, t_max, t_along and bad_rays: a bool array of the
+                 bad_rays: str = "miss", mask: int = 255) -> np.ndarray:
+        """Occlusion queries, with cast_rays' rays, t_min, t_max, t_along, bad_rays and mask: a bool array of the
         rays' leading shape, True where a ray hits anything at t_min < t < t_max (a bad ray: False). Each
         ray's search stops at the first hit it meets. Open3D's test_occlusions of segments p to q is
         occluded(np.concatenate([p, q - p], axis=-1), t_max=1, t_along='direction')."""
         flat, leading, lo, hi = self._rays_and_ranges(rays, t_min, t_max)
         flags = self._flags(t_along, bad_rays)
+        self._set_mask(mask)
         blocked = np.empty(leading, dtype=np.uint8)
         _check(_native.lib.vkray_occluded(self._handle, _pointer(flat), len(flat), _pointer(lo), _pointer(hi), flags,
                                           _pointer(blocked, ctypes.c_uint8)))
