@@ -49,6 +49,7 @@ struct RenderOptions {
   double depth_step = 0.001;
   std::string precision = "float";
   std::string traversal = "auto";
+  uint32_t mask = every_mask_bit;  // the rays' (Renderer::set_ray_mask)
   ViewsOptions views;
   bool output_given = false;  // -o on the command line (many views default to view-{index:05}.exr)
 };
@@ -205,6 +206,7 @@ int run_render_views(const RenderOptions& options, const AovSet& aovs) {
   renderer_options.scene.search = *traversal_from_name(options.traversal);
   renderer_options.first_aovs = aovs;
   Renderer renderer(*device, scene, renderer_options);
+  renderer.set_ray_mask(static_cast<Mask>(options.mask));
   ViewsProgress progress;
   const ViewBatchSummary summary = render_views(renderer, batch, std::ref(progress));
   std::printf("vkray: %u views written, %u complete already (shard %u of %u, %zu views in all), to %s on %s; manifest %s\n",
@@ -344,7 +346,7 @@ int run_render(const RenderOptions& options) {
   auto reference = [&]() -> const std::vector<ReferenceHit>& {
     if (!reference_hits) {
       Stopwatch reference_watch;
-      reference_scene.emplace(scene);
+      reference_scene.emplace(scene, static_cast<Mask>(options.mask));
       reference_hits = render_reference_hits(*reference_scene, scene.camera,
                                              scene.width, scene.height);
       run.reference_ms = reference_watch.lap_ms();
@@ -375,6 +377,7 @@ int run_render(const RenderOptions& options) {
     renderer_options.scene.search = *traversal_from_name(options.traversal);
     renderer_options.first_aovs = aovs;
     Renderer renderer(device, scene, renderer_options);
+    renderer.set_ray_mask(static_cast<Mask>(options.mask));
     run.upload_ms = stopwatch.lap_ms();
     frame = renderer.render(scene.camera, scene.width, scene.height, aovs);
     run.render_ms = stopwatch.lap_ms();
@@ -476,6 +479,11 @@ Action add_render_command(CLI::App& app) {
       ->check(CLI::IsMember({"float", "double"}))
       ->capture_default_str();
   add_traversal_option(command, options->traversal);
+  command->add_option("--mask", options->mask,
+                      "The rays' mask, 1..255: they hit only the meshes, spheres and planes whose \"mask\" in the scene "
+                      "file shares a bit with it (a layer left out of a view)")
+      ->check(CLI::Range(1, 255))
+      ->capture_default_str();
   command->add_flag("--timings", options->timings, "Print where the time went");
   add_views_options(command, options->views);
   CLI::Option* check = command->add_flag("--check", options->check,

@@ -551,6 +551,38 @@ TEST_F(CliTest, IdsAreUnsignedChannelsNumberedMeshesSpheresPlanes) {
   }
 }
 
+// --mask: a sphere in front of a plane, each with its own bit. The mask of the plane's bit alone
+// shows the plane where the sphere stood, on the GPU, in many views and in the reference alike.
+TEST_F(CliTest, MaskLeavesOutWhatSharesNoBitWithIt) {
+  std::ofstream(path("masked.json")) << R"({"camera": {"from": [0, 0, 5], "to": [0, 0, 0], "fovy": 40},
+    "spheres": [{"center": [0, 0, 0], "radius": 1, "mask": 2}],
+    "planes": [{"point": [0, 0, -2], "normal": [0, 0, 1], "mask": 1}]})";
+  const std::vector<std::vector<std::string>> runs = {
+      {"--mask", "1", "-o", "plane.exr"}, {"--mask", "1", "--reference", "-o", "plane-ref.exr"},
+      {"--mask", "1", "--orbit", "2", "-o", "plane-{index}.exr"}, {"--mask", "3", "-o", "both.exr"}};
+  for (const std::vector<std::string>& extra : runs) {
+    std::vector<std::string> args = {"render", path("masked.json").string(), "--width", "16", "--height", "12",
+                                     "--aov", "mesh-id"};
+    args.insert(args.end(), extra.begin(), extra.end());
+    if (std::ranges::find(extra, "--orbit") == extra.end()) args.push_back("--no-preview");
+    const RunResult run = vkray(args);
+    ASSERT_EQ(run.exit_code, 0) << run.err;
+    const std::string output = extra.back().find("{index}") != std::string::npos ? "plane-0.exr" : extra.back();
+    SCOPED_TRACE(output);
+    auto input = OIIO::ImageInput::open(path(output).string());
+    ASSERT_TRUE(input) << OIIO::geterror();
+    const int channel = input->spec().channelindex("mesh_id");
+    ASSERT_GE(channel, 0);
+    std::vector<uint32_t> ids(16 * 12);
+    ASSERT_TRUE(input->read_image(0, 0, channel, channel + 1, OIIO::TypeUInt, ids.data()));
+    const uint32_t centre = ids[6 * 16 + 8];  // the sphere's, where the mask lets it through
+    EXPECT_EQ(centre, extra[1] == "3" ? 0u : 1u);
+  }
+  const RunResult zero = vkray({"render", path("masked.json").string(), "--mask", "0", "-o", "zero.exr"});
+  EXPECT_EQ(zero.exit_code, 2);
+  EXPECT_NE(zero.err.find("--mask"), std::string::npos) << zero.err;
+}
+
 // ---------------------------------------------------------------------------------------------
 // 3. and 4. Choosing outputs with --aov
 
