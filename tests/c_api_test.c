@@ -45,6 +45,25 @@ int main(void) {
   uint8_t blocked[2];
   CHECK(vkray_occluded(renderer, &rays[0][0], 2, NULL, NULL, 0, blocked) == VKRAY_OK && blocked[0] == 1 && blocked[1] == 0);
 
+  /* Masks: a triangle in front of another; rays of mask 1 pass the near one (mask 2). */
+  vkray_scene* layered = NULL;
+  const double near_far[2][9] = {{-1, -1, 0, 1, -1, 0, 0, 1, 0}, {-1, -1, -1, 1, -1, -1, 0, 1, -1}};
+  const int64_t corners[3] = {0, 1, 2};
+  CHECK(vkray_scene_new(8, 8, &layered) == VKRAY_OK);
+  for (int k = 0; k < 2; ++k) CHECK(vkray_scene_add_mesh(layered, near_far[k], 3, corners, 0, 1, NULL) == VKRAY_OK);
+  CHECK(vkray_scene_set_mask(layered, 0, 2) == VKRAY_OK && vkray_scene_set_mask(layered, 2, 1) == VKRAY_INPUT_ERROR);
+  CHECK(vkray_scene_finish(layered) == VKRAY_OK && strstr(vkray_scene_describe(layered), "\"masks\":[2,255]") != NULL);
+  vkray_renderer* masked = NULL;
+  CHECK(vkray_renderer_new(layered, NULL, "float", "auto", &masked) == VKRAY_OK);
+  const double down_z[6] = {0, 0, 5, 0, 0, -1};
+  CHECK(vkray_renderer_set_ray_mask(masked, 1) == VKRAY_OK);
+  CHECK(vkray_cast_rays(masked, down_z, 1, NULL, NULL, 0, 2, outputs, hits) == VKRAY_OK && mesh[0] == 1 && fabsf(t[0] - 6.0f) < 1e-5f);
+  CHECK(vkray_renderer_set_ray_mask(masked, 0) == VKRAY_INPUT_ERROR && vkray_renderer_set_ray_mask(masked, 256) == VKRAY_INPUT_ERROR);
+  CHECK(vkray_renderer_set_ray_mask(masked, 255) == VKRAY_OK);
+  CHECK(vkray_cast_rays(masked, down_z, 1, NULL, NULL, 0, 2, outputs, hits) == VKRAY_OK && mesh[0] == 0);
+  vkray_renderer_free(masked);
+  vkray_scene_free(layered);
+
   CHECK(vkray_scene_load("/nonexistent/scene.json", 0, 0, NULL, NULL, &scene) == VKRAY_INPUT_ERROR && scene == NULL);
   CHECK(strstr(vkray_last_error(), "/nonexistent/scene.json") != NULL);
   vkray_renderer_free(renderer);
