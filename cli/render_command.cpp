@@ -186,6 +186,7 @@ int run_render_views(const RenderOptions& options, const AovSet& aovs) {
   batch.width = scene.width;
   batch.height = scene.height;
   batch.scene = geometry_hash(scene);
+  batch.mask = static_cast<Mask>(options.mask);
   if (aovs.has(Aov::mesh_id)) batch.objects = object_names(scene);
   if (batch.cameras.size() > 1 && (!batch.exr.has_index() || (batch.png && !batch.png->has_index()))) {
     throw InputError(std::string(batch.exr.has_index() ? "--preview" : "-o") + ": '" +
@@ -206,7 +207,6 @@ int run_render_views(const RenderOptions& options, const AovSet& aovs) {
   renderer_options.scene.search = *traversal_from_name(options.traversal);
   renderer_options.first_aovs = aovs;
   Renderer renderer(*device, scene, renderer_options);
-  renderer.set_ray_mask(static_cast<Mask>(options.mask));
   ViewsProgress progress;
   const ViewBatchSummary summary = render_views(renderer, batch, std::ref(progress));
   std::printf("vkray: %u views written, %u complete already (shard %u of %u, %zu views in all), to %s on %s; manifest %s\n",

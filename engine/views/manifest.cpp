@@ -101,6 +101,7 @@ std::string manifest_line(const ViewRecord& record, const std::filesystem::path&
   if (!record.half.empty()) line["half"] = record.half;
   if (record.miss) line["miss"] = miss_text(*record.miss);
   if (record.depth_step) line["depth_step"] = *record.depth_step;
+  if (record.mask) line["mask"] = *record.mask;
   const nlohmann::ordered_json camera = camera_description(record.camera, record.width, record.height);
   for (auto key = camera.begin(); key != camera.end(); ++key) line[key.key()] = key.value();
   return line.dump();
@@ -202,8 +203,8 @@ std::string record_changes(const std::string& recorded, const std::string& now) 
     changes += (changes.empty() ? "" : "; ") + std::string(what);
     if (std::string(what) != "the camera") changes += ": " + shown(before, keys) + " then, " + shown(after, keys) + " now";
   }
-  // How values are stored: a key left out holds its default.
-  const std::pair<const char*, const char*> storage[] = {{"half", "none"}, {"miss", "inf"}, {"depth_step", "none"}};
+  // How values are stored, and what the rays see: a key left out holds its default.
+  const std::pair<const char*, const char*> storage[] = {{"half", "none"}, {"miss", "inf"}, {"depth_step", "none"}, {"mask", "255"}};
   for (const auto& [key, default_value] : storage) {
     const std::string then = before.contains(key) ? shown(before, {key}) : default_value;
     const std::string now_value = after.contains(key) ? shown(after, {key}) : default_value;

@@ -8,7 +8,7 @@
 //
 // "exr" where the outputs are one EXR, else "files": {"depth": "view-00042.depth.npy", ...}, one
 // file an output; "png" only where previews are written; "objects" (what each mesh_id stands for: a mesh's file or
-// glTF node, "spheres[i]", "planes[i]") only with the mesh-id output; file names relative to the manifest's folder; "scene" the
+// glTF node, "spheres[i]", "planes[i]") only with the mesh-id output; "mask" (the rays') where not 255; file names relative to the manifest's folder; "scene" the
 // geometry's hash (geometry_hash); the camera's keys as engine/scene/camera_description.hpp
 // describes them (README "Many views").
 #pragma once
@@ -42,6 +42,8 @@ struct ViewRecord {
   std::string half;                  // AovSet::names() of --half
   std::optional<float> miss;         // --miss, where not +inf
   std::optional<double> depth_step;  // --depth-step, with png16 files
+  // The rays' mask (--mask), where not every bit: a resumed run with another would mix two scenes.
+  std::optional<uint32_t> mask;
 };
 
 // One line, without its newline; file names relative to `folder`.

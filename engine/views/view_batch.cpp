@@ -134,6 +134,7 @@ ViewRecord record_of(const ViewBatch& batch, uint32_t index) {
   record.outputs = batch.aovs.names();
   record.scene = batch.scene;
   record.objects = batch.objects;
+  if (batch.mask != every_mask_bit) record.mask = batch.mask;
   const OutputSettings& stored = batch.output_settings;
   record.half = stored.half.names();
   if (!(std::isinf(stored.miss) && stored.miss > 0)) record.miss = stored.miss;
@@ -218,6 +219,7 @@ ViewBatchSummary render_views(Renderer& renderer, const ViewBatch& batch,
     if (batch.shard.holds(index)) shard_views.push_back(index);
   }
   check_view_names(batch);
+  renderer.set_ray_mask(batch.mask);
   prepare_folders(batch, shard_views);
   ManifestWriter manifest(batch.manifest, batch.overwrite);
   std::vector<uint32_t> to_render;

@@ -37,6 +37,7 @@ struct ViewBatch {
   Shard shard;
   std::string scene;       // geometry_hash of the scene, recorded with each view
   std::vector<std::string> objects;  // object_names of the scene, recorded with each view's mesh_id
+  Mask mask = every_mask_bit;  // the rays' (Renderer::set_ray_mask), recorded with each view where not every bit
   bool overwrite = false;  // render views whose files exist too (and start the manifest afresh)
   unsigned writers = 0;    // threads writing files, a view each (0: writer_threads's choice); the queue holds one frame more
   // Called with each view's index before it renders; what it throws stops the batch as a failed

@@ -421,12 +421,13 @@ def test_a_device_lost_mid_batch_ends_the_run_and_keeps_the_views_before_it(tmp_
 
 
 def test_a_run_resumed_with_other_settings_is_refused_unless_it_overwrites(tmp_path):
-    """Files from a run at another size (or with other outputs) are not this run's views: the same
+    """Files from a run at another size (or with other outputs, or rays of another mask) are not this run's views: the same
     command again says what changed and exits 2; --overwrite renders every view anew."""
     out = str(tmp_path / "v-{index}.exr")
     vkray("render", *SIZE, "--orbit", "4", "-o", out)
     for options, change in [(["--width", "80", "--height", "48"], "the size: 64x48 then, 80x48 now"),
-                            ([*SIZE, "--aov", "depth"], "the outputs: depth,normal then, depth now")]:
+                            ([*SIZE, "--aov", "depth"], "the outputs: depth,normal then, depth now"),
+                            ([*SIZE, "--mask", "1"], "mask: 255 then, 1 now")]:
         result = vkray("render", *options, "--orbit", "4", "-o", out, check=False)
         assert result.returncode == 2, result.stderr
         assert f"view 0 was rendered with other settings ({change}): --overwrite renders every view again" in result.stderr
