@@ -37,6 +37,15 @@ void add_traversal_option(CLI::App* command, std::string& traversal) {
       ->capture_default_str();
 }
 
+void add_mask_option(CLI::App* command, uint32_t& mask) {
+  command
+      ->add_option("--mask", mask,
+                   "The rays' mask, 1..255: they hit only the meshes, spheres and planes whose \"mask\" in the scene "
+                   "file shares a bit with it (a layer left out of a view)")
+      ->check(CLI::Range(1, 255))
+      ->capture_default_str();
+}
+
 void print_cpu_device_note(const GpuDeviceInfo& device) {
   if (const std::string note = cpu_device_note(device); !note.empty()) std::fprintf(stderr, "%s\n", note.c_str());
 }

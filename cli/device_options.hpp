@@ -20,6 +20,8 @@ CLI::Option* add_device_options(CLI::App* command, DeviceOptions& options);
 
 // Adds --traversal (render, view): how rays find the primitives, by traversal_from_name's names.
 void add_traversal_option(CLI::App* command, std::string& traversal);
+// --mask: the rays' mask (Renderer::set_ray_mask), 1..255.
+void add_mask_option(CLI::App* command, uint32_t& mask);
 
 // Prints cpu_device_note for `device` on stderr, when it has one.
 void print_cpu_device_note(const GpuDeviceInfo& device);

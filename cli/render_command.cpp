@@ -479,11 +479,7 @@ Action add_render_command(CLI::App& app) {
       ->check(CLI::IsMember({"float", "double"}))
       ->capture_default_str();
   add_traversal_option(command, options->traversal);
-  command->add_option("--mask", options->mask,
-                      "The rays' mask, 1..255: they hit only the meshes, spheres and planes whose \"mask\" in the scene "
-                      "file shares a bit with it (a layer left out of a view)")
-      ->check(CLI::Range(1, 255))
-      ->capture_default_str();
+  add_mask_option(command, options->mask);
   command->add_flag("--timings", options->timings, "Print where the time went");
   add_views_options(command, options->views);
   CLI::Option* check = command->add_flag("--check", options->check,

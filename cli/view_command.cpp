@@ -20,6 +20,7 @@ struct ViewCommandOptions {
   std::string output = "depth";
   DeviceOptions device_options;
   std::string traversal = "auto";
+  uint32_t mask = every_mask_bit;
   bool no_vsync = false;
   bool no_overlay = false;
   uint32_t frames = 0;
@@ -55,6 +56,7 @@ int run_view(const ViewCommandOptions& options) {
   viewer.device = options.device_options.device;
   viewer.transfer = options.device_options.transfer_mode();
   viewer.traversal = *traversal_from_name(options.traversal);
+  viewer.mask = static_cast<Mask>(options.mask);
   viewer.on_device = print_cpu_device_note;
   viewer.vsync = !options.no_vsync;
   viewer.output = *output;
@@ -86,6 +88,7 @@ Action add_view_command(CLI::App& app) {
       ->capture_default_str();
   add_device_options(command, options->device_options);
   add_traversal_option(command, options->traversal);
+  add_mask_option(command, options->mask);
   command->add_flag("--no-vsync", options->no_vsync, "Present without waiting for the display's refresh");
   command->add_flag("--no-overlay", options->no_overlay, "Show the picture alone, without the text overlay");
   command->add_option("--frames", options->frames, "Quit after presenting N frames, each rendered anew (benchmarks, tests)");

@@ -22,9 +22,12 @@
 namespace vkray {
 namespace {
 
-RendererOptions renderer_options(const ViewerOptions& options) {
-  RendererOptions renderer;
-  renderer.scene.search = options.traversal;
+// A renderer of `scene` as the options ask: their traversal and their rays' mask.
+std::unique_ptr<Renderer> make_renderer(GpuDevice& device, const Scene& scene, const ViewerOptions& options) {
+  RendererOptions renderer_options;
+  renderer_options.scene.search = options.traversal;
+  auto renderer = std::make_unique<Renderer>(device, scene, renderer_options);
+  renderer->set_ray_mask(options.mask);
   return renderer;
 }
 
@@ -130,7 +133,7 @@ Viewer::Viewer(const ViewerOptions& options)
       presentation_(window_.presentation()),
       device_(options.device, presentation_, options.transfer),
       display_(device_.vulkan(), window_.create_surface(device_.vulkan().instance), options.vsync),
-      renderer_(std::make_unique<Renderer>(device_, scene_, renderer_options(options))),
+      renderer_(make_renderer(device_, scene_, options)),
       preview_(device_.vulkan()) {
   if (options.on_device) options.on_device(device_.info());
   resize();
@@ -278,7 +281,7 @@ void Viewer::handle(const WindowInput& input, double dt) {
 void Viewer::reload() {
   try {
     Scene scene = options_.load_scene();
-    auto renderer = std::make_unique<Renderer>(device_, scene, renderer_options(options_));
+    auto renderer = make_renderer(device_, scene, options_);
     renderer_ = std::move(renderer);
     scene_ = std::move(scene);
     controller_.set_home(scene_.camera);

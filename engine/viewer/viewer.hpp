@@ -26,6 +26,7 @@ struct ViewerOptions {
   std::string device;              // as --device
   TransferMode transfer = TransferMode::automatic;
   PrimitiveSearch traversal = PrimitiveSearch::automatic;  // as --traversal
+  Mask mask = every_mask_bit;                               // the rays', as --mask
   bool vsync = true;
   Aov output = Aov::depth;  // shown first; keys 1, 2, 3 switch
   bool overlay = true;
