@@ -297,7 +297,7 @@ VKRAY_CHECK_SIZE(GpuPlane, 64);
 //   host so that needle triangles get an accurate one; the shader reads it only for the winner.
 // - Sphere: x = the vertex holding (centre, radius), w = VKRAY_PRIMITIVE_SPHERE.
 // Above the kind, w holds the primitive's mask (its mesh's, or the sphere's) from bit
-// VKRAY_PRIMITIVE_MASK_SHIFT: read with no other fetch where the scene has masks.
+// VKRAY_PRIMITIVE_MASK_SHIFT: in the texel a walk reads for the primitive anyway.
 // Primitives are stored in the order of the BVH's leaves, so a leaf is a contiguous range of slots.
 struct GpuPrimitive {
   uvec4 indices;

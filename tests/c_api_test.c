@@ -29,7 +29,7 @@ int main(void) {
   static float depth[24][32], normal[24][32][3];
   const char* aovs[] = {"depth", "normal"};
   void* results[] = {depth, normal};
-  CHECK(vkray_render(renderer, NULL, 0, 0, 2, aovs, results) == VKRAY_OK);
+  CHECK(vkray_render(renderer, NULL, 0, 0, 255, 2, aovs, results) == VKRAY_OK);
   CHECK(isfinite(depth[12][16]) && depth[12][16] > 0.0f);
 
   /* The scene's camera is at (0, 1.8, 6) looking at (0, 0.7, 0): a ray there, and a dead one. */
@@ -38,12 +38,12 @@ int main(void) {
   uint32_t mesh[2];
   const char* outputs[] = {"t", "mesh-id"};
   void* hits[] = {t, mesh};
-  CHECK(vkray_cast_rays(renderer, &rays[0][0], 2, NULL, NULL, 0, 2, outputs, hits) == VKRAY_OK);
+  CHECK(vkray_cast_rays(renderer, &rays[0][0], 2, NULL, NULL, 0, 255, 2, outputs, hits) == VKRAY_OK);
   CHECK(isfinite(t[0]) && isinf(t[1]) && mesh[1] == VKRAY_NO_HIT);
-  CHECK(vkray_cast_rays(renderer, &rays[0][0], 2, NULL, NULL, VKRAY_BAD_RAYS_FAIL, 2, outputs, hits) == VKRAY_INPUT_ERROR);
+  CHECK(vkray_cast_rays(renderer, &rays[0][0], 2, NULL, NULL, VKRAY_BAD_RAYS_FAIL, 255, 2, outputs, hits) == VKRAY_INPUT_ERROR);
   CHECK(strstr(vkray_last_error(), "ray 1: the direction is 0") != NULL);
   uint8_t blocked[2];
-  CHECK(vkray_occluded(renderer, &rays[0][0], 2, NULL, NULL, 0, blocked) == VKRAY_OK && blocked[0] == 1 && blocked[1] == 0);
+  CHECK(vkray_occluded(renderer, &rays[0][0], 2, NULL, NULL, 0, 255, blocked) == VKRAY_OK && blocked[0] == 1 && blocked[1] == 0);
 
   /* Masks: a triangle in front of another; rays of mask 1 pass the near one (mask 2). */
   vkray_scene* layered = NULL;
@@ -56,11 +56,10 @@ int main(void) {
   vkray_renderer* masked = NULL;
   CHECK(vkray_renderer_new(layered, NULL, "float", "auto", &masked) == VKRAY_OK);
   const double down_z[6] = {0, 0, 5, 0, 0, -1};
-  CHECK(vkray_renderer_set_ray_mask(masked, 1) == VKRAY_OK);
-  CHECK(vkray_cast_rays(masked, down_z, 1, NULL, NULL, 0, 2, outputs, hits) == VKRAY_OK && mesh[0] == 1 && fabsf(t[0] - 6.0f) < 1e-5f);
-  CHECK(vkray_renderer_set_ray_mask(masked, 0) == VKRAY_INPUT_ERROR && vkray_renderer_set_ray_mask(masked, 256) == VKRAY_INPUT_ERROR);
-  CHECK(vkray_renderer_set_ray_mask(masked, 255) == VKRAY_OK);
-  CHECK(vkray_cast_rays(masked, down_z, 1, NULL, NULL, 0, 2, outputs, hits) == VKRAY_OK && mesh[0] == 0);
+  CHECK(vkray_cast_rays(masked, down_z, 1, NULL, NULL, 0, 1, 2, outputs, hits) == VKRAY_OK && mesh[0] == 1 && fabsf(t[0] - 6.0f) < 1e-5f);
+  CHECK(vkray_cast_rays(masked, down_z, 1, NULL, NULL, 0, 0, 2, outputs, hits) == VKRAY_INPUT_ERROR);
+  CHECK(vkray_occluded(masked, down_z, 1, NULL, NULL, 0, 256, blocked) == VKRAY_INPUT_ERROR);
+  CHECK(vkray_cast_rays(masked, down_z, 1, NULL, NULL, 0, 255, 2, outputs, hits) == VKRAY_OK && mesh[0] == 0);
   vkray_renderer_free(masked);
   vkray_scene_free(layered);
 

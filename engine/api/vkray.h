@@ -79,9 +79,9 @@ VKRAY_API vkray_status vkray_scene_add_mesh(vkray_scene* scene, const double* ve
 VKRAY_API vkray_status vkray_scene_add_spheres(vkray_scene* scene, const double* spheres, uint64_t count);
 /* count x 6: a point, the normal. */
 VKRAY_API vkray_status vkray_scene_add_planes(vkray_scene* scene, const double* planes, uint64_t count);
-/* The ray mask (0..255) of object `object`, numbered as mesh_id numbers them (the meshes, then the
- * spheres, then the planes, each in the order added): rays hit it only where their mask
- * (vkray_renderer_set_ray_mask) shares a bit with it. Every bit by default. */
+/* The ray mask (0..255) of object `object`, numbered as mesh_id numbers the objects added so far (the
+ * meshes, then the spheres, then the planes; so set it once all are added): a call's rays (its
+ * `mask`) hit it only where their mask shares a bit with it. Every bit (255) by default. */
 VKRAY_API vkray_status vkray_scene_set_mask(vkray_scene* scene, uint32_t object, uint32_t mask);
 /* The camera in the scene file's form, as JSON: {"from": [0, 1, 5], "to": [0, 0, 0], "fovy": 40}. */
 VKRAY_API vkray_status vkray_scene_set_camera(vkray_scene* scene, const char* camera_json);
@@ -115,18 +115,17 @@ VKRAY_API const char* vkray_renderer_device_name(const vkray_renderer* renderer)
  * unchanged. */
 VKRAY_API vkray_status vkray_renderer_set_vertices(vkray_renderer* renderer, uint32_t mesh, const double* positions,
                                                    uint64_t count);
-/* The mask (1..255) of every later call's rays: they hit only the objects whose mask shares a bit
- * with it (vkray_scene_set_mask; a scene file's "mask"). Every bit (255) at first. */
-VKRAY_API vkray_status vkray_renderer_set_ray_mask(vkray_renderer* renderer, uint32_t mask);
 /* What the last call's time went to, as JSON ({"dispatch_gpu_ms": ..., ...}, milliseconds); the
  * constructor's own (upload, BVH build, pipelines) under "setup". */
 VKRAY_API const char* vkray_renderer_timings(vkray_renderer* renderer);
 VKRAY_API void vkray_renderer_free(vkray_renderer* renderer);
 
 /* Renders the scene's camera, or camera_json (its keys over the scene's camera), at width x height
- * (0: the scene's): the outputs named in aovs, aovs[k] into results[k], H x W x components of its type. */
+ * (0: the scene's): the outputs named in aovs, aovs[k] into results[k], H x W x components of its type.
+ * mask: the rays' ray mask, 1..255 (255 for every object): they hit only the objects whose mask
+ * (vkray_scene_set_mask, a scene file's "mask") shares a bit with it. */
 VKRAY_API vkray_status vkray_render(vkray_renderer* renderer, const char* camera_json, uint32_t width, uint32_t height,
-                                    uint32_t aov_count, const char* const* aovs, void* const* results);
+                                    uint32_t mask, uint32_t aov_count, const char* const* aovs, void* const* results);
 
 /* What a given ray is traced for. */
 typedef enum vkray_ray_flags {
@@ -140,14 +139,14 @@ typedef enum vkray_ray_flags {
  * float64, +inf on a miss), "normal" (3, the geometric normal facing the ray; 0 on a miss),
  * "primitive-id" and "mesh-id" (uint32, VKRAY_NO_HIT on a miss), and the surface outputs render
  * gives: "position" (3), "barycentric" (2), "front-facing" (uint32), "shading-normal" (3),
- * "texcoord" (2). */
+ * "texcoord" (2). mask: the rays' ray mask, as vkray_render's. */
 VKRAY_API vkray_status vkray_cast_rays(vkray_renderer* renderer, const double* rays, uint64_t count, const double* t_min,
-                                       const double* t_max, uint32_t flags, uint32_t output_count,
+                                       const double* t_max, uint32_t flags, uint32_t mask, uint32_t output_count,
                                        const char* const* outputs, void* const* results);
 /* Occlusion queries: whether each ray hits anything at t_min < t < t_max (1) or not (0), into
- * occluded (count bytes). The same rays, ranges and flags as vkray_cast_rays. */
+ * occluded (count bytes). The same rays, ranges, flags and mask as vkray_cast_rays. */
 VKRAY_API vkray_status vkray_occluded(vkray_renderer* renderer, const double* rays, uint64_t count, const double* t_min,
-                                      const double* t_max, uint32_t flags, uint8_t* occluded);
+                                      const double* t_max, uint32_t flags, uint32_t mask, uint8_t* occluded);
 
 #ifdef __cplusplus
 }

@@ -360,12 +360,25 @@ nlohmann::json timings_json(const RenderTimings& t, bool constructor) {
   return json;
 }
 
-// A mask from the C API's 32-bit argument: 8 bits (see Mask).
-Mask checked_mask(uint32_t mask, const char* what) {
-  if (mask > every_mask_bit) {
-    throw InputError(std::string(what) + ": " + std::to_string(mask) + " is no mask of 8 bits (0..255)");
-  }
+// An object's mask from the C API's 32-bit argument: 8 bits (see Mask).
+Mask object_mask_argument(uint32_t mask) {
+  if (mask > every_mask_bit) throw InputError("mask: " + std::to_string(mask) + " is no mask of 8 bits (0..255)");
   return static_cast<Mask>(mask);
+}
+
+// Makes `mask` the renderer's rays' for the call under way (the caller holds `busy`): the engine's,
+// or the reference's tree made again for it.
+void use_ray_mask(vkray_renderer& renderer, uint32_t mask) {
+  if (mask == 0 || mask > every_mask_bit) {
+    throw InputError("mask: " + std::to_string(mask) + " is no ray mask (1..255; 0 would hit nothing)");
+  }
+  const auto ray_mask = static_cast<Mask>(mask);
+  if (renderer.renderer) {
+    renderer.renderer->set_ray_mask(ray_mask);
+  } else if (ray_mask != renderer.ray_mask) {
+    renderer.reference = std::make_unique<ReferenceScene>(renderer.scene, ray_mask);
+  }
+  renderer.ray_mask = ray_mask;
 }
 
 }  // namespace
@@ -498,7 +511,7 @@ vkray_status vkray_scene_add_planes(vkray_scene* scene, const double* planes, ui
 vkray_status vkray_scene_set_mask(vkray_scene* scene, uint32_t object, uint32_t mask) {
   return guarded([&] {
     require(scene, "scene");
-    set_object_mask(scene->scene, object, checked_mask(mask, "mask"));
+    set_object_mask(scene->scene, object, object_mask_argument(mask));
   });
 }
 
@@ -534,7 +547,8 @@ const char* vkray_scene_describe(vkray_scene* scene) {
   json["camera"] = camera_description(s.camera, s.width, s.height)["camera"];
   json["object_names"] = object_names(s);
   std::vector<uint32_t> masks;
-  for (uint32_t object = 0; object < object_names(s).size(); ++object) masks.push_back(object_mask(s, object));
+  const size_t objects = s.meshes.size() + s.spheres.size() + s.planes.size();
+  for (uint32_t object = 0; object < objects; ++object) masks.push_back(object_mask(s, object));
   json["masks"] = masks;
   scene->description = json.dump();
   return scene->description.c_str();
@@ -612,21 +626,6 @@ vkray_status vkray_renderer_set_vertices(vkray_renderer* renderer, uint32_t mesh
   });
 }
 
-vkray_status vkray_renderer_set_ray_mask(vkray_renderer* renderer, uint32_t mask) {
-  return guarded([&] {
-    require(renderer, "renderer");
-    const Mask ray_mask = checked_mask(mask, "mask");
-    const std::lock_guard one_call_at_a_time(renderer->busy);
-    if (renderer->renderer) {
-      renderer->renderer->set_ray_mask(ray_mask);
-    } else if (ray_mask != renderer->ray_mask) {
-      if (ray_mask == 0) throw InputError("mask: 0 shares no bit with any object's, so its rays would hit nothing; give 1..255");
-      renderer->reference = std::make_unique<ReferenceScene>(renderer->scene, ray_mask);
-    }
-    renderer->ray_mask = ray_mask;
-  });
-}
-
 const char* vkray_renderer_timings(vkray_renderer* renderer) {
   if (!renderer) return "{}";
   const std::lock_guard one_call_at_a_time(renderer->busy);
@@ -643,8 +642,8 @@ const char* vkray_renderer_timings(vkray_renderer* renderer) {
 
 void vkray_renderer_free(vkray_renderer* renderer) { delete renderer; }
 
-vkray_status vkray_render(vkray_renderer* renderer, const char* camera_json, uint32_t width, uint32_t height, uint32_t aov_count,
-                          const char* const* aov_names, void* const* results) {
+vkray_status vkray_render(vkray_renderer* renderer, const char* camera_json, uint32_t width, uint32_t height, uint32_t mask,
+                          uint32_t aov_count, const char* const* aov_names, void* const* results) {
   return guarded([&] {
     require(renderer, "renderer");
     if (aov_count == 0) throw InputError("aovs: name at least one output (" + output_names() + ")");
@@ -666,6 +665,7 @@ vkray_status vkray_render(vkray_renderer* renderer, const char* camera_json, uin
     Frame frame;
     {
       const std::lock_guard one_call_at_a_time(renderer->busy);
+      use_ray_mask(*renderer, mask);
       renderer->called = true;
       if (renderer->renderer) {
         frame = renderer->renderer->render(camera, w, h, aovs);
@@ -696,7 +696,8 @@ vkray_status vkray_render(vkray_renderer* renderer, const char* camera_json, uin
 }
 
 vkray_status vkray_cast_rays(vkray_renderer* renderer, const double* rays, uint64_t count, const double* t_min, const double* t_max,
-                             uint32_t flags, uint32_t output_count, const char* const* outputs, void* const* results) {
+                             uint32_t flags, uint32_t mask, uint32_t output_count, const char* const* outputs,
+                             void* const* results) {
   return guarded([&] {
     require(renderer, "renderer");
     if (output_count > 0) {
@@ -711,6 +712,7 @@ vkray_status vkray_cast_rays(vkray_renderer* renderer, const double* rays, uint6
     CallRays call(rays, count, t_min, t_max, flags);
     const RayOutputs written(asked, results, renderer->doubles, call, renderer->scene);
     const std::lock_guard one_call_at_a_time(renderer->busy);
+    use_ray_mask(*renderer, mask);
     renderer->called = true;
     // Where it can, the device reads the rays and writes the hits in the caller's own arrays;
     // elsewhere each traced hit goes into them from the host.
@@ -745,12 +747,13 @@ vkray_status vkray_cast_rays(vkray_renderer* renderer, const double* rays, uint6
 }
 
 vkray_status vkray_occluded(vkray_renderer* renderer, const double* rays, uint64_t count, const double* t_min, const double* t_max,
-                            uint32_t flags, uint8_t* occluded) {
+                            uint32_t flags, uint32_t mask, uint8_t* occluded) {
   return guarded([&] {
     require(renderer, "renderer");
     if (count > 0) require(occluded, "occluded");
     CallRays call(rays, count, t_min, t_max, flags);
     const std::lock_guard one_call_at_a_time(renderer->busy);
+    use_ray_mask(*renderer, mask);
     renderer->called = true;
     const auto never_whole = [](std::span<const GivenRay>, const RayRanges&) { return false; };
     trace_call(*renderer, call, never_whole, [&](size_t first, std::span<const GivenRay> run, const RayRanges& run_ranges) {

@@ -343,7 +343,7 @@ class _Caster:
     def render(self, camera: Optional[Mapping[str, Any]] = None, width: Optional[int] = None, height: Optional[int] = None,
                aovs: Union[str, Iterable[str]] = ("depth", "normal"), mask: int = 255) -> Dict[str, np.ndarray]:
         names = _output_names(aovs, "aovs")
-        self._set_mask(mask)
+        ray_mask = _mask(mask, "mask")
         camera_json = _camera_json(camera)
         w = _size(width, "width") or self._scene_size[0]
         h = _size(height, "height") or self._scene_size[1]
@@ -360,11 +360,8 @@ class _Caster:
         c_names = (ctypes.c_char_p * max(1, len(names)))(*[name.replace("_", "-").encode() for name in names])
         c_results = (ctypes.c_void_p * max(1, len(names)))(*[array.ctypes.data for array in results])
         _check(_native.lib.vkray_render(self._handle, camera_json, w if width is not None else 0, h if height is not None else 0,
-                                        len(names), c_names, c_results))
+                                        ray_mask, len(names), c_names, c_results))
         return dict(zip(keys, results))
-
-    def _set_mask(self, mask: int) -> None:
-        _check(_native.lib.vkray_renderer_set_ray_mask(self._handle, _mask(mask, "mask")))
 
     def _rays_and_ranges(self, rays: Any, t_min: Any, t_max: Any):
         given = np.asarray(rays)
@@ -415,7 +412,7 @@ class _Caster:
         only the meshes, spheres and planes whose mask (Scene's masks) shares a bit with it. A dict of
         C-contiguous arrays of shape (...) or (..., C)."""
         names = _output_names(outputs, "outputs")
-        self._set_mask(mask)
+        ray_mask = _mask(mask, "mask")
         flat, leading, lo, hi = self._rays_and_ranges(rays, t_min, t_max)
         flags = self._flags(t_along, bad_rays)
         results, keys = [], []
@@ -431,7 +428,7 @@ class _Caster:
         c_names = (ctypes.c_char_p * max(1, len(names)))(*[key.replace("_", "-").encode() for key in keys])
         c_results = (ctypes.c_void_p * max(1, len(names)))(*[array.ctypes.data for array in results])
         _check(_native.lib.vkray_cast_rays(self._handle, _pointer(flat), len(flat), _pointer(lo), _pointer(hi), flags,
-                                           len(keys), c_names, c_results))
+                                           ray_mask, len(keys), c_names, c_results))
         return dict(zip(keys, results))
 
     def occluded(self, rays: Any, *, t_min: Any = None, t_max: Any = None, t_along: str = "unit",
@@ -442,10 +439,9 @@ class _Caster:
         occluded(np.concatenate([p, q - p], axis=-1), t_max=1, t_along='direction')."""
         flat, leading, lo, hi = self._rays_and_ranges(rays, t_min, t_max)
         flags = self._flags(t_along, bad_rays)
-        self._set_mask(mask)
         blocked = np.empty(leading, dtype=np.uint8)
         _check(_native.lib.vkray_occluded(self._handle, _pointer(flat), len(flat), _pointer(lo), _pointer(hi), flags,
-                                          _pointer(blocked, ctypes.c_uint8)))
+                                          _mask(mask, "mask"), _pointer(blocked, ctypes.c_uint8)))
         return blocked.view(np.bool_)
 
     def set_vertices(self, mesh: int, positions: Any) -> None:

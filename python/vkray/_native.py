@@ -59,13 +59,13 @@ _signatures = {
     "vkray_renderer_doubles": (ctypes.c_int, [_renderer]),
     "vkray_renderer_device_name": (ctypes.c_char_p, [_renderer]),
     "vkray_renderer_set_vertices": (Status, [_renderer, ctypes.c_uint32, _doubles, ctypes.c_uint64]),
-    "vkray_renderer_set_ray_mask": (Status, [_renderer, ctypes.c_uint32]),
     "vkray_renderer_timings": (ctypes.c_char_p, [_renderer]),
     "vkray_renderer_free": (None, [_renderer]),
-    "vkray_render": (Status, [_renderer, ctypes.c_char_p, ctypes.c_uint32, ctypes.c_uint32, ctypes.c_uint32, _names, _pointers]),
+    "vkray_render": (Status, [_renderer, ctypes.c_char_p, ctypes.c_uint32, ctypes.c_uint32, ctypes.c_uint32, ctypes.c_uint32,
+                              _names, _pointers]),
     "vkray_cast_rays": (Status, [_renderer, _doubles, ctypes.c_uint64, _doubles, _doubles, ctypes.c_uint32, ctypes.c_uint32,
-                                 _names, _pointers]),
-    "vkray_occluded": (Status, [_renderer, _doubles, ctypes.c_uint64, _doubles, _doubles, ctypes.c_uint32,
+                                 ctypes.c_uint32, _names, _pointers]),
+    "vkray_occluded": (Status, [_renderer, _doubles, ctypes.c_uint64, _doubles, _doubles, ctypes.c_uint32, ctypes.c_uint32,
                                 ctypes.POINTER(ctypes.c_uint8)]),
 }
 for _name, (_result, _arguments) in _signatures.items():
