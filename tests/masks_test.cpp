@@ -155,6 +155,63 @@ TEST(Masks, GivenRaysAndOcclusionQueries) {
   }
 }
 
+// The other ways the same rays go: after set_vertices (refitted in place from its second call), into
+// the viewer's storage image, and read and written in the caller's arrays (where the device does).
+TEST(Masks, MovedMeshesTheImageTargetAndRaysInPlace) {
+  Scene scene = masked_scene(true);
+  Renderer renderer(device(), scene);
+  const AovSet aovs{Aov::depth, Aov::normal, Aov::mesh_id, Aov::primitive_id};
+  for (const double shift : {0.1, 0.2}) {
+    std::vector<glm::dvec3> moved = scene.meshes[0].positions;
+    for (glm::dvec3& p : moved) p.x -= shift;
+    renderer.set_vertices(0, moved);
+    EXPECT_TRUE(renderer.timings().tree_refitted);  // the records' masks kept through the refit
+    scene.meshes[0].positions = moved;
+    for (const Mask mask : {Mask(1), Mask(0xfe)}) {
+      SCOPED_TRACE(testing::Message() << "moved by " << shift << ", ray mask " << int(mask));
+      renderer.set_ray_mask(mask);
+      const Frame frame = renderer.render(scene.camera, scene.width, scene.height, aovs);
+      std::vector<ObjectPrimitive> ids(frame.pixel_count());
+      for (size_t p = 0; p < ids.size(); ++p) ids[p] = {frame.mesh_id[p], frame.primitive_id[p]};
+      const EnvelopeReport report = check_against_reference(scene, frame, 1, &ids, mask);
+      EXPECT_EQ(report.failures, 0u) << report.describe();
+      EXPECT_EQ(objects_hit(frame).contains(0), mask == 1) << "the pyramid, mask 1";
+    }
+  }
+
+  renderer.set_ray_mask(2);  // the cube alone
+  const Frame cube = renderer.render(scene.camera, scene.width, scene.height, {Aov::depth});
+  ImageTarget target(device(), scene.width, scene.height);
+  const DepthRange depths = renderer.render(scene.camera, Aov::depth, target);
+  const DepthRange expected = finite_depth_range(cube);
+  EXPECT_EQ(depths.near, expected.near);
+  EXPECT_EQ(depths.far, expected.far);
+
+  if (!renderer.casts_in_place()) GTEST_SKIP() << device().info().name << " casts no rays in place";
+  const CameraBasis basis = make_camera_basis(scene.camera, scene.width, scene.height);
+  std::vector<GivenRay> rays;
+  for (uint32_t j = 0; j < scene.height; ++j) {
+    for (uint32_t i = 0; i < scene.width; ++i) {
+      const glm::dvec3 dir = basis.direction(pixel_uv(i, j, scene.width, scene.height));
+      rays.push_back({basis.origin.x, basis.origin.y, basis.origin.z, dir.x, dir.y, dir.z});
+    }
+  }
+  renderer.set_ray_mask(0x30);  // the small spheres alone
+  const RayHits hits = renderer.cast_rays(rays);
+  std::vector<float> t(rays.size()), normal(3 * rays.size());
+  std::vector<uint32_t> object(rays.size()), primitive(rays.size());
+  ASSERT_TRUE(renderer.cast_rays_in_place(rays, {t.data(), normal.data(), object.data(), primitive.data()}));
+  size_t differing = 0, spheres = 0, hidden = 0;
+  for (size_t k = 0; k < rays.size(); ++k) {
+    differing += t[k] != hits.t[k] || object[k] != hits.object[k] || primitive[k] != hits.primitive[k];
+    spheres += object[k] != no_object;
+    hidden += object[k] != no_object && !mask_hits(object_mask(scene, object[k]), 0x30);
+  }
+  EXPECT_EQ(differing, 0u);
+  EXPECT_GT(spheres, 0u);
+  EXPECT_EQ(hidden, 0u);
+}
+
 // The reference with a mask is the reference of the scene without what the mask hides, hit for hit
 // (the same double arithmetic on the same primitives; ids mapped back to the whole scene's).
 TEST(Masks, ReferenceIsTheSceneWithoutWhatTheMaskHides) {
