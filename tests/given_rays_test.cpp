@@ -52,14 +52,7 @@ GivenRayWalk expected_walk(const Renderer& renderer, Listing listing, std::span<
 // The pixel rays of `scene`'s camera listed as `listing` says; pixel_of[k] is the pixel whose ray
 // is listed k-th.
 std::vector<GivenRay> camera_rays(const Scene& scene, Listing listing, std::vector<size_t>& pixel_of) {
-  const CameraBasis basis = make_camera_basis(scene.camera, scene.width, scene.height);
-  std::vector<GivenRay> rays;
-  for (uint32_t j = 0; j < scene.height; ++j) {
-    for (uint32_t i = 0; i < scene.width; ++i) {
-      const glm::dvec3 dir = basis.direction(pixel_uv(i, j, scene.width, scene.height));
-      rays.push_back({basis.origin.x, basis.origin.y, basis.origin.z, dir.x, dir.y, dir.z});
-    }
-  }
+  std::vector<GivenRay> rays = pixel_rays(scene);
   pixel_of.resize(rays.size());
   std::iota(pixel_of.begin(), pixel_of.end(), size_t{0});
   if (listing == Listing::shuffled) {

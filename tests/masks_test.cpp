@@ -119,14 +119,7 @@ TEST(Masks, ShaderVariantsAndRaysFinishedOnTheHost) {
 // hit something.
 TEST(Masks, GivenRaysAndOcclusionQueries) {
   const Scene scene = masked_scene(true);
-  const CameraBasis basis = make_camera_basis(scene.camera, scene.width, scene.height);
-  std::vector<GivenRay> rays;
-  for (uint32_t j = 0; j < scene.height; ++j) {
-    for (uint32_t i = 0; i < scene.width; ++i) {
-      const glm::dvec3 dir = basis.direction(pixel_uv(i, j, scene.width, scene.height));
-      rays.push_back({basis.origin.x, basis.origin.y, basis.origin.z, dir.x, dir.y, dir.z});
-    }
-  }
+  const std::vector<GivenRay> rays = pixel_rays(scene);
   for (const PrimitiveSearch search : runnable({PrimitiveSearch::brute_force, PrimitiveSearch::bvh_per_ray,
                                                 PrimitiveSearch::bvh_packet, PrimitiveSearch::ray_query})) {
     RendererOptions options;
@@ -188,14 +181,7 @@ TEST(Masks, MovedMeshesTheImageTargetAndRaysInPlace) {
   EXPECT_EQ(depths.far, expected.far);
 
   if (!renderer.casts_in_place()) GTEST_SKIP() << device().info().name << " casts no rays in place";
-  const CameraBasis basis = make_camera_basis(scene.camera, scene.width, scene.height);
-  std::vector<GivenRay> rays;
-  for (uint32_t j = 0; j < scene.height; ++j) {
-    for (uint32_t i = 0; i < scene.width; ++i) {
-      const glm::dvec3 dir = basis.direction(pixel_uv(i, j, scene.width, scene.height));
-      rays.push_back({basis.origin.x, basis.origin.y, basis.origin.z, dir.x, dir.y, dir.z});
-    }
-  }
+  const std::vector<GivenRay> rays = pixel_rays(scene);
   renderer.set_ray_mask(0x30);  // the small spheres alone
   const RayHits hits = renderer.cast_rays(rays);
   std::vector<float> t(rays.size()), normal(3 * rays.size());

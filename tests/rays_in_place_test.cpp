@@ -33,19 +33,6 @@ struct CallerHits {
   std::vector<uint32_t> object, primitive;
 };
 
-// The scene camera's pixel rays, row by row (an image's rows: the packet walk takes them in place).
-std::vector<GivenRay> pixel_rays(const Scene& scene) {
-  const CameraBasis basis = make_camera_basis(scene.camera, scene.width, scene.height);
-  std::vector<GivenRay> rays;
-  for (uint32_t j = 0; j < scene.height; ++j) {
-    for (uint32_t i = 0; i < scene.width; ++i) {
-      const glm::dvec3 d = basis.direction(pixel_uv(i, j, scene.width, scene.height));
-      rays.push_back({basis.origin.x, basis.origin.y, basis.origin.z, d.x, d.y, d.z});
-    }
-  }
-  return rays;
-}
-
 // `rays` in a fixed random order: listed[n] is the index in `rays` of the n-th.
 std::vector<GivenRay> shuffled(const std::vector<GivenRay>& rays, std::vector<size_t>& listed) {
   listed.resize(rays.size());

@@ -44,6 +44,19 @@ inline Scene translated(Scene scene, const glm::dvec3& offset) {
   return scene;
 }
 
+// The scene camera's pixel rays, row by row (an image's rows: the packet walk takes them in place).
+inline std::vector<GivenRay> pixel_rays(const Scene& scene) {
+  const CameraBasis basis = make_camera_basis(scene.camera, scene.width, scene.height);
+  std::vector<GivenRay> rays;
+  for (uint32_t j = 0; j < scene.height; ++j) {
+    for (uint32_t i = 0; i < scene.width; ++i) {
+      const glm::dvec3 d = basis.direction(pixel_uv(i, j, scene.width, scene.height));
+      rays.push_back({basis.origin.x, basis.origin.y, basis.origin.z, d.x, d.y, d.z});
+    }
+  }
+  return rays;
+}
+
 // A spinning sensor at `scene`'s camera: 16 rings of 1024 azimuths all the way round, 0.03 radians
 // of elevation apart about the view direction, listed ring by ring.
 inline std::vector<GivenRay> sensor_rings(const Scene& scene) {

@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 import vkray
+from shapes import CUBE_CORNERS, CUBE_FACES
 
 EPS = 2.0**-24  # float32 unit roundoff
 
@@ -13,10 +14,7 @@ EPS = 2.0**-24  # float32 unit roundoff
 def robot_and_room():
     """A sensor's own robot (a box about the origin, mask 2) inside a room's walls (a box 10 wide,
     mask 1), and a sphere on the floor (mask 4)."""
-    corners = np.array([[x, y, z] for x in (-1.0, 1.0) for y in (-1.0, 1.0) for z in (-1.0, 1.0)])
-    faces = np.array([[0, 1, 3], [0, 3, 2], [4, 6, 7], [4, 7, 5], [0, 4, 5], [0, 5, 1],
-                      [2, 3, 7], [2, 7, 6], [0, 2, 6], [0, 6, 4], [1, 5, 7], [1, 7, 3]])
-    meshes = [{"vertices": 5.0 * corners, "triangles": faces}, {"vertices": 0.5 * corners, "triangles": faces}]
+    meshes = [{"vertices": 5.0 * CUBE_CORNERS, "triangles": CUBE_FACES}, {"vertices": 0.5 * CUBE_CORNERS, "triangles": CUBE_FACES}]
     return vkray.Scene(meshes=meshes, spheres=[[2.5, -4.0, 1.0, 1.0]], masks={0: 1, 1: 2, 2: 4},
                        camera={"from": [0.0, 0.0, 0.0], "to": [0.0, 0.0, -1.0], "fovy": 100}, width=64, height=48)
 
@@ -24,16 +22,6 @@ def robot_and_room():
 @pytest.fixture(scope="module")
 def scene():
     return robot_and_room()
-
-
-@pytest.fixture(scope="module")
-def renderer(scene):
-    return vkray.Renderer(scene)
-
-
-@pytest.fixture(scope="module")
-def reference(scene):
-    return vkray.Reference(scene)
 
 
 def sensor_rays(count, seed=7):

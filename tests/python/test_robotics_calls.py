@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 import vkray
+from shapes import CUBE_CORNERS, CUBE_FACES
 
 EPS = 2.0**-24  # float32 unit roundoff
 
@@ -15,21 +16,8 @@ EPS = 2.0**-24  # float32 unit roundoff
 @pytest.fixture(scope="module")
 def scene():
     # A closed box (12 triangles, texture coordinates through a glTF-free mesh: none) and a sphere.
-    box = np.array([[x, y, z] for x in (-1.0, 1.0) for y in (-1.0, 1.0) for z in (-1.0, 1.0)])
-    faces = np.array([[0, 1, 3], [0, 3, 2], [4, 6, 7], [4, 7, 5], [0, 4, 5], [0, 5, 1],
-                      [2, 3, 7], [2, 7, 6], [0, 2, 6], [0, 6, 4], [1, 5, 7], [1, 7, 3]])
-    return vkray.Scene(box, faces, spheres=np.array([[3.0, 0.0, 0.0, 0.75]]),
+    return vkray.Scene(CUBE_CORNERS, CUBE_FACES, spheres=np.array([[3.0, 0.0, 0.0, 0.75]]),
                        camera={"from": [0.5, 0.8, 6.0], "to": [0.5, 0.0, 0.0], "fovy": 40}, width=96, height=72)
-
-
-@pytest.fixture(scope="module")
-def renderer(scene):
-    return vkray.Renderer(scene)
-
-
-@pytest.fixture(scope="module")
-def reference(scene):
-    return vkray.Reference(scene)
 
 
 def sensor_rays(origin, count, seed=1):

@@ -12,6 +12,7 @@ import OpenImageIO as oiio
 import pytest
 
 import vkray
+from shapes import CUBE_CORNERS, CUBE_FACES
 
 EPS = 2.0**-24  # float32 unit roundoff
 MODELS = os.environ.get("VKRAY_MODELS_DIR", "")
@@ -412,10 +413,7 @@ def test_mesh_ids_count_meshes_then_spheres_then_planes():
 
 
 def test_rays_from_inside_a_closed_mesh_meet_its_walls_from_inside():
-    corners = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)], dtype=float)
-    faces = np.array([[0, 1, 3], [0, 3, 2], [4, 6, 7], [4, 7, 5], [0, 4, 5], [0, 5, 1],
-                      [2, 3, 7], [2, 7, 6], [0, 2, 6], [0, 6, 4], [1, 5, 7], [1, 7, 3]])
-    scene = vkray.Scene(corners, faces, camera={"from": [0, 0, 0.5], "to": [0, 0, 0], "fovy": 90})
+    scene = vkray.Scene(CUBE_CORNERS, CUBE_FACES, camera={"from": [0, 0, 0.5], "to": [0, 0, 0], "fovy": 90})
     rng = np.random.default_rng(11)
     origins = rng.uniform(-0.9, 0.9, size=(3000, 3))
     directions = rng.normal(size=(3000, 3))
