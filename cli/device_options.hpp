@@ -1,7 +1,9 @@
-// The options every command that opens a device shares: which device, and how data reaches it.
+// The options every command that opens a device shares: which device, how data reaches it, how rays
+// find the primitives and which they see (--mask).
 #pragma once
 
 #include "engine/device/gpu_device.hpp"
+#include "engine/scene/scene.hpp"
 
 #include <CLI/CLI.hpp>
 
@@ -22,6 +24,9 @@ CLI::Option* add_device_options(CLI::App* command, DeviceOptions& options);
 void add_traversal_option(CLI::App* command, std::string& traversal);
 // --mask: the rays' mask (Renderer::set_ray_mask), 1..255.
 void add_mask_option(CLI::App* command, uint32_t& mask);
+// Prints a note on stderr where --mask `mask` hides every object of `scene`: its image would be all
+// misses, most likely a mistyped mask.
+void print_mask_note(const Scene& scene, uint32_t mask);
 
 // Prints cpu_device_note for `device` on stderr, when it has one.
 void print_cpu_device_note(const GpuDeviceInfo& device);

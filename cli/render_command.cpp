@@ -187,6 +187,7 @@ int run_render_views(const RenderOptions& options, const AovSet& aovs) {
   batch.height = scene.height;
   batch.scene = geometry_hash(scene);
   batch.mask = static_cast<Mask>(options.mask);
+  print_mask_note(scene, options.mask);
   if (aovs.has(Aov::mesh_id)) batch.objects = object_names(scene);
   if (batch.cameras.size() > 1 && (!batch.exr.has_index() || (batch.png && !batch.png->has_index()))) {
     throw InputError(std::string(batch.exr.has_index() ? "--preview" : "-o") + ": '" +
@@ -335,6 +336,7 @@ int run_render(const RenderOptions& options) {
   Scene scene = load_scene_argument(options.scene_path, options.width, options.height, options.view);
   if (options.camera) apply_camera_option(*options.camera, scene.camera);
   check_scene_camera(scene, options.camera.has_value(), options.scene_path);
+  print_mask_note(scene, options.mask);
   const double load_ms = stopwatch.lap_ms();
 
   Frame frame;

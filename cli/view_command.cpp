@@ -43,6 +43,7 @@ int run_view(const ViewCommandOptions& options) {
   if (options.screenshot) check_output_path(*options.screenshot);
   viewer.load_scene = [options, width, height] {
     Scene scene = load_scene_argument(options.scene_path, width, height, options.view);
+    print_mask_note(scene, options.mask);
     if (options.camera) apply_camera_option(*options.camera, scene.camera);
     check_scene_camera(scene, options.camera.has_value(), options.scene_path);
     if (scene.camera.projection != Projection::perspective) {

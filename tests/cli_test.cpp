@@ -578,6 +578,11 @@ TEST_F(CliTest, MaskLeavesOutWhatSharesNoBitWithIt) {
     const uint32_t centre = ids[6 * 16 + 8];  // the sphere's, where the mask lets it through
     EXPECT_EQ(centre, extra[1] == "3" ? 0u : 1u);
   }
+  const RunResult none = vkray({"render", path("masked.json").string(), "--mask", "4", "-o", "none.exr", "--no-preview"});
+  EXPECT_EQ(none.exit_code, 0) << none.err;
+  EXPECT_NE(none.err.find("--mask 4 shares no bit with the mask of any object of the scene (1, 2): every ray misses"),
+            std::string::npos)
+      << none.err;
   const RunResult zero = vkray({"render", path("masked.json").string(), "--mask", "0", "-o", "zero.exr"});
   EXPECT_EQ(zero.exit_code, 2);
   EXPECT_NE(zero.err.find("--mask"), std::string::npos) << zero.err;
