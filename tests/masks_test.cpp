@@ -70,7 +70,7 @@ void expect_masks_render_as_reference(const Scene& scene, const RendererOptions&
     }
     EXPECT_EQ(hit, expected);
   }
-  EXPECT_EQ(in_view.size(), scene.meshes.size() + scene.spheres.size() + scene.planes.size())
+  EXPECT_EQ(in_view.size(), scene.object_count())
       << "every object must be in view";
 }
 

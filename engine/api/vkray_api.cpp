@@ -547,8 +547,7 @@ const char* vkray_scene_describe(vkray_scene* scene) {
   json["camera"] = camera_description(s.camera, s.width, s.height)["camera"];
   json["object_names"] = object_names(s);
   std::vector<uint32_t> masks;
-  const size_t objects = s.meshes.size() + s.spheres.size() + s.planes.size();
-  for (uint32_t object = 0; object < objects; ++object) masks.push_back(object_mask(s, object));
+  for (uint32_t object = 0; object < s.object_count(); ++object) masks.push_back(object_mask(s, object));
   json["masks"] = masks;
   scene->description = json.dump();
   return scene->description.c_str();

@@ -90,8 +90,6 @@ void Renderer::set_ray_mask(Mask mask) {
   r.reference.reset();  // made again for this mask where a ray needs it
 }
 
-Mask Renderer::ray_mask() const { return impl_->ray_mask; }
-
 void Renderer::set_vertices(uint32_t mesh, std::span<const glm::dvec3> positions) {
   Impl& r = *impl_;
   const auto start = Clock::now();

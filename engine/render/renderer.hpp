@@ -197,7 +197,6 @@ class Renderer {
   // the shaders test none, and any mask sees everything. Throws InputError for 0, which would see
   // nothing.
   void set_ray_mask(Mask mask);
-  Mask ray_mask() const;
 
   // Moves the vertices of mesh `mesh` (the scene's meshes[mesh], its mesh_id) to `positions`, one a
   // vertex in its order (a deforming mesh: a skinned arm, cloth): the next call renders the moved

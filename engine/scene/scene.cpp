@@ -307,8 +307,7 @@ void add_geometry(Fnv1a& fnv, const Scene& scene) {
   }
   // Masks change what a call sees; a scene without them keeps the hash it had before masks existed.
   if (scene.has_masks()) {
-    const size_t objects = scene.meshes.size() + scene.spheres.size() + scene.planes.size();
-    for (uint32_t object = 0; object < objects; ++object) fnv.add(uint64_t{object_mask(scene, object)});
+    for (uint32_t object = 0; object < scene.object_count(); ++object) fnv.add(uint64_t{object_mask(scene, object)});
   }
 }
 
@@ -340,7 +339,7 @@ void set_object_mask(Scene& scene, uint32_t object, Mask mask) {
   Mask* field = object_mask_field(scene, object);
   if (!field) {
     throw InputError("mask: no object " + std::to_string(object) + " (the scene has " +
-                     std::to_string(scene.meshes.size() + scene.spheres.size() + scene.planes.size()) +
+                     std::to_string(scene.object_count()) +
                      ": its meshes, then spheres, then planes)");
   }
   *field = mask;

@@ -95,6 +95,8 @@ struct Scene {
   // exactly 0 in double). No ray can hit them; the renderer and the reference leave them out, and
   // the command line says how many.
   size_t zero_area_triangle_count() const;
+  // The objects the outputs' mesh_id numbers: the meshes, then the spheres, then the planes.
+  size_t object_count() const { return meshes.size() + spheres.size() + planes.size(); }
   // Whether any mesh, sphere or plane has a mask other than every bit: only then do the shaders test
   // masks (VKRAY_SPEC_MASKS).
   bool has_masks() const;
