@@ -214,9 +214,17 @@ VKRAY_SHARED_FUNCTION uint direction_key(float x, float y, float z, uint bits) {
 #define VKRAY_SPEC_SUBGROUP_SIZE 21
 // Write what each camera ray hit to VKRAY_BINDING_HITS too (the mesh-id and primitive-id outputs).
 #define VKRAY_SPEC_WRITE_HIT 22
-// Occlusion queries (Renderer::occluded): a ray's walk stops at its first hit, whichever it is;
-// only whether it hit means anything then, not its depth or normal.
-#define VKRAY_SPEC_ANY_HIT 23
+// What a ray's walk looks for (HitQuery in engine/scene/scene.hpp):
+// - the nearest hit;
+// - any hit (Renderer::occluded): the walk stops at its first, whichever it is; only whether it hit
+//   means anything then, not its depth or normal;
+// - every crossing (Renderer::count_intersections): the walk goes to the end of the ray's range
+//   and counts each surface it crosses into VKRAY_BINDING_HITS; an edge or vertex a ray passes
+//   exactly through counts once (intersect_triangle's claim_edges).
+#define VKRAY_SPEC_HIT_QUERY 23
+#define VKRAY_HIT_QUERY_NEAREST 0
+#define VKRAY_HIT_QUERY_ANY 1
+#define VKRAY_HIT_QUERY_COUNT 2
 // The scene gives some mesh, sphere or plane a mask other than every bit (see Mask in
 // engine/scene/scene.hpp): a primitive counts only where its mask shares a bit with the call's ray
 // mask (RayGenParams.counts.w). Without, no mask is read or tested.

@@ -151,16 +151,19 @@ vec3 perpendicular_part(vec3 f_hi, vec3 f_lo, float b_over_a, vec3 dir) {
 //   difference of nearly equal numbers.
 // `normal` receives the hit point minus the centre over the radius, facing the ray by which root was
 // taken (outward for the near root, inward from inside), not by the sign of its dot product with
-// the ray, which rounding decides at the silhouette, where it is 0.
+// the ray, which rounding decides at the silhouette, where it is 0. `far_root` receives the farther
+// root whatever its sign (t_max on a miss), which counting crossings adds when both lie ahead.
 // The textbook form, kept as a benchmark variant (VKRAY_SPHERE_NAIVE) to show what this buys:
 // b^2 - c cancels when the sphere is small against its distance, -b + sqrt(disc) when the camera is
 // inside, c = |f|^2 - r^2 near a large sphere's surface, and f + t dir for any small sphere far away.
-float intersect_sphere_naive(vec3 f, float radius, vec3 dir, float t_max, out vec3 normal) {
+float intersect_sphere_naive(vec3 f, float radius, vec3 dir, float t_max, out vec3 normal, out float far_root) {
   float b = dot(f, dir);
   float disc = b * b - (dot(f, f) - radius * radius);
   normal = vec3(0.0);
+  far_root = t_max;
   if (disc < 0.0) return t_max;
   float root = sqrt(disc);
+  far_root = -b + root;
   bool near = -b - root > 0.0;
   float t = near ? -b - root : -b + root;
   normal = (near ? 1.0 : -1.0) * (f + t * dir) / radius;
@@ -171,9 +174,11 @@ float intersect_sphere_naive(vec3 f, float radius, vec3 dir, float t_max, out ve
 // must get the same bits from every pipeline that computes it (workgroup shapes, the generic and
 // storage-geometry variants; tests/shader_variant_test.cpp), and a compiler may otherwise fuse a
 // product and a sum into an FMA in one pipeline and not in another.
-float intersect_sphere(vec3 f_hi, vec3 f_lo, float r_hi, float r_lo, vec3 dir, float t_max, out vec3 normal) {
-  if (SPHERE_FORMULA == VKRAY_SPHERE_NAIVE) return intersect_sphere_naive(f_hi + f_lo, r_hi, dir, t_max, normal);
+float intersect_sphere(vec3 f_hi, vec3 f_lo, float r_hi, float r_lo, vec3 dir, float t_max, out vec3 normal,
+                       out float far_root) {
+  if (SPHERE_FORMULA == VKRAY_SPHERE_NAIVE) return intersect_sphere_naive(f_hi + f_lo, r_hi, dir, t_max, normal, far_root);
   normal = vec3(0.0);
+  far_root = t_max;
   precise float a = dot(dir, dir);
   vec3 f = f_hi + f_lo;
   precise float ff = dot(f, f);
@@ -215,6 +220,7 @@ float intersect_sphere(vec3 f_hi, vec3 f_lo, float r_hi, float r_lo, vec3 dir, f
   if (q == 0.0) return t_max;  // origin on the surface and tangent ray: no hit in front
   float t0 = c / q;
   float t1 = q / a;
+  far_root = max(t0, t1);
   float t_near = min(t0, t1);
   bool near = t_near > 0.0;
   float t = near ? t_near : max(t0, t1);  // camera inside the sphere: the far root
@@ -228,8 +234,9 @@ float intersect_sphere(vec3 f_hi, vec3 f_lo, float r_hi, float r_lo, vec3 dir, f
 
 #else  // VKRAY_FLOAT64: the reference's formulas, in double
 
-double intersect_sphere(dvec3 f, double radius, dvec3 dir, double t_max, out dvec3 normal) {
+double intersect_sphere(dvec3 f, double radius, dvec3 dir, double t_max, out dvec3 normal, out double far_root) {
   normal = dvec3(0.0);
+  far_root = t_max;
   precise double a = dot(dir, dir);
   precise double b = dot(f, dir);
   precise dvec3 f_perp = f - (b / a) * dir;
@@ -241,6 +248,7 @@ double intersect_sphere(dvec3 f, double radius, dvec3 dir, double t_max, out dve
   if (q == 0.0) return t_max;
   double t0 = c / q;
   double t1 = q / a;
+  far_root = max(t0, t1);
   bool near = min(t0, t1) > 0.0;
   double t = near ? min(t0, t1) : max(t0, t1);
   precise dvec3 offset = f + t * dir;
@@ -322,8 +330,27 @@ real intersect_triangle_moller_trumbore(real3 dir, real3 v0, real3 v1, real3 v2,
   return (t > 0.0 && t < t_max) ? t : t_max;
 }
 
-// Vertices relative to the ray origin.
-real intersect_triangle(RayFrame frame, real3 dir, real3 v0, real3 v1, real3 v2, real t_max) {
+// Whether a triangle whose edge functions `uvw` agree in sign (det = their sum, not 0) claims the
+// edges the ray passes exactly through (u, v, w exactly 0): a ray through an edge shared by two
+// triangles, or a vertex shared by a fan of them, then hits exactly one, which counting crossings
+// needs (the watertight test alone takes both). The rule is rasterization's top-left rule in the
+// ray frame: a triangle owns an edge where it lies to the left of the edge directed upward (+y,
+// or +x along y = 0), as if the ray were moved by (-e, e^2) for an infinitesimal e: one such move
+// for every triangle of a ray, so exactly one triangle of a flat fan contains it. An edge's
+// direction is told from its endpoints by comparisons, exactly; the vertices share their bits in
+// both triangles, and counter-clockwise (u, v, w < 0, det < 0) puts the triangle on the left of its
+// edges b->c, c->a and a->b.
+bool claims_edges(real3 a, real3 b, real3 c, bvec3 on_edge, real det) {
+  real3 from_x = real3(b.x, c.x, a.x), from_y = real3(b.y, c.y, a.y);
+  real3 to_x = real3(c.x, a.x, b.x), to_y = real3(c.y, a.y, b.y);
+  bvec3 upward = bvec3(uvec3(greaterThan(to_y, from_y)) | (uvec3(equal(to_y, from_y)) & uvec3(greaterThan(to_x, from_x))));
+  bvec3 owned = equal(upward, bvec3(det < 0.0));
+  return !any(bvec3(uvec3(on_edge) & uvec3(not(owned))));
+}
+
+// Vertices relative to the ray origin. With claim_edges (counting crossings), an edge the ray
+// passes exactly through counts for one of its triangles alone (claims_edges).
+real intersect_triangle(RayFrame frame, real3 dir, real3 v0, real3 v1, real3 v2, real t_max, bool claim_edges) {
   if (TRIANGLE_TEST == VKRAY_TRIANGLE_MOLLER_TRUMBORE) return intersect_triangle_moller_trumbore(dir, v0, v1, v2, t_max);
   real3 a = to_ray_frame(frame, v0);
   real3 b = to_ray_frame(frame, v1);
@@ -344,6 +371,7 @@ real intersect_triangle(RayFrame frame, real3 dir, real3 v0, real3 v1, real3 v2,
   dvec3 exact_uvw = dvec3(left_x) * dvec3(left_y) - dvec3(right_x) * dvec3(right_y);
   if (any(lessThan(exact_uvw, dvec3(0.0))) && any(greaterThan(exact_uvw, dvec3(0.0)))) return t_max;
   uvw = vec3(exact_uvw);
+  bvec3 on_edge = equal(exact_uvw, dvec3(0.0));  // before rounding to float, which may flush to 0
 #else
 #ifndef VKRAY_FLOAT64
   // A triangle much smaller than its distance from the ray (1e-4 across, 500 to the side) has edge
@@ -361,10 +389,12 @@ real intersect_triangle(RayFrame frame, real3 dir, real3 v0, real3 v1, real3 v2,
   }
 #endif
   if (any(lessThan(uvw, real3(0.0))) && any(greaterThan(uvw, real3(0.0)))) return t_max;
+  bvec3 on_edge = equal(uvw, real3(0.0));  // exact zeros: the small ones were evaluated error-free
 #endif
   real u = uvw.x, v = uvw.y, w = uvw.z;
   real det = u + v + w;
   if (det == 0.0) return t_max;  // ray in the triangle's plane, or a degenerate projection
+  if (claim_edges && !claims_edges(a, b, c, on_edge, det)) return t_max;
   precise real t = frame.shear.z * (u * a.z + v * b.z + w * c.z) / det;
   return (t > 0.0 && t < t_max) ? t : t_max;
 }

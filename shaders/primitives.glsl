@@ -19,7 +19,9 @@ layout(constant_id = VKRAY_SPEC_TREE_HAS_SPHERES) const bool TREE_HAS_SPHERES = 
 layout(constant_id = VKRAY_SPEC_LOOP_BUDGET) const uint LOOP_BUDGET = 0;
 layout(constant_id = VKRAY_SPEC_GENERIC) const bool GENERIC = false;
 layout(constant_id = VKRAY_SPEC_STACK_REGISTERS) const uint STACK_REGISTERS = 0;
-layout(constant_id = VKRAY_SPEC_ANY_HIT) const bool ANY_HIT = false;
+layout(constant_id = VKRAY_SPEC_HIT_QUERY) const uint HIT_QUERY = VKRAY_HIT_QUERY_NEAREST;
+const bool ANY_HIT = HIT_QUERY == VKRAY_HIT_QUERY_ANY;
+const bool COUNT_CROSSINGS = HIT_QUERY == VKRAY_HIT_QUERY_COUNT;
 layout(constant_id = VKRAY_SPEC_MASKS) const bool MASKS = false;
 // What the tree may hold: in the generic variant, both kinds.
 const bool TREE_TRIANGLES = GENERIC || TREE_HAS_TRIANGLES;
@@ -62,6 +64,10 @@ bool mask_hits(uint mask) { return !MASKS || (mask & ray_mask) != 0u; }
 bool slot_visible(uint slot) { return !MASKS || mask_hits(FETCH(primitives, int(slot)).w >> VKRAY_PRIMITIVE_MASK_SHIFT); }
 bool apart_visible(uint index) { return !MASKS || mask_hits(FETCH(apart_masks, int(index)).x); }
 
+// COUNT_CROSSINGS: the surfaces the ray has crossed so far. Every test leaves the ray's range
+// whole, so the walk visits everything along it.
+uint crossings = 0u;
+
 // A GpuPoint as stored: hi and lo parts in float32 shaders, the position and w in float64 shaders.
 struct Point {
 #ifdef VKRAY_FLOAT64
@@ -98,15 +104,23 @@ real3 point_from_origin(Point point, Origin origin) {
 #endif
 }
 
-// A sphere given as (centre, radius): `normal` receives (hit - centre) / radius.
-real intersect_sphere_point(Point sphere, Origin origin, real3 dir, real t_max, out real3 normal) {
+// A sphere given as (centre, radius): `normal` receives (hit - centre) / radius, `far_root` the
+// farther root (intersect_sphere).
+real intersect_sphere_point(Point sphere, Origin origin, real3 dir, real t_max, out real3 normal, out real far_root) {
 #ifdef VKRAY_FLOAT64
-  return intersect_sphere(origin.position - sphere.value.xyz, sphere.value.w, dir, t_max, normal);
+  return intersect_sphere(origin.position - sphere.value.xyz, sphere.value.w, dir, t_max, normal, far_root);
 #else
   vec3 f_hi, f_lo;
   sphere_offset(sphere.hi.xyz, sphere.lo.xyz, origin.hi, origin.lo, f_hi, f_lo);
-  return intersect_sphere(f_hi, f_lo, sphere.hi.w, sphere.lo.w, dir, t_max, normal);
+  return intersect_sphere(f_hi, f_lo, sphere.hi.w, sphere.lo.w, dir, t_max, normal, far_root);
 #endif
+}
+
+// A sphere's crossings in (0, t_max), from the root intersect_sphere took (`t`: the near one where
+// it lies ahead, else the far one) and the far root: a tangent ray's double root counts twice, so
+// that it leaves the count's parity (inside or outside) as it was.
+uint sphere_crossings(real t, real far_root, real t_max) {
+  return uint(t < t_max) + uint(t < far_root && far_root < t_max);
 }
 
 const uint no_primitive = VKRAY_HIT_NONE;
@@ -151,8 +165,12 @@ Point fetch_sphere(int slot) {
 void test_triangle(RayFrame frame, Origin origin, real3 dir, uint slot, inout SlotHit hit) {
   real3 v0, v1, v2;
   fetch_triangle(int(slot), origin, v0, v1, v2);
-  real t = intersect_triangle(frame, dir, v0, v1, v2, hit.t);
+  real t = intersect_triangle(frame, dir, v0, v1, v2, hit.t, COUNT_CROSSINGS);
   if (t < hit.t && slot_visible(slot)) {
+    if (COUNT_CROSSINGS) {
+      ++crossings;
+      return;
+    }
     hit.t = t;
     hit.slot = slot;
   }
@@ -172,8 +190,11 @@ void test_primitive(RayFrame frame, Origin origin, real3 dir, uint slot, inout S
   if (TREE_TRIANGLES && !sphere) test_triangle(frame, origin, dir, slot, hit);
   if (TREE_SPHERES && sphere) {
     real3 normal;
-    real t = intersect_sphere_point(fetch_sphere(int(slot)), origin, dir, hit.t, normal);
-    if (t < hit.t && slot_visible(slot)) {
+    real far_root;
+    real t = intersect_sphere_point(fetch_sphere(int(slot)), origin, dir, hit.t, normal, far_root);
+    if (COUNT_CROSSINGS) {
+      if (slot_visible(slot)) crossings += sphere_crossings(t, far_root, hit.t);
+    } else if (t < hit.t && slot_visible(slot)) {
       hit.t = t;
       hit.slot = slot;
     }
@@ -185,7 +206,8 @@ void test_primitive(RayFrame frame, Origin origin, real3 dir, uint slot, inout S
 real3 primitive_normal(uint slot, Origin origin, real3 dir) {
   real3 normal;
   if (TREE_SPHERES && is_sphere(int(slot))) {
-    intersect_sphere_point(fetch_sphere(int(slot)), origin, dir, uintBitsToFloat(0x7f800000u), normal);
+    real far_root;
+    intersect_sphere_point(fetch_sphere(int(slot)), origin, dir, uintBitsToFloat(0x7f800000u), normal, far_root);
     return normal;
   }
   normal = fetch_normal(int(slot));
@@ -198,8 +220,11 @@ PrimitiveHit nearest_primitive_brute_force(RayFrame frame, Origin origin, real3 
   PrimitiveHit result = PrimitiveHit(t_max, real3(0.0), false, VKRAY_HIT_NONE);
   for (uint i = 0; i < sphere_count; ++i) {
     real3 normal;
-    real t = intersect_sphere_point(fetch_point(spheres, int(i)), origin, dir, result.t, normal);
-    if (t < result.t && apart_visible(i)) {
+    real far_root;
+    real t = intersect_sphere_point(fetch_point(spheres, int(i)), origin, dir, result.t, normal, far_root);
+    if (COUNT_CROSSINGS) {
+      if (apart_visible(i)) crossings += sphere_crossings(t, far_root, result.t);
+    } else if (t < result.t && apart_visible(i)) {
       result.t = t;
       result.normal = normal;
       result.id = VKRAY_HIT_SPHERE_APART | i;
@@ -293,6 +318,8 @@ PrimitiveHit nearest_primitive_in_tree(RayFrame frame, Origin origin, real3 dir,
                                   FETCH(bvh_bounds, 4 * int(current) + 2), box_origin, box_margin, inv_dir,
                                   hit.t, enter);
       uvec2 children = FETCH(bvh_links, 4 * int(current) + 3).xy;
+      // A tree of one leaf is a root with that leaf as both children (Bvh::nodes): counted once.
+      if (COUNT_CROSSINGS && children.x == children.y) hits.y = false;
       bool second_first = hits.y && (!hits.x || enter.y < enter.x);
       if (hits.x && hits.y) {
         uint later = second_first ? children.x : children.y;

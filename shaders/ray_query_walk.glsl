@@ -55,6 +55,11 @@ PrimitiveHit nearest_primitive_ray_query(RayFrame frame, Origin origin, vec3 dir
     // ordering would bring its distance and another triangle's normal.
     SlotHit own = SlotHit(t_max, no_primitive);
     test_primitive(frame, origin, dir, slot, own);
+    // Counting crossings commits nothing, so the device proposes every candidate along the range;
+    // test_primitive counted this one where vkray's test takes it. What the device never proposes
+    // (a triangle its own test misses at an edge) is not counted: a ray within rounding of an edge
+    // may count one crossing fewer here than with vkray's walks.
+    if (COUNT_CROSSINGS) continue;
     if (own.slot != no_primitive && own.t < hit.t) hit = own;
     const bool triangle = rayQueryGetIntersectionTypeEXT(query, false) == gl_RayQueryCandidateIntersectionTriangleEXT;
     if (triangle && own.slot == no_primitive && slot_visible(slot)) {

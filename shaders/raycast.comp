@@ -3,7 +3,8 @@
 // Writes the requested outputs (depth, normal, uv, and what each ray hit: WRITE_HIT) for one tile
 // of rows of the image into buffers, or one output into a storage image (IMAGE_TARGET, the
 // viewer's frame); or traces rays the caller gave (RAY_INPUT), writing depth, normal and what each
-// hit, or directions the caller gave from one origin. Compiled seven times (shaders/CMakeLists.txt):
+// hit (or how many surfaces each crosses: COUNT_CROSSINGS), or directions the caller gave from one
+// origin. Compiled seven times (shaders/CMakeLists.txt):
 // float32; float32 with VKRAY_DOUBLE_EDGES defined (triangle edge functions from exact double
 // products, for devices whose doubles are fast: see intersect.glsl); each of those two with VKRAY_STORAGE_GEOMETRY
 // (geometry in storage buffers, not texel buffers: see primitives.glsl) and with VKRAY_RAY_QUERY
@@ -279,7 +280,9 @@ void main() {
       if (GIVEN_ORIGINS) height += plane.lo.w - dot(plane_normal, origin.lo);
 #endif
       real t = intersect_plane(plane_normal, height, dir, t_best[r]);
-      if (t < t_best[r] && apart_visible(spheres_apart + i)) {
+      if (COUNT_CROSSINGS) {
+        if (t < t_best[r] && apart_visible(spheres_apart + i)) ++crossings;
+      } else if (t < t_best[r] && apart_visible(spheres_apart + i)) {
         t_best[r] = t;
         normal[r] = dot(plane_normal, dir) > 0.0 ? -plane_normal : plane_normal;
         primitive_t_max[r] = VKRAY_PRIMITIVE_T_MAX(t, abs(dot(plane_normal, dir)));
@@ -358,7 +361,7 @@ void main() {
       if ((written & VKRAY_CALLER_WRITE_PRIMITIVE_ID) != 0u) primitive_id_out[k] = ids.y;
       continue;
     }
-    if (RAY_INPUT || WRITE_HIT) hit_out[out_index] = hit_id[r];
+    if (RAY_INPUT || WRITE_HIT) hit_out[out_index] = COUNT_CROSSINGS ? crossings : hit_id[r];
     if (WRITE_DEPTH) depth_out[out_index] = t_best[r];
     if (WRITE_NORMAL) {
       normal_out[out_index] = normal[r].x;

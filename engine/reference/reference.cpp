@@ -8,6 +8,7 @@
 #include <glm/geometric.hpp>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <thread>
@@ -17,7 +18,8 @@ namespace vkray {
 // Same formulation as shaders/intersect.glsl (Ray Tracing Gems ch. 7): discriminant from the
 // perpendicular offset and roots without cancellation. Double precision makes even the
 // tiny-far-sphere case exact to ~1e-16 relative.
-double intersect_sphere(const glm::dvec3& f, double radius, const glm::dvec3& dir, double t_max, bool* near) {
+double intersect_sphere(const glm::dvec3& f, double radius, const glm::dvec3& dir, double t_max, bool* near,
+                        double* far_root) {
   const double a = glm::dot(dir, dir);
   const double b = glm::dot(f, dir);
   const glm::dvec3 f_perp = f - (b / a) * dir;
@@ -28,6 +30,7 @@ double intersect_sphere(const glm::dvec3& f, double radius, const glm::dvec3& di
   if (q == 0.0) return t_max;
   const double t0 = c / q;
   const double t1 = q / a;
+  if (far_root) *far_root = std::max(t0, t1);
   const bool near_root = std::min(t0, t1) > 0.0;
   const double t = near_root ? std::min(t0, t1) : std::max(t0, t1);
   if (near) *near = near_root;
@@ -45,9 +48,11 @@ double intersect_plane(const glm::dvec3& normal, const glm::dvec3& point, const 
 }
 
 // Woop, Benthin and Wald, "Watertight Ray/Triangle Intersection", JCGT 2(1), 2013 (see the GLSL
-// version for why): rays through a shared edge never fall between the two triangles.
+// version for why): rays through a shared edge never fall between the two triangles. With
+// claim_edges, an edge or vertex the ray passes exactly through belongs to one triangle alone, by
+// the shader's rule (claims_edges in shaders/intersect.glsl).
 double intersect_triangle(const glm::dvec3& v0, const glm::dvec3& v1, const glm::dvec3& v2, const glm::dvec3& origin,
-                          const glm::dvec3& dir, double t_max) {
+                          const glm::dvec3& dir, double t_max, bool claim_edges) {
   const glm::dvec3 ad = glm::abs(dir);
   const int kz = ad.x > ad.y ? (ad.x > ad.z ? 0 : 2) : (ad.y > ad.z ? 1 : 2);
   int kx = (kz + 1) % 3;
@@ -65,6 +70,16 @@ double intersect_triangle(const glm::dvec3& v0, const glm::dvec3& v1, const glm:
   if ((u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0)) return t_max;
   const double det = u + v + w;
   if (det == 0.0) return t_max;
+  if (claim_edges) {
+    // Edges b->c, c->a, a->b, as u, v and w; counter-clockwise (det < 0) puts the triangle on their left.
+    const std::array<std::array<glm::dvec3, 2>, 3> edges{{{b, c}, {c, a}, {a, b}}};
+    const std::array<double, 3> edge_functions{u, v, w};
+    for (size_t e = 0; e < 3; ++e) {
+      const glm::dvec3 &from = edges[e][0], &to = edges[e][1];
+      const bool upward = to.y > from.y || (to.y == from.y && to.x > from.x);
+      if (edge_functions[e] == 0.0 && upward != (det < 0.0)) return t_max;
+    }
+  }
   const double t = sz * (u * a.z + v * b.z + w * c.z) / det;
   return (t > 0.0 && t < t_max) ? t : t_max;
 }
@@ -163,7 +178,8 @@ double enter_box(const Box& box, const glm::dvec3& origin, const glm::dvec3& inv
 
 }  // namespace
 
-void ReferenceScene::nearest_in_tree(const glm::dvec3& origin, const glm::dvec3& dir, ReferenceHit& hit) const {
+template <typename Visit>
+void ReferenceScene::walk_tree(const glm::dvec3& origin, const glm::dvec3& dir, const double& t_max, Visit visit) const {
   glm::dvec3 inv_dir;
   for (int axis = 0; axis < 3; ++axis) {
     constexpr double tiny = 1e-300;
@@ -176,9 +192,10 @@ void ReferenceScene::nearest_in_tree(const glm::dvec3& origin, const glm::dvec3&
   while (true) {
     if (!is_leaf(current)) {
       // <= t_max rather than <: a triangle at exactly the best distance may still win the tie.
-      const double enter0 = enter_box(child_boxes_[current][0], origin, inv_dir, hit.t);
-      const double enter1 = enter_box(child_boxes_[current][1], origin, inv_dir, hit.t);
+      const double enter0 = enter_box(child_boxes_[current][0], origin, inv_dir, t_max);
       const auto& children = nodes_[current];
+      // A tree of one leaf is a root with that leaf as both children (Bvh::nodes): visited once.
+      const double enter1 = children[1] == children[0] ? no_hit : enter_box(child_boxes_[current][1], origin, inv_dir, t_max);
       if (enter0 < no_hit && enter1 < no_hit) {
         const bool second_first = enter1 < enter0;
         stack[stack_size++] = children[second_first ? 0 : 1];
@@ -190,18 +207,43 @@ void ReferenceScene::nearest_in_tree(const glm::dvec3& origin, const glm::dvec3&
         continue;
       }
     } else {
-      for (uint32_t k = 0; k < leaf_count(current); ++k) {
-        const TreeEntry& entry = tree_entries_[leaf_first(current) + k];
-        if (entry.kind == PrimitiveKind::sphere) {
-          test_sphere(entry.index, origin, dir, hit);
-        } else {
-          test_triangle(triangles_[entry.index], origin, dir, hit);
-        }
-      }
+      for (uint32_t k = 0; k < leaf_count(current); ++k) visit(tree_entries_[leaf_first(current) + k]);
     }
     if (stack_size == 0) return;
     current = stack[--stack_size];
   }
+}
+
+void ReferenceScene::nearest_in_tree(const glm::dvec3& origin, const glm::dvec3& dir, ReferenceHit& hit) const {
+  walk_tree(origin, dir, hit.t, [&](const TreeEntry& entry) {
+    if (entry.kind == PrimitiveKind::sphere) {
+      test_sphere(entry.index, origin, dir, hit);
+    } else {
+      test_triangle(triangles_[entry.index], origin, dir, hit);
+    }
+  });
+}
+
+uint32_t ReferenceScene::count_crossings(const glm::dvec3& origin, const glm::dvec3& dir, double t_max) const {
+  uint32_t crossings = 0;
+  for (const Plane& plane : planes_) {
+    if (mask_hits(plane.mask, ray_mask_) && intersect_plane(plane.normal, plane.point, origin, dir, t_max) < t_max) ++crossings;
+  }
+  if (nodes_.empty()) return crossings;
+  walk_tree(origin, dir, t_max, [&](const TreeEntry& entry) {
+    if (entry.kind == PrimitiveKind::sphere) {
+      // Both roots that lie ahead within the range, a tangent's double root twice (as the shader's
+      // sphere_crossings).
+      double far_root = t_max;
+      const double t = intersect_sphere(origin - spheres_[entry.index].center, spheres_[entry.index].radius, dir, t_max,
+                                        nullptr, &far_root);
+      crossings += (t < t_max ? 1 : 0) + (t < far_root && far_root < t_max ? 1 : 0);
+    } else {
+      const Triangle& triangle = triangles_[entry.index];
+      if (intersect_triangle(triangle.v0, triangle.v1, triangle.v2, origin, dir, t_max, true) < t_max) ++crossings;
+    }
+  });
+  return crossings;
 }
 
 // Planes first, then spheres and triangles, in the shader's order (the first of equal distances
@@ -305,6 +347,12 @@ ReferenceHit trace_reference_ray(const ReferenceScene& scene, const GivenRay& ra
   ReferenceHit hit = scene.trace({start[0], start[1], start[2]}, {start[3], start[4], start[5]}, t_max - t_min);
   hit.t += t_min;  // a miss stays +infinity
   return hit;
+}
+
+uint32_t count_reference_crossings(const ReferenceScene& scene, const GivenRay& ray, double t_min, double t_max) {
+  if (t_min == 0.0) return scene.count_crossings({ray[0], ray[1], ray[2]}, unit_vector({ray[3], ray[4], ray[5]}), t_max);
+  const GivenRay start = range_start_ray(ray, t_min);
+  return scene.count_crossings({start[0], start[1], start[2]}, {start[3], start[4], start[5]}, t_max - t_min);
 }
 
 std::vector<ReferenceHit> trace_reference_rays(const ReferenceScene& scene, std::span<const GivenRay> rays,

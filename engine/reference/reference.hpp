@@ -21,13 +21,14 @@ inline constexpr double no_hit = std::numeric_limits<double>::infinity();
 
 // The individual intersectors, in the same form as shaders/intersect.glsl. Each returns the ray
 // parameter of the nearest hit in (0, t_max), else t_max.
-// `near`, when given, receives whether the hit is the near root (the ray enters the sphere there).
+// `near`, when given, receives whether the hit is the near root (the ray enters the sphere there);
+// `far_root` the farther root whatever its sign (t_max on a miss).
 double intersect_sphere(const glm::dvec3& origin_minus_center, double radius, const glm::dvec3& dir, double t_max,
-                        bool* near = nullptr);
+                        bool* near = nullptr, double* far_root = nullptr);
 double intersect_plane(const glm::dvec3& normal, const glm::dvec3& point, const glm::dvec3& origin,
                        const glm::dvec3& dir, double t_max);
 double intersect_triangle(const glm::dvec3& v0, const glm::dvec3& v1, const glm::dvec3& v2, const glm::dvec3& origin,
-                          const glm::dvec3& dir, double t_max);
+                          const glm::dvec3& dir, double t_max, bool claim_edges = false);
 
 enum class PrimitiveKind : uint8_t { none, sphere, plane, triangle };
 
@@ -49,6 +50,10 @@ class ReferenceScene {
   ReferenceHit trace(const glm::dvec3& origin, const glm::dvec3& dir, double t_max = no_hit) const;
   // The same with every triangle tested: the check on the tree.
   ReferenceHit trace_brute_force(const glm::dvec3& origin, const glm::dvec3& dir) const;
+  // How many times the ray crosses a surface in (0, t_max): each triangle hit (an edge or vertex it
+  // passes exactly through counts for one of the triangles that share it), each sphere root, each
+  // plane. A closed surface's count is odd where the origin lies inside it.
+  uint32_t count_crossings(const glm::dvec3& origin, const glm::dvec3& dir, double t_max = no_hit) const;
   // The hit's object and primitive as the outputs number them (see ObjectPrimitive).
   ObjectPrimitive source(const ReferenceHit& hit) const;
 
@@ -64,6 +69,10 @@ class ReferenceScene {
   };
   void test_sphere(uint32_t index, const glm::dvec3& origin, const glm::dvec3& dir, ReferenceHit& hit) const;
   void test_triangle(const Triangle& triangle, const glm::dvec3& origin, const glm::dvec3& dir, ReferenceHit& hit) const;
+  // Calls visit(entry) for each tree entry in a box the ray enters before t_max, nearer child
+  // first; t_max is read again at every box (a nearest-hit search lowers it as it goes).
+  template <typename Visit>
+  void walk_tree(const glm::dvec3& origin, const glm::dvec3& dir, const double& t_max, Visit visit) const;
   void nearest_in_tree(const glm::dvec3& origin, const glm::dvec3& dir, ReferenceHit& hit) const;
   ReferenceHit trace_with(const glm::dvec3& origin, const glm::dvec3& dir, double t_max, bool brute_force) const;
 
@@ -98,6 +107,9 @@ std::vector<ReferenceHit> trace_reference_rays(const ReferenceScene& scene, std:
 
 // The nearest hit of `ray` within (t_min, t_max) (see RayRanges), t counting from its origin.
 ReferenceHit trace_reference_ray(const ReferenceScene& scene, const GivenRay& ray, double t_min, double t_max);
+
+// How many times `ray` crosses a surface within (t_min, t_max) (ReferenceScene::count_crossings).
+uint32_t count_reference_crossings(const ReferenceScene& scene, const GivenRay& ray, double t_min, double t_max);
 
 // Pixel `pixel` of `frame`'s outputs (depth and normal; uv is the camera's) from a reference hit,
 // rounded to float only here.

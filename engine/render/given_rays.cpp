@@ -111,7 +111,7 @@ void Renderer::Impl::cast_given(const GivenRays& given, RaycastMode mode, uint32
     ms_per_ray = sizer.slowest_ms_per_pixel();
 
     const auto copy_start = Clock::now();
-    const auto* slots = static_cast<const uint32_t*>(tile.hits->host());
+    const auto* slots = static_cast<const uint32_t*>(tile.hits->host());  // with HitQuery::count: crossings
     const size_t plane_size = size_t{width} * params.image.w;  // the shader's planes span whole rows
     auto copy = [&]<typename T>(const T* depths, const T* unit_normals) {
       parallel_for_chunks(count, [&](size_t begin, size_t end) {
@@ -123,7 +123,9 @@ void Renderer::Impl::cast_given(const GivenRays& given, RaycastMode mode, uint32
         }
       });
     };
-    if (!order && precision() == Precision::float32 && ranges.t_min.empty()) {  // in place: the planes as they are, the ids named
+    if (given.query == HitQuery::count) {  // one by one: no order
+      std::memcpy(hits.crossings.data() + first, slots, count * sizeof(uint32_t));
+    } else if (!order && precision() == Precision::float32 && ranges.t_min.empty()) {  // in place: the planes as they are, the ids named
       const auto* unit_normals = static_cast<const float*>(tile.normal->host());
       std::memcpy(hits.t.data() + first, tile.depth->host(), count * sizeof(float));
       for (size_t c = 0; c < 3; ++c) {
@@ -146,6 +148,10 @@ void Renderer::Impl::cast_given(const GivenRays& given, RaycastMode mode, uint32
       finish_unfinished([&](uint32_t position) {
         const size_t k = ray_at(first + position);
         if (k >= rays.size()) return;
+        if (given.query == HitQuery::count) {
+          hits.crossings[k] = count_reference_crossings(*reference, rays[k], ranges.start(k), ranges.end(k));
+          return;
+        }
         const ReferenceHit hit = trace_reference_ray(*reference, rays[k], ranges.start(k), ranges.end(k));
         hits.store(k, hit.t, hit.normal, reference->source(hit));
       });
@@ -159,6 +165,7 @@ RayHits Renderer::Impl::cast_rays(const GivenRays& given) {
   check_ray_ranges(rays, given.ranges);
   RayHits hits;
   hits.allocate(rays.size(), precision() == Precision::float64);
+  if (given.query == HitQuery::count) hits.crossings.resize(rays.size());
   reset_timings();
   if (rays.empty()) return hits;
 
@@ -174,10 +181,12 @@ RayHits Renderer::Impl::cast_rays(const GivenRays& given) {
     // as long (README, "Python"). A packet's rays must point nearly the same way: rays listed as an
     // image's rows keep their places, as a camera's pixels; others are ordered by direction, 64
     // consecutive ones a packet, in tiles of whole packets (where the device's buffers hold one).
-    // Ranges that start past the origin move it, ray by ray: those rays walk one by one.
+    // Ranges that start past the origin move it, ray by ray: those rays walk one by one, as do
+    // counts of crossings (the packet walk finds the nearest hit alone).
     const bool from_origins = std::all_of(given.ranges.t_min.begin(), given.ranges.t_min.end(), [](double t) { return t == 0.0; });
     const std::optional<glm::dvec3> origin =
-        stats.search == PrimitiveSearch::bvh_packet && precision() == Precision::float32 && from_origins
+        stats.search == PrimitiveSearch::bvh_packet && precision() == Precision::float32 && from_origins &&
+                given.query != HitQuery::count
             ? shared_origin(rays)
             : std::nullopt;
     if (const std::optional<uint32_t> rows_width = origin ? scan_width(rays) : std::nullopt) {

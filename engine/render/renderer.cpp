@@ -298,6 +298,11 @@ std::vector<uint8_t> Renderer::occluded(std::span<const GivenRay> rays, const Ra
   return blocked;
 }
 
+std::vector<uint32_t> Renderer::count_intersections(std::span<const GivenRay> rays, const RayRanges& ranges) {
+  RayHits hits = impl_->cast_rays({rays, ranges, HitQuery::count});
+  return {hits.crossings.begin(), hits.crossings.end()};
+}
+
 DepthRange Renderer::render(const Camera& camera, Aov aov, ImageTarget& target) {
   const uint32_t width = target.width(), height = target.height();
   check_image_size(width, height);

@@ -97,6 +97,9 @@ struct RayHits {
   // The float64 shader's distances and normals as it computed them, before t and normal round them;
   // empty for the float32 shader.
   UninitializedVector<double> t64, normal64;
+  // HitQuery::count alone: how many surfaces each ray crosses (Renderer::count_intersections); the
+  // arrays above are then left as they are.
+  UninitializedVector<uint32_t> crossings;
   // Room for `ray_count` rays, their values unset: cast_rays stores every one.
   void allocate(size_t ray_count, bool doubles = false);
   void store(size_t ray, double distance, const glm::dvec3& unit_normal, ObjectPrimitive source);
@@ -183,6 +186,13 @@ class Renderer {
   // Whether each ray hits anything within its range (1) or not (0): an occlusion query, whose walk
   // stops at the first hit it meets. The same rays, ranges and precision contract as cast_rays.
   std::vector<uint8_t> occluded(std::span<const GivenRay> rays, const RayRanges& ranges = {});
+
+  // How many times each ray crosses a surface within its range: every triangle, sphere root and
+  // plane it meets, as ReferenceScene::count_crossings counts them (an edge or vertex passed exactly
+  // through counts once), so that the count is odd where the ray starts inside a closed mesh. The
+  // walk runs one by one to the end of each range. The same rays, ranges and mask as cast_rays; the
+  // first call makes its pipeline.
+  std::vector<uint32_t> count_intersections(std::span<const GivenRay> rays, const RayRanges& ranges = {});
 
   // Makes, side by side, every pipeline that render of `camera` at width x height with depth and
   // normal, cast_rays and occluded can take (one by one and, where the packet walk runs, in packets

@@ -3,6 +3,7 @@
 #pragma once
 
 #include "engine/scene/camera.hpp"
+#include "shaders/gpu_layout.h"
 
 #include <glm/common.hpp>
 #include <glm/vec3.hpp>
@@ -217,8 +218,9 @@ struct RayRanges {
   double end(size_t ray) const { return t_max.empty() ? std::numeric_limits<double>::infinity() : t_max[ray]; }
 };
 
-// What a given ray looks for: its nearest hit, or any hit at all (an occlusion query).
-enum class HitQuery : uint32_t { nearest, any };
+// What a given ray looks for: its nearest hit, any hit at all (an occlusion query), or how many
+// times it crosses a surface (VKRAY_SPEC_HIT_QUERY).
+enum class HitQuery : uint32_t { nearest = VKRAY_HIT_QUERY_NEAREST, any = VKRAY_HIT_QUERY_ANY, count = VKRAY_HIT_QUERY_COUNT };
 
 // The ray traced for `ray`'s range from `t_min` on: its origin moved to the range's start, its
 // direction unit length.

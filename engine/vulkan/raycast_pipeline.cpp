@@ -91,7 +91,7 @@ const vk::raii::Pipeline& RaycastPipeline::pipeline(AovSet aovs, bool lo_parts, 
                                                                         : VKRAY_RAY_INPUT_NONE;
   values[VKRAY_SPEC_STACK_REGISTERS] = specialization_.stack_registers;
   values[VKRAY_SPEC_SUBGROUP_SIZE] = context_.info.subgroup_size == 8 ? 8u : 0u;
-  values[VKRAY_SPEC_ANY_HIT] = query == HitQuery::any ? 1u : 0u;
+  values[VKRAY_SPEC_HIT_QUERY] = static_cast<uint32_t>(query);
   values[VKRAY_SPEC_MASKS] = specialization_.masks ? 1u : 0u;
   std::array<vk::SpecializationMapEntry, values.size()> entries;
   for (uint32_t id = 0; id < entries.size(); ++id) entries[id] = vk::SpecializationMapEntry(id, id * 4u, 4u);
