@@ -60,6 +60,12 @@ int main(void) {
   CHECK(vkray_cast_rays(masked, down_z, 1, NULL, NULL, 0, 0, 2, outputs, hits) == VKRAY_INPUT_ERROR);
   CHECK(vkray_occluded(masked, down_z, 1, NULL, NULL, 0, 256, blocked) == VKRAY_INPUT_ERROR);
   CHECK(vkray_cast_rays(masked, down_z, 1, NULL, NULL, 0, 255, 2, outputs, hits) == VKRAY_OK && mesh[0] == 0);
+  /* Counting: both triangles with every bit, the far one alone with mask 1, the near one in a range ending between. */
+  uint32_t crossings[1];
+  const double ends_between[1] = {5.5};
+  CHECK(vkray_count_intersections(masked, down_z, 1, NULL, NULL, 0, 255, crossings) == VKRAY_OK && crossings[0] == 2);
+  CHECK(vkray_count_intersections(masked, down_z, 1, NULL, NULL, 0, 1, crossings) == VKRAY_OK && crossings[0] == 1);
+  CHECK(vkray_count_intersections(masked, down_z, 1, NULL, ends_between, 0, 255, crossings) == VKRAY_OK && crossings[0] == 1);
   vkray_renderer_free(masked);
   vkray_scene_free(layered);
 

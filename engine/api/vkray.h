@@ -1,4 +1,4 @@
-/* vkray's C API, version 1: the engine's one outward boundary, libvkray.so. Python's `vkray`
+/* vkray's C API, version 3 (VKRAY_API_VERSION): the engine's one outward boundary, libvkray.so. Python's `vkray`
  * package is written over it (ctypes, any CPython 3.9 or later, any numpy 1.22 to 2.x); C, Rust and
  * Julia callers use it as it is.
  *
@@ -25,7 +25,7 @@
 extern "C" {
 #endif
 
-#define VKRAY_API_VERSION 2
+#define VKRAY_API_VERSION 3
 #define VKRAY_API __attribute__((visibility("default")))
 
 /* mesh_id and primitive_id of a ray that hit nothing. */
@@ -147,6 +147,13 @@ VKRAY_API vkray_status vkray_cast_rays(vkray_renderer* renderer, const double* r
  * occluded (count bytes). The same rays, ranges, flags and mask as vkray_cast_rays. */
 VKRAY_API vkray_status vkray_occluded(vkray_renderer* renderer, const double* rays, uint64_t count, const double* t_min,
                                       const double* t_max, uint32_t flags, uint32_t mask, uint8_t* occluded);
+/* How many times each ray crosses a surface at t_min < t < t_max, into crossings (count uint32s;
+ * a bad ray: 0): every triangle, sphere root and plane it meets; an edge or vertex it passes exactly
+ * through counts once, so the count is odd where a ray starts inside a closed mesh (Open3D's
+ * count_intersections). The same rays, ranges, flags and mask as vkray_cast_rays. */
+VKRAY_API vkray_status vkray_count_intersections(vkray_renderer* renderer, const double* rays, uint64_t count,
+                                                 const double* t_min, const double* t_max, uint32_t flags, uint32_t mask,
+                                                 uint32_t* crossings);
 
 #ifdef __cplusplus
 }

@@ -770,4 +770,30 @@ vkray_status vkray_occluded(vkray_renderer* renderer, const double* rays, uint64
   });
 }
 
+vkray_status vkray_count_intersections(vkray_renderer* renderer, const double* rays, uint64_t count, const double* t_min,
+                                       const double* t_max, uint32_t flags, uint32_t mask, uint32_t* crossings) {
+  return guarded([&] {
+    require(renderer, "renderer");
+    if (count > 0) require(crossings, "crossings");
+    CallRays call(rays, count, t_min, t_max, flags);
+    const std::lock_guard one_call_at_a_time(renderer->busy);
+    use_ray_mask(*renderer, mask);
+    renderer->called = true;
+    const auto never_whole = [](std::span<const GivenRay>, const RayRanges&) { return false; };
+    trace_call(*renderer, call, never_whole, [&](size_t first, std::span<const GivenRay> run, const RayRanges& run_ranges) {
+      if (renderer->renderer) {
+        const std::vector<uint32_t> counted = renderer->renderer->count_intersections(run, run_ranges);
+        for (size_t k = 0; k < counted.size(); ++k) crossings[call.given_index(first + k)] = counted[k];
+        return;
+      }
+      parallel_for_chunks(run.size(), [&](size_t begin, size_t end) {
+        for (size_t k = begin; k < end; ++k) {
+          crossings[call.given_index(first + k)] =
+              count_reference_crossings(*renderer->reference, run[k], run_ranges.start(k), run_ranges.end(k));
+        }
+      });
+    }, [&](size_t given) { crossings[given] = 0; });
+  });
+}
+
 }  // extern "C"

@@ -444,6 +444,20 @@ class _Caster:
                                           _mask(mask, "mask"), _pointer(blocked, ctypes.c_uint8)))
         return blocked.view(np.bool_)
 
+    def count_intersections(self, rays: Any, *, t_min: Any = None, t_max: Any = None, t_along: str = "unit",
+                            bad_rays: str = "miss", mask: int = 255) -> np.ndarray:
+        """How many times each ray crosses a surface at t_min < t < t_max, with cast_rays' rays, t_min, t_max,
+        t_along, bad_rays and mask: a uint32 array of the rays' leading shape (a bad ray: 0). Every
+        triangle, sphere root and plane counts; an edge or vertex a ray passes exactly through counts once,
+        so the count is odd exactly where a ray starts inside a closed mesh (Open3D's count_intersections:
+        inside = renderer.count_intersections(rays) % 2 == 1)."""
+        flat, leading, lo, hi = self._rays_and_ranges(rays, t_min, t_max)
+        flags = self._flags(t_along, bad_rays)
+        crossings = np.empty(leading, dtype=np.uint32)
+        _check(_native.lib.vkray_count_intersections(self._handle, _pointer(flat), len(flat), _pointer(lo), _pointer(hi),
+                                                     flags, _mask(mask, "mask"), _pointer(crossings, ctypes.c_uint32)))
+        return crossings
+
     def set_vertices(self, mesh: int, positions: Any) -> None:
         """Moves the vertices of mesh `mesh` (its mesh_id) to `positions`, an N x 3 array of the mesh's N
         vertices in its order (a skinned arm, cloth): the next call renders the moved scene, as a

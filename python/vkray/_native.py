@@ -6,7 +6,7 @@ the relocatable bundle's lib/ two folders up. ctypes releases the GIL for every 
 import ctypes
 import pathlib
 
-API_VERSION = 2  # VKRAY_API_VERSION of the header this file declares
+API_VERSION = 3  # VKRAY_API_VERSION of the header this file declares
 
 
 def _find_library():
@@ -67,6 +67,8 @@ _signatures = {
                                  ctypes.c_uint32, _names, _pointers]),
     "vkray_occluded": (Status, [_renderer, _doubles, ctypes.c_uint64, _doubles, _doubles, ctypes.c_uint32, ctypes.c_uint32,
                                 ctypes.POINTER(ctypes.c_uint8)]),
+    "vkray_count_intersections": (Status, [_renderer, _doubles, ctypes.c_uint64, _doubles, _doubles, ctypes.c_uint32,
+                                           ctypes.c_uint32, ctypes.POINTER(ctypes.c_uint32)]),
 }
 for _name, (_result, _arguments) in _signatures.items():
     _function = getattr(lib, _name)
