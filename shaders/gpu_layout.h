@@ -229,7 +229,13 @@ VKRAY_SHARED_FUNCTION uint direction_key(float x, float y, float z, uint bits) {
 // engine/scene/scene.hpp): a primitive counts only where its mask shares a bit with the call's ray
 // mask (RayGenParams.counts.w). Without, no mask is read or tested.
 #define VKRAY_SPEC_MASKS 24
-#define VKRAY_SPEC_COUNT 25
+// Given rays' first hits (Renderer::cast_rays with hits > 1): the first VKRAY_SPEC_HITS crossings
+// along each ray in order of distance (the crossings counting counts, an edge or vertex once),
+// each written as a nearest hit is, hit k of a tile's rays in the k-th of VKRAY_SPEC_HITS runs of
+// each output's planes. 1: the nearest hit alone.
+#define VKRAY_SPEC_HITS 25
+#define VKRAY_HITS_MAX 16
+#define VKRAY_SPEC_COUNT 26
 #define VKRAY_STACK_REGISTERS_MAX 32
 
 #define VKRAY_SPHERE_STABLE 0               // Ray Tracing Gems ch. 7 (intersect.glsl)
@@ -275,6 +281,9 @@ VKRAY_CHECK_SIZE(GpuRay, 64);
 #define VKRAY_HIT_SPHERE_APART 0x40000000u  // | index of a sphere tested one by one (VKRAY_BINDING_SPHERES)
 #define VKRAY_HIT_PLANE 0x80000000u         // | index of the plane
 #define VKRAY_HIT_INDEX_MASK 0x3fffffffu
+// In a shader's list of first hits alone, never written: the far root of a sphere whose near root is
+// listed too (its normal is the far root's). Slots stay below it.
+#define VKRAY_HIT_FAR_ROOT 0x20000000u
 
 // A sphere tested one by one: centre, radius in w.
 struct GpuSphere {

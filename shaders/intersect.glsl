@@ -152,18 +152,22 @@ vec3 perpendicular_part(vec3 f_hi, vec3 f_lo, float b_over_a, vec3 dir) {
 // `normal` receives the hit point minus the centre over the radius, facing the ray by which root was
 // taken (outward for the near root, inward from inside), not by the sign of its dot product with
 // the ray, which rounding decides at the silhouette, where it is 0. `far_root` receives the farther
-// root whatever its sign (t_max on a miss), which counting crossings adds when both lie ahead.
+// root whatever its sign (t_max on a miss), which counting crossings adds when both lie ahead, and
+// `far_normal` its normal facing the ray (inward: the ray leaves there), for a list of first hits.
 // The textbook form, kept as a benchmark variant (VKRAY_SPHERE_NAIVE) to show what this buys:
 // b^2 - c cancels when the sphere is small against its distance, -b + sqrt(disc) when the camera is
 // inside, c = |f|^2 - r^2 near a large sphere's surface, and f + t dir for any small sphere far away.
-float intersect_sphere_naive(vec3 f, float radius, vec3 dir, float t_max, out vec3 normal, out float far_root) {
+float intersect_sphere_naive(vec3 f, float radius, vec3 dir, float t_max, out vec3 normal, out float far_root,
+                             out vec3 far_normal) {
   float b = dot(f, dir);
   float disc = b * b - (dot(f, f) - radius * radius);
   normal = vec3(0.0);
   far_root = t_max;
+  far_normal = vec3(0.0);
   if (disc < 0.0) return t_max;
   float root = sqrt(disc);
   far_root = -b + root;
+  far_normal = -(f + far_root * dir) / radius;
   bool near = -b - root > 0.0;
   float t = near ? -b - root : -b + root;
   normal = (near ? 1.0 : -1.0) * (f + t * dir) / radius;
@@ -175,10 +179,13 @@ float intersect_sphere_naive(vec3 f, float radius, vec3 dir, float t_max, out ve
 // storage-geometry variants; tests/shader_variant_test.cpp), and a compiler may otherwise fuse a
 // product and a sum into an FMA in one pipeline and not in another.
 float intersect_sphere(vec3 f_hi, vec3 f_lo, float r_hi, float r_lo, vec3 dir, float t_max, out vec3 normal,
-                       out float far_root) {
-  if (SPHERE_FORMULA == VKRAY_SPHERE_NAIVE) return intersect_sphere_naive(f_hi + f_lo, r_hi, dir, t_max, normal, far_root);
+                       out float far_root, out vec3 far_normal) {
+  if (SPHERE_FORMULA == VKRAY_SPHERE_NAIVE) {
+    return intersect_sphere_naive(f_hi + f_lo, r_hi, dir, t_max, normal, far_root, far_normal);
+  }
   normal = vec3(0.0);
   far_root = t_max;
+  far_normal = vec3(0.0);
   precise float a = dot(dir, dir);
   vec3 f = f_hi + f_lo;
   precise float ff = dot(f, f);
@@ -229,14 +236,18 @@ float intersect_sphere(vec3 f_hi, vec3 f_lo, float r_hi, float r_lo, vec3 dir, f
   // dir is within ~10 eps r.
   precise vec3 offset = far ? f_perp + ((near ? -root : root) / a) * dir : f + t * dir;
   normal = (near ? offset : -offset) / r_hi;  // facing the ray (see above)
+  precise vec3 far_offset = far ? f_perp + (root / a) * dir : f + far_root * dir;
+  far_normal = -far_offset / r_hi;
   return (t > 0.0 && t < t_max) ? t : t_max;
 }
 
 #else  // VKRAY_FLOAT64: the reference's formulas, in double
 
-double intersect_sphere(dvec3 f, double radius, dvec3 dir, double t_max, out dvec3 normal, out double far_root) {
+double intersect_sphere(dvec3 f, double radius, dvec3 dir, double t_max, out dvec3 normal, out double far_root,
+                        out dvec3 far_normal) {
   normal = dvec3(0.0);
   far_root = t_max;
+  far_normal = dvec3(0.0);
   precise double a = dot(dir, dir);
   precise double b = dot(f, dir);
   precise dvec3 f_perp = f - (b / a) * dir;
@@ -253,6 +264,8 @@ double intersect_sphere(dvec3 f, double radius, dvec3 dir, double t_max, out dve
   double t = near ? min(t0, t1) : max(t0, t1);
   precise dvec3 offset = f + t * dir;
   normal = (near ? 1.0 : -1.0) * offset / radius;
+  precise dvec3 far_offset = f + far_root * dir;
+  far_normal = -far_offset / radius;
   return (t > 0.0 && t < t_max) ? t : t_max;
 }
 

@@ -147,8 +147,7 @@ void test_packet_primitive(PacketPrimitive primitive, uint slot, Origin origin, 
   if (TREE_SPHERES && (!TREE_TRIANGLES || primitive.sphere)) {
     [[unroll]] for (uint r = 0; r < VKRAY_PACKET_ROWS; ++r) {
       vec3 normal;
-      float far_root;
-      float t = intersect_sphere_point(primitive.center_radius, origin, dirs[r], t_max[r], normal, far_root);
+      float t = intersect_sphere_point(primitive.center_radius, origin, dirs[r], t_max[r], normal);
       if (t < t_max[r]) t_max[r] = t, slots[r] = slot;
     }
   } else {

@@ -23,6 +23,10 @@ layout(constant_id = VKRAY_SPEC_HIT_QUERY) const uint HIT_QUERY = VKRAY_HIT_QUER
 const bool ANY_HIT = HIT_QUERY == VKRAY_HIT_QUERY_ANY;
 const bool COUNT_CROSSINGS = HIT_QUERY == VKRAY_HIT_QUERY_COUNT;
 layout(constant_id = VKRAY_SPEC_MASKS) const bool MASKS = false;
+layout(constant_id = VKRAY_SPEC_HITS) const uint HITS = 1u;
+const bool FIRST_HITS = HITS > 1u;
+// Crossings counted or listed take an edge or vertex a ray passes exactly through once.
+const bool CLAIM_EDGES = COUNT_CROSSINGS || FIRST_HITS;
 // What the tree may hold: in the generic variant, both kinds.
 const bool TREE_TRIANGLES = GENERIC || TREE_HAS_TRIANGLES;
 const bool TREE_SPHERES = GENERIC || TREE_HAS_SPHERES;
@@ -68,6 +72,34 @@ bool apart_visible(uint index) { return !MASKS || mask_hits(FETCH(apart_masks, i
 // whole, so the walk visits everything along it.
 uint crossings = 0u;
 
+// FIRST_HITS: the first HITS crossings found so far, nearest first (ties by id, so that the order
+// does not depend on the walk's), VKRAY_HIT_NONE at the range's end where fewer were found. The
+// walk's bound is the last one's distance: what lies beyond cannot enter the list. Indexed by
+// constants alone once unrolled, so the list stays in registers.
+real first_t[VKRAY_HITS_MAX];
+uint first_id[VKRAY_HITS_MAX];
+
+void clear_first_hits(real t_max) {
+  [[unroll]] for (uint k = 0; k < VKRAY_HITS_MAX; ++k) {
+    first_t[k] = t_max;
+    first_id[k] = VKRAY_HIT_NONE;
+  }
+}
+
+// Inserts a crossing at t in order where it lies below the list's bound; returns the new bound.
+real list_first_hit(real t, uint id) {
+  bool placed = !(t < first_t[HITS - 1u]);
+  [[unroll]] for (int k = VKRAY_HITS_MAX - 1; k >= 0; --k) {
+    if (uint(k) >= HITS || placed) continue;
+    int before = max(k - 1, 0);
+    bool shift = k > 0 && (first_t[before] > t || (first_t[before] == t && first_id[before] > id));
+    first_t[k] = shift ? first_t[before] : t;
+    first_id[k] = shift ? first_id[before] : id;
+    placed = !shift;
+  }
+  return first_t[HITS - 1u];
+}
+
 // A GpuPoint as stored: hi and lo parts in float32 shaders, the position and w in float64 shaders.
 struct Point {
 #ifdef VKRAY_FLOAT64
@@ -104,16 +136,25 @@ real3 point_from_origin(Point point, Origin origin) {
 #endif
 }
 
-// A sphere given as (centre, radius): `normal` receives (hit - centre) / radius, `far_root` the
-// farther root (intersect_sphere).
-real intersect_sphere_point(Point sphere, Origin origin, real3 dir, real t_max, out real3 normal, out real far_root) {
+// A sphere given as (centre, radius): `normal` receives (hit - centre) / radius, `far_root` and
+// `far_normal` the farther root and its normal (intersect_sphere).
+real intersect_sphere_point(Point sphere, Origin origin, real3 dir, real t_max, out real3 normal, out real far_root,
+                            out real3 far_normal) {
 #ifdef VKRAY_FLOAT64
-  return intersect_sphere(origin.position - sphere.value.xyz, sphere.value.w, dir, t_max, normal, far_root);
+  return intersect_sphere(origin.position - sphere.value.xyz, sphere.value.w, dir, t_max, normal, far_root, far_normal);
 #else
   vec3 f_hi, f_lo;
   sphere_offset(sphere.hi.xyz, sphere.lo.xyz, origin.hi, origin.lo, f_hi, f_lo);
-  return intersect_sphere(f_hi, f_lo, sphere.hi.w, sphere.lo.w, dir, t_max, normal, far_root);
+  return intersect_sphere(f_hi, f_lo, sphere.hi.w, sphere.lo.w, dir, t_max, normal, far_root, far_normal);
 #endif
+}
+real intersect_sphere_point(Point sphere, Origin origin, real3 dir, real t_max, out real3 normal, out real far_root) {
+  real3 far_normal;
+  return intersect_sphere_point(sphere, origin, dir, t_max, normal, far_root, far_normal);
+}
+real intersect_sphere_point(Point sphere, Origin origin, real3 dir, real t_max, out real3 normal) {
+  real far_root;
+  return intersect_sphere_point(sphere, origin, dir, t_max, normal, far_root);
 }
 
 // A sphere's crossings in (0, t_max), from the root intersect_sphere took (`t`: the near one where
@@ -121,6 +162,15 @@ real intersect_sphere_point(Point sphere, Origin origin, real3 dir, real t_max, 
 // that it leaves the count's parity (inside or outside) as it was.
 uint sphere_crossings(real t, real far_root, real t_max) {
   return uint(t < t_max) + uint(t < far_root && far_root < t_max);
+}
+
+// A sphere's crossings (`t` and `far_root` as for sphere_crossings) into the list of first hits:
+// the root taken as `id`, the far one after it as id | VKRAY_HIT_FAR_ROOT. Returns the new bound.
+real list_sphere_hits(real t, real far_root, real t_max, uint id) {
+  real bound = t_max;
+  if (t < bound) bound = list_first_hit(t, id);
+  if (t < far_root && far_root < bound) bound = list_first_hit(far_root, id | VKRAY_HIT_FAR_ROOT);
+  return bound;
 }
 
 const uint no_primitive = VKRAY_HIT_NONE;
@@ -165,10 +215,15 @@ Point fetch_sphere(int slot) {
 void test_triangle(RayFrame frame, Origin origin, real3 dir, uint slot, inout SlotHit hit) {
   real3 v0, v1, v2;
   fetch_triangle(int(slot), origin, v0, v1, v2);
-  real t = intersect_triangle(frame, dir, v0, v1, v2, hit.t, COUNT_CROSSINGS);
+  real t = intersect_triangle(frame, dir, v0, v1, v2, hit.t, CLAIM_EDGES);
   if (t < hit.t && slot_visible(slot)) {
     if (COUNT_CROSSINGS) {
       ++crossings;
+      return;
+    }
+    if (FIRST_HITS) {
+      hit.t = list_first_hit(t, slot);
+      hit.slot = first_id[0];
       return;
     }
     hit.t = t;
@@ -194,6 +249,11 @@ void test_primitive(RayFrame frame, Origin origin, real3 dir, uint slot, inout S
     real t = intersect_sphere_point(fetch_sphere(int(slot)), origin, dir, hit.t, normal, far_root);
     if (COUNT_CROSSINGS) {
       if (slot_visible(slot)) crossings += sphere_crossings(t, far_root, hit.t);
+    } else if (FIRST_HITS) {
+      if (slot_visible(slot)) {
+        hit.t = list_sphere_hits(t, far_root, hit.t, slot);
+        hit.slot = first_id[0];
+      }
     } else if (t < hit.t && slot_visible(slot)) {
       hit.t = t;
       hit.slot = slot;
@@ -202,13 +262,16 @@ void test_primitive(RayFrame frame, Origin origin, real3 dir, uint slot, inout S
 }
 
 // The winner's normal, facing the ray: a sphere's is computed again from its intersection (once
-// per ray).
+// per ray), at its far root where the first hits list it so (VKRAY_HIT_FAR_ROOT).
 real3 primitive_normal(uint slot, Origin origin, real3 dir) {
   real3 normal;
+  bool far = FIRST_HITS && (slot & VKRAY_HIT_FAR_ROOT) != 0u;
+  slot &= ~VKRAY_HIT_FAR_ROOT;
   if (TREE_SPHERES && is_sphere(int(slot))) {
     real far_root;
-    intersect_sphere_point(fetch_sphere(int(slot)), origin, dir, uintBitsToFloat(0x7f800000u), normal, far_root);
-    return normal;
+    real3 far_normal;
+    intersect_sphere_point(fetch_sphere(int(slot)), origin, dir, uintBitsToFloat(0x7f800000u), normal, far_root, far_normal);
+    return far ? far_normal : normal;
   }
   normal = fetch_normal(int(slot));
   return dot(normal, dir) > 0.0 ? -normal : normal;
@@ -224,6 +287,8 @@ PrimitiveHit nearest_primitive_brute_force(RayFrame frame, Origin origin, real3 
     real t = intersect_sphere_point(fetch_point(spheres, int(i)), origin, dir, result.t, normal, far_root);
     if (COUNT_CROSSINGS) {
       if (apart_visible(i)) crossings += sphere_crossings(t, far_root, result.t);
+    } else if (FIRST_HITS) {
+      if (apart_visible(i)) result.t = list_sphere_hits(t, far_root, result.t, VKRAY_HIT_SPHERE_APART | i);
     } else if (t < result.t && apart_visible(i)) {
       result.t = t;
       result.normal = normal;
@@ -234,7 +299,11 @@ PrimitiveHit nearest_primitive_brute_force(RayFrame frame, Origin origin, real3 
   for (uint batch = 0; batch < triangle_slots; batch += VKRAY_TRIANGLE_BATCH) {
     [[unroll]] for (uint k = 0; k < VKRAY_TRIANGLE_BATCH; ++k) test_triangle(frame, origin, dir, batch + k, hit);
   }
-  if (hit.slot != no_primitive) result = PrimitiveHit(hit.t, primitive_normal(hit.slot, origin, dir), false, hit.slot);
+  if (FIRST_HITS) {
+    result.t = hit.t;  // the list's bound; its hits' normals are read when they are written
+  } else if (hit.slot != no_primitive) {
+    result = PrimitiveHit(hit.t, primitive_normal(hit.slot, origin, dir), false, hit.slot);
+  }
   return result;
 }
 
@@ -346,7 +415,7 @@ PrimitiveHit nearest_primitive_in_tree(RayFrame frame, Origin origin, real3 dir,
     }
   }
   PrimitiveHit result = PrimitiveHit(hit.t, real3(0.0), unfinished, hit.slot);
-  if (hit.slot != no_primitive) result.normal = primitive_normal(hit.slot, origin, dir);
+  if (hit.slot != no_primitive && !FIRST_HITS) result.normal = primitive_normal(hit.slot, origin, dir);
   return result;
 }
 

@@ -55,11 +55,11 @@ PrimitiveHit nearest_primitive_ray_query(RayFrame frame, Origin origin, vec3 dir
     // ordering would bring its distance and another triangle's normal.
     SlotHit own = SlotHit(t_max, no_primitive);
     test_primitive(frame, origin, dir, slot, own);
-    // Counting crossings commits nothing, so the device proposes every candidate along the range;
-    // test_primitive counted this one where vkray's test takes it. What the device never proposes
-    // (a triangle its own test misses at an edge) is not counted: a ray within rounding of an edge
-    // may count one crossing fewer here than with vkray's walks.
-    if (COUNT_CROSSINGS) continue;
+    // Counting crossings or listing the first hits commits nothing, so the device proposes every
+    // candidate along the range; test_primitive counted or listed this one where vkray's test takes
+    // it. What the device never proposes (a triangle its own test misses at an edge) is not: a ray
+    // within rounding of an edge may cross one surface fewer here than with vkray's walks.
+    if (COUNT_CROSSINGS || FIRST_HITS) continue;
     if (own.slot != no_primitive && own.t < hit.t) hit = own;
     const bool triangle = rayQueryGetIntersectionTypeEXT(query, false) == gl_RayQueryCandidateIntersectionTriangleEXT;
     if (triangle && own.slot == no_primitive && slot_visible(slot)) {
@@ -81,7 +81,7 @@ PrimitiveHit nearest_primitive_ray_query(RayFrame frame, Origin origin, vec3 dir
       }
     }
   }
-  if (hit.slot != no_primitive && !unfinished) {
+  if (hit.slot != no_primitive && !unfinished && !FIRST_HITS) {
     // Once a triangle is committed, the device culls every other at its own float32 distance, so a
     // triangle that vkray's test finds nearer by less than the two distances' disagreement (two
     // overlapping coplanar triangles, or one crossing the winner at the hit) may never have been
@@ -100,7 +100,7 @@ PrimitiveHit nearest_primitive_ray_query(RayFrame frame, Origin origin, vec3 dir
     while (next_candidate(query, iterations, unfinished)) test_primitive(frame, origin, dir, candidate_slot(query), hit);
   }
   PrimitiveHit result = PrimitiveHit(hit.t, vec3(0.0), unfinished, hit.slot);
-  if (hit.slot != no_primitive) result.normal = primitive_normal(hit.slot, origin, dir);
+  if (hit.slot != no_primitive && !FIRST_HITS) result.normal = primitive_normal(hit.slot, origin, dir);
   return result;
 }
 

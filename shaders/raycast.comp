@@ -122,6 +122,29 @@ PrimitiveHit nearest_primitive(Origin origin, real3 dir, real t_max, uvec4 count
 }
 
 
+// The normal, facing the ray, of a hit in the list of first hits (FIRST_HITS; not yet unit length).
+real3 first_hit_normal(uint id, Origin origin, real3 dir) {
+  if (id == VKRAY_HIT_NONE) return real3(0.0);
+  bool far = (id & VKRAY_HIT_FAR_ROOT) != 0u;
+  uint index = id & VKRAY_HIT_INDEX_MASK & ~VKRAY_HIT_FAR_ROOT;
+  if ((id & VKRAY_HIT_PLANE) != 0u) {
+#ifdef VKRAY_FLOAT64
+    real3 plane_normal = fetch_point(planes, 2 * int(index)).value.xyz;
+#else
+    real3 plane_normal = fetch_point_hi(planes, 2 * int(index)).hi.xyz;
+#endif
+    return dot(plane_normal, dir) > 0.0 ? -plane_normal : plane_normal;
+  }
+  if ((id & VKRAY_HIT_SPHERE_APART) != 0u) {
+    real3 normal, far_normal;
+    real far_root;
+    intersect_sphere_point(fetch_point(spheres, int(index)), origin, dir, uintBitsToFloat(0x7f800000u), normal, far_root,
+                           far_normal);
+    return far ? far_normal : normal;
+  }
+  return primitive_normal(id, origin, dir);
+}
+
 // The rays this invocation traces: one, or a column of a packet (see VKRAY_PACKET_ROWS).
 const uint RAYS = PACKET_WALK ? VKRAY_PACKET_ROWS : 1u;
 
@@ -256,6 +279,7 @@ void main() {
     t_best[r] = inside[r] ? range_end : 0.0;
     normal[r] = real3(0.0);
     hit_id[r] = VKRAY_HIT_NONE;
+    if (FIRST_HITS) clear_first_hits(t_best[r]);
 
     // Planes first; spheres and triangles then search up to VKRAY_PRIMITIVE_T_MAX (coincident
     // surfaces: the plane wins; see gpu_layout.h).
@@ -282,6 +306,8 @@ void main() {
       real t = intersect_plane(plane_normal, height, dir, t_best[r]);
       if (COUNT_CROSSINGS) {
         if (t < t_best[r] && apart_visible(spheres_apart + i)) ++crossings;
+      } else if (FIRST_HITS) {
+        if (apart_visible(spheres_apart + i)) primitive_t_max[r] = list_first_hit(t, VKRAY_HIT_PLANE | i);
       } else if (t < t_best[r] && apart_visible(spheres_apart + i)) {
         t_best[r] = t;
         normal[r] = dot(plane_normal, dir) > 0.0 ? -plane_normal : plane_normal;
@@ -318,7 +344,7 @@ void main() {
 
   float near = uintBitsToFloat(0x7f800000u), far = 0.0;
   for (uint r = 0; r < RAYS; ++r) {
-    if (hits[r].t < primitive_t_max[r]) {
+    if (!FIRST_HITS && hits[r].t < primitive_t_max[r]) {
       t_best[r] = hits[r].t;
       normal[r] = hits[r].normal;
       hit_id[r] = hits[r].id;
@@ -345,6 +371,18 @@ void main() {
     if (IMAGE_TARGET) {
       imageStore(image_out, ivec2(tile_pixel[r].x, params.image.z + tile_pixel[r].y),
                  WRITE_DEPTH ? vec4(t_best[r], 0.0, 0.0, 0.0) : vec4(normal[r], 0.0));
+      continue;
+    }
+    if (FIRST_HITS) {  // hit k in the k-th run of each output's planes
+      [[unroll]] for (uint k = 0; k < VKRAY_HITS_MAX; ++k) {
+        if (k >= HITS) continue;
+        uint id = first_id[k];
+        bool listed = id != VKRAY_HIT_NONE;
+        hit_out[k * plane_size + out_index] = listed ? id & ~VKRAY_HIT_FAR_ROOT : VKRAY_HIT_NONE;
+        depth_out[k * plane_size + out_index] = listed ? first_t[k] : uintBitsToFloat(0x7f800000u);
+        real3 unit_normal = listed ? normalize(first_hit_normal(id, origin, dirs[r])) : real3(0.0);
+        for (uint c = 0; c < 3; ++c) normal_out[(3 * k + c) * plane_size + out_index] = unit_normal[c];
+      }
       continue;
     }
     if (CALLER_ARRAYS) {  // by ray, as the caller holds them: t, x y z of the normal, the ids

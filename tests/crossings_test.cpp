@@ -124,6 +124,9 @@ TEST(Crossings, RandomRaysCountAsTheReference) {
     SCOPED_TRACE(variant_name(options));
     Renderer renderer(device(), scene, options);
     const std::vector<uint32_t> counts = renderer.count_intersections(rays);
+    if (options.loop_budget > 0) {
+      EXPECT_GT(renderer.timings().unfinished_rays, 0u) << "the loop budget must leave rays to the host";
+    }
     size_t wrong = 0, first_wrong = rays.size();
     for (size_t k = 0; k < rays.size(); ++k) {
       if (counts[k] != expected[k] && wrong++ == 0) first_wrong = k;
@@ -170,6 +173,140 @@ TEST(Crossings, RangesMasksAndTheDefaultScene) {
     EXPECT_EQ(wrong, 0u) << "of " << pixels.size() << " pixel rays";
     EXPECT_GT(crossed, pixels.size() / 10) << "rays must cross more than the nearest surface";
   }
+}
+
+
+// Three closed cubes along the x axis (2 wide, centred at x = 0, 4 and 8), a sphere of radius 0.8 in
+// the first and one of radius 0.6 apart at x = 12, and the plane x = 15 facing -x: a ray along +x near
+// the axis crosses 6 cube faces, 4 sphere roots and the plane, 11 crossings, each met nearly head
+// on (the rays stay within 0.1 rad of the axis and 0.5 of it at the cubes, away from every cube edge
+// and from the faces' diagonals, where a triangle's neighbour may take the hit).
+Scene row_of_shapes() {
+  Scene scene = cube_scene();
+  for (const double x : {4.0, 8.0}) {
+    Mesh cube = scene.meshes[0];
+    for (glm::dvec3& p : cube.positions) p.x += x;
+    scene.meshes.push_back(std::move(cube));
+  }
+  scene.spheres.push_back({{0.0, 0.0, 0.0}, 0.8});
+  scene.spheres.push_back({{12.0, 0.0, 0.0}, 0.6});
+  scene.planes.push_back({{15.0, 0.0, 0.0}, {-1.0, 0.0, 0.0}});
+  return scene;
+}
+
+std::vector<GivenRay> rays_along_the_row(size_t count) {
+  PortableRandom random(11);
+  std::vector<GivenRay> rays;
+  while (rays.size() < count) {
+    const double y = random.uniform(-0.3, 0.3), z = random.uniform(-0.3, 0.3);
+    const double dy = random.uniform(-0.01, 0.01), dz = random.uniform(-0.01, 0.01);
+    // Within 0.01 of a face's diagonal anywhere along the cubes (x up to 9): too near an edge.
+    bool near_diagonal = false;
+    for (const double x : {-1.0, 1.0, 3.0, 5.0, 7.0, 9.0}) {
+      const double at_y = y + (x + 2.0) * dy, at_z = z + (x + 2.0) * dz;
+      near_diagonal = near_diagonal || std::abs(std::abs(at_y) - std::abs(at_z)) < 0.01;
+    }
+    if (!near_diagonal) rays.push_back({-2.0, y, z, 1.0, dy, dz});
+  }
+  return rays;
+}
+
+// The first hits along the rays, 4 (fewer than the crossings) and 16 (VKRAY_HITS_MAX, more: misses
+// past the 11th),
+// are the reference's in every search and variant: the same objects and primitives in the same
+// order, each distance within float32's error and each normal within its angle. The error of a
+// distance: every position relative to the origin and the direction are good to 2 eps (eps = 2^-24)
+// of their size, and the tests' arithmetic adds a few eps, which a head-on hit (cos > 0.99) passes
+// to t as 8 eps (t + 16) (16: the scene's extent, the largest position from the anchor); a normal:
+// a triangle's is stored rounded (2 eps), a sphere's comes from an offset good to 10 eps of its
+// radius (intersect.glsl): 32 eps.
+TEST(FirstHits, InOrderAsTheReference) {
+  const Scene scene = row_of_shapes();
+  const std::vector<GivenRay> rays = rays_along_the_row(512);
+  const ReferenceScene reference(scene);
+  constexpr double eps = 0x1p-24;
+  for (const uint32_t count : {4u, uint32_t{VKRAY_HITS_MAX}}) {
+    std::vector<std::vector<ReferenceHit>> expected(rays.size());
+    for (size_t k = 0; k < rays.size(); ++k) {
+      expected[k] = first_reference_hits(reference, rays[k], 0.0, no_hit, count);
+      ASSERT_EQ(std::count_if(expected[k].begin(), expected[k].end(), [](const ReferenceHit& h) { return h.kind != PrimitiveKind::none; }),
+                std::min(count, 11u));
+    }
+    for (const RendererOptions& options : counting_variants()) {
+      // The longest list (a pipeline of its own, slower to compile) in the per-ray walk and float64 alone.
+      if (count == VKRAY_HITS_MAX && (options.scene.search != PrimitiveSearch::bvh_per_ray || options.shader.generic ||
+                                      options.shader.storage_geometry || options.loop_budget > 0)) {
+        continue;
+      }
+      SCOPED_TRACE(variant_name(options) + ", " + std::to_string(count) + " hits");
+      Renderer renderer(device(), scene, options);
+      const RayHits hits = renderer.cast_rays(rays, {}, count);
+      if (options.loop_budget > 0) {
+        EXPECT_GT(renderer.timings().unfinished_rays, 0u) << "the loop budget must leave rays to the host";
+      }
+      ASSERT_EQ(hits.count, rays.size() * count);
+      ASSERT_EQ(hits.hits_per_ray, count);
+      size_t wrong_ids = 0, wrong_t = 0, wrong_normals = 0;
+      std::string first;
+      for (size_t k = 0; k < rays.size(); ++k) {
+        for (uint32_t layer = 0; layer < count; ++layer) {
+          const size_t at = k * count + layer;
+          const ReferenceHit& want = expected[k][layer];
+          const ObjectPrimitive source = reference.source(want);
+          const bool ids_differ = hits.object[at] != source.object || hits.primitive[at] != source.primitive;
+          const double t = hits.t64.empty() ? double{hits.t[at]} : hits.t64[at];
+          const bool t_differs = want.kind == PrimitiveKind::none ? !std::isinf(t) : !(std::abs(t - want.t) <= 8 * eps * (want.t + 16.0));
+          const glm::dvec3 normal(hits.normal[at], hits.normal[hits.count + at], hits.normal[2 * hits.count + at]);
+          const bool normal_differs =
+              want.kind == PrimitiveKind::none ? normal != glm::dvec3(0.0) : !(angle_between(normal, want.normal) <= 32 * eps);
+          wrong_ids += ids_differ, wrong_t += t_differs, wrong_normals += normal_differs;
+          if ((ids_differ || t_differs || normal_differs) && first.empty()) {
+            first = "ray " + std::to_string(k) + " hit " + std::to_string(layer) + ": t " + std::to_string(t) + " (reference " +
+                    std::to_string(want.t) + "), object " + std::to_string(hits.object[at]) + " (" + std::to_string(source.object) + ")";
+          }
+        }
+      }
+      EXPECT_EQ(wrong_ids + wrong_t + wrong_normals, 0u)
+          << wrong_ids << " ids, " << wrong_t << " distances, " << wrong_normals << " normals; first: " << first;
+    }
+  }
+}
+
+// The nearest of the first hits is the nearest hit, bit for bit (the same tests on the same
+// values); ranges and masks apply to the list as to the nearest hit; counts outside 1 to 16 are refused.
+TEST(FirstHits, TheFirstIsTheNearestAndRangesAndMasksApply) {
+  Scene scene = row_of_shapes();
+  scene.meshes[1].mask = 2;
+  const std::vector<GivenRay> rays = rays_along_the_row(256);
+  Renderer renderer(device(), scene);
+  const RayHits nearest = renderer.cast_rays(rays);
+  const RayHits first = renderer.cast_rays(rays, {}, 4);
+  size_t differ = 0;
+  for (size_t k = 0; k < rays.size(); ++k) {
+    differ += nearest.t[k] != first.t[4 * k] || nearest.object[k] != first.object[4 * k] ||
+              nearest.primitive[k] != first.primitive[4 * k] || nearest.normal[k] != first.normal[4 * k];
+  }
+  EXPECT_EQ(differ, 0u);
+
+  // From x = 2 to 9.5: the second cube (3 and 5) and the third's near face (7) alone; with mask 1 the
+  // third's alone (7, 9), the second hidden.
+  const std::vector<double> t_min(rays.size(), 4.0), t_max(rays.size(), 11.5);
+  const ReferenceScene every_bit(scene), without_second(scene, 1);
+  for (const Mask mask : {Mask(0xff), Mask(1)}) {
+    renderer.set_ray_mask(mask);
+    const RayHits ranged = renderer.cast_rays(rays, {t_min, t_max}, 4);
+    size_t wrong = 0;
+    for (size_t k = 0; k < rays.size(); ++k) {
+      const std::vector<ReferenceHit> want = first_reference_hits(mask == 1 ? without_second : every_bit, rays[k], 4.0, 11.5, 4);
+      for (uint32_t layer = 0; layer < 4; ++layer) {
+        const ReferenceScene& reference = mask == 1 ? without_second : every_bit;
+        wrong += ranged.object[4 * k + layer] != reference.source(want[layer]).object;
+      }
+    }
+    EXPECT_EQ(wrong, 0u) << "ray mask " << int(mask);
+  }
+  EXPECT_THROW(renderer.cast_rays(rays, {}, 0), InputError);
+  EXPECT_THROW(renderer.cast_rays(rays, {}, VKRAY_HITS_MAX + 1), InputError);
 }
 
 }  // namespace

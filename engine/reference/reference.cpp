@@ -224,6 +224,48 @@ void ReferenceScene::nearest_in_tree(const glm::dvec3& origin, const glm::dvec3&
   });
 }
 
+std::vector<ReferenceHit> ReferenceScene::first_hits(const glm::dvec3& origin, const glm::dvec3& dir, double t_max,
+                                                     uint32_t count) const {
+  std::vector<ReferenceHit> found;  // nearest first, at most `count`
+  double bound = t_max;             // the last one's distance once there are `count`
+  auto add = [&](const ReferenceHit& hit) {
+    if (!(hit.t < bound)) return;
+    found.insert(std::upper_bound(found.begin(), found.end(), hit.t, [](double t, const ReferenceHit& h) { return t < h.t; }), hit);
+    if (found.size() > count) found.pop_back();
+    if (found.size() == count) bound = found.back().t;
+  };
+  for (uint32_t i = 0; i < planes_.size(); ++i) {
+    if (!mask_hits(planes_[i].mask, ray_mask_)) continue;
+    add({intersect_plane(planes_[i].normal, planes_[i].point, origin, dir, bound), planes_[i].normal, PrimitiveKind::plane, i});
+  }
+  if (!nodes_.empty()) {
+    walk_tree(origin, dir, bound, [&](const TreeEntry& entry) {
+      if (entry.kind == PrimitiveKind::sphere) {
+        const Sphere& sphere = spheres_[entry.index];
+        const glm::dvec3 f = origin - sphere.center;
+        bool near = false;
+        double far_root = bound;
+        const double t = intersect_sphere(f, sphere.radius, dir, bound, &near, &far_root);
+        // Facing the ray by the root, as test_sphere does; the far root after a near one faces inward.
+        if (t < bound) add({t, (near ? 1.0 : -1.0) * (f + t * dir) / sphere.radius, PrimitiveKind::sphere, entry.index});
+        if (t < far_root && far_root < bound) {
+          add({far_root, -(f + far_root * dir) / sphere.radius, PrimitiveKind::sphere, entry.index});
+        }
+      } else {
+        const Triangle& triangle = triangles_[entry.index];
+        add({intersect_triangle(triangle.v0, triangle.v1, triangle.v2, origin, dir, bound, true), triangle.normal,
+             PrimitiveKind::triangle, triangle.index});
+      }
+    });
+  }
+  for (ReferenceHit& hit : found) {
+    hit.normal = glm::normalize(hit.normal);
+    if (hit.kind != PrimitiveKind::sphere && glm::dot(hit.normal, dir) > 0.0) hit.normal = -hit.normal;
+  }
+  found.resize(count);  // misses past the last: t = +infinity, kind none
+  return found;
+}
+
 uint32_t ReferenceScene::count_crossings(const glm::dvec3& origin, const glm::dvec3& dir, double t_max) const {
   uint32_t crossings = 0;
   for (const Plane& plane : planes_) {
@@ -347,6 +389,15 @@ ReferenceHit trace_reference_ray(const ReferenceScene& scene, const GivenRay& ra
   ReferenceHit hit = scene.trace({start[0], start[1], start[2]}, {start[3], start[4], start[5]}, t_max - t_min);
   hit.t += t_min;  // a miss stays +infinity
   return hit;
+}
+
+std::vector<ReferenceHit> first_reference_hits(const ReferenceScene& scene, const GivenRay& ray, double t_min, double t_max,
+                                               uint32_t count) {
+  if (t_min == 0.0) return scene.first_hits({ray[0], ray[1], ray[2]}, unit_vector({ray[3], ray[4], ray[5]}), t_max, count);
+  const GivenRay start = range_start_ray(ray, t_min);
+  std::vector<ReferenceHit> hits = scene.first_hits({start[0], start[1], start[2]}, {start[3], start[4], start[5]}, t_max - t_min, count);
+  for (ReferenceHit& hit : hits) hit.t += t_min;  // a miss stays +infinity
+  return hits;
 }
 
 uint32_t count_reference_crossings(const ReferenceScene& scene, const GivenRay& ray, double t_min, double t_max) {

@@ -54,6 +54,9 @@ class ReferenceScene {
   // passes exactly through counts for one of the triangles that share it), each sphere root, each
   // plane. A closed surface's count is odd where the origin lies inside it.
   uint32_t count_crossings(const glm::dvec3& origin, const glm::dvec3& dir, double t_max = no_hit) const;
+  // The first `count` of those crossings in order of distance, each as a nearest hit would be (a
+  // sphere's far root with its inward normal, facing the ray), misses past the last.
+  std::vector<ReferenceHit> first_hits(const glm::dvec3& origin, const glm::dvec3& dir, double t_max, uint32_t count) const;
   // The hit's object and primitive as the outputs number them (see ObjectPrimitive).
   ObjectPrimitive source(const ReferenceHit& hit) const;
 
@@ -110,6 +113,11 @@ ReferenceHit trace_reference_ray(const ReferenceScene& scene, const GivenRay& ra
 
 // How many times `ray` crosses a surface within (t_min, t_max) (ReferenceScene::count_crossings).
 uint32_t count_reference_crossings(const ReferenceScene& scene, const GivenRay& ray, double t_min, double t_max);
+
+// The first `count` hits of `ray` within (t_min, t_max) (ReferenceScene::first_hits), t counting
+// from its origin.
+std::vector<ReferenceHit> first_reference_hits(const ReferenceScene& scene, const GivenRay& ray, double t_min, double t_max,
+                                               uint32_t count);
 
 // Pixel `pixel` of `frame`'s outputs (depth and normal; uv is the camera's) from a reference hit,
 // rounded to float only here.

@@ -78,10 +78,10 @@ void Renderer::Impl::cast_given(const GivenRays& given, RaycastMode mode, uint32
     });
     lo_parts = any_near;
   }
-  const vk::raii::Pipeline& chosen = pipeline->pipeline(aovs, lo_parts, mode, timings.pipeline_ms, given.query);
+  const vk::raii::Pipeline& chosen = pipeline->pipeline(aovs, lo_parts, mode, timings.pipeline_ms, given.query, given.hits);
   // The planes' heights above the one origin; rays from their own origins subtract it themselves.
   if (origin) set_planes_above(*origin);
-  prepare_tile(width, tile_rows, aovs, nullptr, mode);
+  prepare_tile(width * given.hits, tile_rows, aovs, nullptr, mode);  // first hits: a run of planes each
   double& ms_per_ray = origin ? camera_ms_per_pixel : given_ms_per_ray;  // packets cost as pixels do
   DispatchSizer sizer(width, tile_rows, options.dispatch_budget_ms, ms_per_ray, workgroup_footprint(mode).height);
   gpu::RayGenParams params{};
@@ -118,14 +118,18 @@ void Renderer::Impl::cast_given(const GivenRays& given, RaycastMode mode, uint32
         for (size_t p = begin; p < end; ++p) {
           const size_t k = ray_at(first + p);
           if (k >= rays.size()) continue;
-          const glm::dvec3 normal(unit_normals[p], unit_normals[plane_size + p], unit_normals[2 * plane_size + p]);
-          hits.store(k, ranges.start(k) + depths[p], normal, hit_sources(slots[p]));
+          for (size_t layer = 0; layer < given.hits; ++layer) {  // hit `layer` in the layer-th run of planes
+            const size_t at = layer * plane_size + p;
+            const T* layer_normals = unit_normals + 3 * layer * plane_size;
+            const glm::dvec3 normal(layer_normals[p], layer_normals[plane_size + p], layer_normals[2 * plane_size + p]);
+            hits.store(k * given.hits + layer, ranges.start(k) + depths[at], normal, hit_sources(slots[at]));
+          }
         }
       });
     };
     if (given.query == HitQuery::count) {  // one by one: no order
       std::memcpy(hits.crossings.data() + first, slots, count * sizeof(uint32_t));
-    } else if (!order && precision() == Precision::float32 && ranges.t_min.empty()) {  // in place: the planes as they are, the ids named
+    } else if (!order && precision() == Precision::float32 && ranges.t_min.empty() && given.hits == 1) {  // in place: the planes as they are, the ids named
       const auto* unit_normals = static_cast<const float*>(tile.normal->host());
       std::memcpy(hits.t.data() + first, tile.depth->host(), count * sizeof(float));
       for (size_t c = 0; c < 3; ++c) {
@@ -152,6 +156,15 @@ void Renderer::Impl::cast_given(const GivenRays& given, RaycastMode mode, uint32
           hits.crossings[k] = count_reference_crossings(*reference, rays[k], ranges.start(k), ranges.end(k));
           return;
         }
+        if (given.hits > 1) {
+          const std::vector<ReferenceHit> first_hits =
+              first_reference_hits(*reference, rays[k], ranges.start(k), ranges.end(k), given.hits);
+          for (size_t layer = 0; layer < given.hits; ++layer) {
+            const ReferenceHit& hit = first_hits[layer];
+            hits.store(k * given.hits + layer, hit.t, hit.normal, reference->source(hit));
+          }
+          return;
+        }
         const ReferenceHit hit = trace_reference_ray(*reference, rays[k], ranges.start(k), ranges.end(k));
         hits.store(k, hit.t, hit.normal, reference->source(hit));
       });
@@ -163,8 +176,12 @@ RayHits Renderer::Impl::cast_rays(const GivenRays& given) {
   const std::span<const GivenRay> rays = given.rays;
   check_given_rays(rays);
   check_ray_ranges(rays, given.ranges);
+  if (given.hits < 1 || given.hits > VKRAY_HITS_MAX) {
+    throw InputError("hits: " + std::to_string(given.hits) + " is not between 1 and " + std::to_string(VKRAY_HITS_MAX));
+  }
   RayHits hits;
-  hits.allocate(rays.size(), precision() == Precision::float64);
+  hits.allocate(rays.size() * given.hits, precision() == Precision::float64);
+  hits.hits_per_ray = given.hits;
   if (given.query == HitQuery::count) hits.crossings.resize(rays.size());
   reset_timings();
   if (rays.empty()) return hits;
@@ -174,7 +191,7 @@ RayHits Renderer::Impl::cast_rays(const GivenRays& given) {
     // Rows of `width` holding `positions`, at most as many as the device's buffers hold.
     auto tile_rows = [&](uint32_t width, size_t positions, RaycastMode mode) {
       const auto rows = static_cast<uint32_t>(std::min<size_t>((positions + width - 1) / width, UINT32_MAX));
-      return rows_per_tile(width, rows, aovs, mode);
+      return rows_per_tile(width * given.hits, rows, aovs, mode);
     };
     // Rays from one origin (a camera's, a LiDAR's) walk the tree in packets as a camera's pixels
     // do, where the camera's rays would (the float32 packet walk): one by one they take five times
@@ -182,11 +199,11 @@ RayHits Renderer::Impl::cast_rays(const GivenRays& given) {
     // image's rows keep their places, as a camera's pixels; others are ordered by direction, 64
     // consecutive ones a packet, in tiles of whole packets (where the device's buffers hold one).
     // Ranges that start past the origin move it, ray by ray: those rays walk one by one, as do
-    // counts of crossings (the packet walk finds the nearest hit alone).
+    // counts of crossings and first hits (the packet walk finds the nearest hit alone).
     const bool from_origins = std::all_of(given.ranges.t_min.begin(), given.ranges.t_min.end(), [](double t) { return t == 0.0; });
     const std::optional<glm::dvec3> origin =
         stats.search == PrimitiveSearch::bvh_packet && precision() == Precision::float32 && from_origins &&
-                given.query != HitQuery::count
+                given.query != HitQuery::count && given.hits == 1
             ? shared_origin(rays)
             : std::nullopt;
     if (const std::optional<uint32_t> rows_width = origin ? scan_width(rays) : std::nullopt) {

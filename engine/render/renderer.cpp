@@ -265,8 +265,8 @@ double Renderer::sustained_dispatch_ms(const Camera& camera, uint32_t width, uin
   return ms;
 }
 
-RayHits Renderer::cast_rays(std::span<const GivenRay> rays, const RayRanges& ranges) {
-  return impl_->cast_rays({rays, ranges, HitQuery::nearest});
+RayHits Renderer::cast_rays(std::span<const GivenRay> rays, const RayRanges& ranges, uint32_t hits) {
+  return impl_->cast_rays({rays, ranges, HitQuery::nearest, hits});
 }
 
 void RenderTimings::add(const RenderTimings& later) {

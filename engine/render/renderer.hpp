@@ -88,8 +88,11 @@ template <typename T>
 using UninitializedVector = std::vector<T, UninitializedAllocator<T>>;
 
 // What each of a batch of given rays hit, in the rays' order.
+// With first hits (Renderer::cast_rays' `hits` above 1), entry ray * hits_per_ray + k holds ray's
+// k-th hit, nearest first: count is the rays' count times hits_per_ray.
 struct RayHits {
   size_t count = 0;
+  uint32_t hits_per_ray = 1;
   UninitializedVector<float> t;         // distance along the unit direction to the nearest hit; +inf on a miss
   UninitializedVector<float> normal;    // 3 planes (all x, then y, then z): unit normal facing the ray, 0 on a miss
   UninitializedVector<uint32_t> object;     // ObjectPrimitive::object, no_object on a miss
@@ -166,8 +169,11 @@ class Renderer {
 
   // Traces each ray (checked first: check_given_rays, check_ray_ranges) to its nearest hit within
   // its range, with the precision contract of images: the origin relative to the scene's anchor, the
-  // direction normalized in double, then rounded as a camera's are.
-  RayHits cast_rays(std::span<const GivenRay> rays, const RayRanges& ranges = {});
+  // direction normalized in double, then rounded as a camera's are. With `hits` above 1 (at most
+  // VKRAY_HITS_MAX), its first `hits` hits in order of distance (RayHits::hits_per_ray): the first
+  // of the crossings count_intersections counts, each sphere's far root too, an edge passed
+  // exactly through once; misses past the last. They walk one by one, in one pass along the ray.
+  RayHits cast_rays(std::span<const GivenRay> rays, const RayRanges& ranges = {}, uint32_t hits = 1);
 
   // cast_rays for rays from one origin with no ranges, their hits written straight into the
   // caller's arrays: the device reads `rays` and writes `into` where they lie (host memory it

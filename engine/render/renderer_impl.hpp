@@ -215,11 +215,13 @@ struct Renderer::Impl {
   double sustained_dispatch_ms(const Camera& camera, uint32_t width, uint32_t height, AovSet aovs, uint32_t repeats);
 
   // given_rays.cpp
-  // What Renderer::cast_rays or Renderer::occluded traces: the rays, their ranges, what they look for.
+  // What Renderer::cast_rays or Renderer::occluded traces: the rays, their ranges, what they look
+  // for, and for the nearest hits how many of the first hits (VKRAY_SPEC_HITS).
   struct GivenRays {
     std::span<const GivenRay> rays;
     RayRanges ranges;
     HitQuery query = HitQuery::nearest;
+    uint32_t hits = 1;
   };
   RayHits cast_rays(const GivenRays& given);
   // Given rays in dispatches of at most `tile_rows` rows of `width` positions. Position p holds ray

@@ -50,12 +50,12 @@ RaycastPipeline::RaycastPipeline(VulkanContext& context, PipelineSpecialization 
 }
 
 const vk::raii::Pipeline& RaycastPipeline::pipeline(AovSet aovs, bool lo_parts, RaycastMode mode, double& created_ms,
-                                                    HitQuery query) {
+                                                    HitQuery query, uint32_t hits) {
   created_ms = 0.0;
   // The output bits in the low word, then the lo parts, the mode (three bits) and the query above every
   // output's bit (Aov::hit is 256, where the lo parts once were: two different pipelines shared a key).
   const uint64_t key = uint64_t{aovs.bits()} | (uint64_t{lo_parts} << 32) | (uint64_t{static_cast<uint32_t>(mode)} << 33) |
-                       (uint64_t{static_cast<uint32_t>(query)} << 36);
+                       (uint64_t{static_cast<uint32_t>(query)} << 36) | (uint64_t{hits} << 40);
   {
     const std::lock_guard lock(*pipelines_lock_);
     if (auto found = pipelines_.find(key); found != pipelines_.end()) return found->second;
@@ -93,6 +93,7 @@ const vk::raii::Pipeline& RaycastPipeline::pipeline(AovSet aovs, bool lo_parts, 
   values[VKRAY_SPEC_SUBGROUP_SIZE] = context_.info.subgroup_size == 8 ? 8u : 0u;
   values[VKRAY_SPEC_HIT_QUERY] = static_cast<uint32_t>(query);
   values[VKRAY_SPEC_MASKS] = specialization_.masks ? 1u : 0u;
+  values[VKRAY_SPEC_HITS] = hits;
   std::array<vk::SpecializationMapEntry, values.size()> entries;
   for (uint32_t id = 0; id < entries.size(); ++id) entries[id] = vk::SpecializationMapEntry(id, id * 4u, 4u);
   const vk::SpecializationInfo specialization(entries, vk::ArrayProxyNoTemporaries<const uint32_t>(values));

@@ -55,11 +55,11 @@ class RaycastPipeline {
   const PipelineSpecialization& specialization() const { return specialization_; }
 
   // The pipeline for this set of outputs, with or without the lo parts of positions
-  // (VKRAY_SPEC_LO_PARTS), in `mode`, for `query`, created on first request. `created_ms` receives
+  // (VKRAY_SPEC_LO_PARTS), in `mode`, for `query` and the first `hits` hits (VKRAY_SPEC_HITS), created on first request. `created_ms` receives
   // the creation time, 0 when it was already there. Threads may ask for different pipelines at once
   // (Renderer::prepare_pipelines makes several together); each is compiled outside the lock.
   const vk::raii::Pipeline& pipeline(AovSet aovs, bool lo_parts, RaycastMode mode, double& created_ms,
-                                     HitQuery query = HitQuery::nearest);
+                                     HitQuery query = HitQuery::nearest, uint32_t hits = 1);
 
   // What each binding (VKRAY_BINDING_*) reads or writes: a storage buffer, a texel view or a
   // storage image (in the GENERAL layout).
