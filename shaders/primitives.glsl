@@ -25,8 +25,9 @@ const bool COUNT_CROSSINGS = HIT_QUERY == VKRAY_HIT_QUERY_COUNT;
 layout(constant_id = VKRAY_SPEC_MASKS) const bool MASKS = false;
 layout(constant_id = VKRAY_SPEC_HITS) const uint HITS = 1u;
 const bool FIRST_HITS = HITS > 1u;
-// Crossings counted or listed take an edge or vertex a ray passes exactly through once.
-const bool CLAIM_EDGES = COUNT_CROSSINGS || FIRST_HITS;
+// Crossings counted or listed are each met once: an edge or vertex a ray passes exactly through,
+// a tree's lone leaf.
+const bool EVERY_CROSSING_ONCE = COUNT_CROSSINGS || FIRST_HITS;
 // What the tree may hold: in the generic variant, both kinds.
 const bool TREE_TRIANGLES = GENERIC || TREE_HAS_TRIANGLES;
 const bool TREE_SPHERES = GENERIC || TREE_HAS_SPHERES;
@@ -215,7 +216,7 @@ Point fetch_sphere(int slot) {
 void test_triangle(RayFrame frame, Origin origin, real3 dir, uint slot, inout SlotHit hit) {
   real3 v0, v1, v2;
   fetch_triangle(int(slot), origin, v0, v1, v2);
-  real t = intersect_triangle(frame, dir, v0, v1, v2, hit.t, CLAIM_EDGES);
+  real t = intersect_triangle(frame, dir, v0, v1, v2, hit.t, EVERY_CROSSING_ONCE);
   if (t < hit.t && slot_visible(slot)) {
     if (COUNT_CROSSINGS) {
       ++crossings;
@@ -387,8 +388,8 @@ PrimitiveHit nearest_primitive_in_tree(RayFrame frame, Origin origin, real3 dir,
                                   FETCH(bvh_bounds, 4 * int(current) + 2), box_origin, box_margin, inv_dir,
                                   hit.t, enter);
       uvec2 children = FETCH(bvh_links, 4 * int(current) + 3).xy;
-      // A tree of one leaf is a root with that leaf as both children (Bvh::nodes): counted once.
-      if (COUNT_CROSSINGS && children.x == children.y) hits.y = false;
+      // A tree of one leaf is a root with that leaf as both children (Bvh::nodes): visited once.
+      if (EVERY_CROSSING_ONCE && children.x == children.y) hits.y = false;
       bool second_first = hits.y && (!hits.x || enter.y < enter.x);
       if (hits.x && hits.y) {
         uint later = second_first ? children.x : children.y;

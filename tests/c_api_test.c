@@ -38,9 +38,9 @@ int main(void) {
   uint32_t mesh[2];
   const char* outputs[] = {"t", "mesh-id"};
   void* hits[] = {t, mesh};
-  CHECK(vkray_cast_rays(renderer, &rays[0][0], 2, NULL, NULL, 0, 255, 2, outputs, hits) == VKRAY_OK);
+  CHECK(vkray_cast_rays(renderer, &rays[0][0], 2, NULL, NULL, 0, 255, 1, 2, outputs, hits) == VKRAY_OK);
   CHECK(isfinite(t[0]) && isinf(t[1]) && mesh[1] == VKRAY_NO_HIT);
-  CHECK(vkray_cast_rays(renderer, &rays[0][0], 2, NULL, NULL, VKRAY_BAD_RAYS_FAIL, 255, 2, outputs, hits) == VKRAY_INPUT_ERROR);
+  CHECK(vkray_cast_rays(renderer, &rays[0][0], 2, NULL, NULL, VKRAY_BAD_RAYS_FAIL, 255, 1, 2, outputs, hits) == VKRAY_INPUT_ERROR);
   CHECK(strstr(vkray_last_error(), "ray 1: the direction is 0") != NULL);
   uint8_t blocked[2];
   CHECK(vkray_occluded(renderer, &rays[0][0], 2, NULL, NULL, 0, 255, blocked) == VKRAY_OK && blocked[0] == 1 && blocked[1] == 0);
@@ -56,10 +56,19 @@ int main(void) {
   vkray_renderer* masked = NULL;
   CHECK(vkray_renderer_new(layered, NULL, "float", "auto", &masked) == VKRAY_OK);
   const double down_z[6] = {0, 0, 5, 0, 0, -1};
-  CHECK(vkray_cast_rays(masked, down_z, 1, NULL, NULL, 0, 1, 2, outputs, hits) == VKRAY_OK && mesh[0] == 1 && fabsf(t[0] - 6.0f) < 1e-5f);
-  CHECK(vkray_cast_rays(masked, down_z, 1, NULL, NULL, 0, 0, 2, outputs, hits) == VKRAY_INPUT_ERROR);
+  CHECK(vkray_cast_rays(masked, down_z, 1, NULL, NULL, 0, 1, 1, 2, outputs, hits) == VKRAY_OK && mesh[0] == 1 && fabsf(t[0] - 6.0f) < 1e-5f);
+  CHECK(vkray_cast_rays(masked, down_z, 1, NULL, NULL, 0, 0, 1, 2, outputs, hits) == VKRAY_INPUT_ERROR);
   CHECK(vkray_occluded(masked, down_z, 1, NULL, NULL, 0, 256, blocked) == VKRAY_INPUT_ERROR);
-  CHECK(vkray_cast_rays(masked, down_z, 1, NULL, NULL, 0, 255, 2, outputs, hits) == VKRAY_OK && mesh[0] == 0);
+  CHECK(vkray_cast_rays(masked, down_z, 1, NULL, NULL, 0, 255, 1, 2, outputs, hits) == VKRAY_OK && mesh[0] == 0);
+  /* First hits: the near triangle (mesh 0) at 5, the far one at 6, then a miss; 0 or too many refused. */
+  float first_t[3];
+  uint32_t first_mesh[3];
+  void* first_hits[2] = {first_t, first_mesh};
+  CHECK(vkray_cast_rays(masked, down_z, 1, NULL, NULL, 0, 255, 3, 2, outputs, first_hits) == VKRAY_OK);
+  CHECK(first_mesh[0] == 0 && first_mesh[1] == 1 && first_mesh[2] == VKRAY_NO_HIT);
+  CHECK(fabsf(first_t[0] - 5.0f) < 1e-5f && fabsf(first_t[1] - 6.0f) < 1e-5f && isinf(first_t[2]));
+  CHECK(vkray_cast_rays(masked, down_z, 1, NULL, NULL, 0, 255, 0, 2, outputs, first_hits) == VKRAY_INPUT_ERROR);
+  CHECK(vkray_cast_rays(masked, down_z, 1, NULL, NULL, 0, 255, VKRAY_HITS_MAX + 1, 2, outputs, first_hits) == VKRAY_INPUT_ERROR);
   /* Counting: both triangles with every bit, the far one alone with mask 1, the near one in a range ending between. */
   uint32_t crossings[1];
   const double ends_between[1] = {5.5};

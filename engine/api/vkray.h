@@ -139,10 +139,14 @@ typedef enum vkray_ray_flags {
  * float64, +inf on a miss), "normal" (3, the geometric normal facing the ray; 0 on a miss),
  * "primitive-id" and "mesh-id" (uint32, VKRAY_NO_HIT on a miss), and the surface outputs render
  * gives: "position" (3), "barycentric" (2), "front-facing" (uint32), "shading-normal" (3),
- * "texcoord" (2). mask: the rays' ray mask, as vkray_render's. */
+ * "texcoord" (2). mask: the rays' ray mask, as vkray_render's. hits: 1 for the nearest hit, or up to
+ * VKRAY_HITS_MAX for each ray's first hits in order of distance (every surface it crosses, a
+ * sphere's far root too, an edge passed exactly through once; misses past the last), results then
+ * count x hits x components. */
+#define VKRAY_HITS_MAX 16 /* as shaders/gpu_layout.h defines it: a different value fails to compile */
 VKRAY_API vkray_status vkray_cast_rays(vkray_renderer* renderer, const double* rays, uint64_t count, const double* t_min,
-                                       const double* t_max, uint32_t flags, uint32_t mask, uint32_t output_count,
-                                       const char* const* outputs, void* const* results);
+                                       const double* t_max, uint32_t flags, uint32_t mask, uint32_t hits,
+                                       uint32_t output_count, const char* const* outputs, void* const* results);
 /* Occlusion queries: whether each ray hits anything at t_min < t < t_max (1) or not (0), into
  * occluded (count bytes). The same rays, ranges, flags and mask as vkray_cast_rays. */
 VKRAY_API vkray_status vkray_occluded(vkray_renderer* renderer, const double* rays, uint64_t count, const double* t_min,

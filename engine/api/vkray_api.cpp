@@ -257,21 +257,25 @@ void trace_call(vkray_renderer& r, CallRays& call, Whole&& whole, Trace&& trace,
 // along the unit direction, the unit normal facing the ray, the object and primitive).
 class RayOutputs {
  public:
-  RayOutputs(const std::vector<const OutputInfo*>& asked, void* const* results, bool doubles, const CallRays& call, const Scene& scene)
-      : asked_(asked), results_(results), doubles_(doubles), call_(call), scene_(scene) {
+  // `hits`: each ray's first hits (1: the nearest), hit k of ray n at entry n * hits + k.
+  RayOutputs(const std::vector<const OutputInfo*>& asked, void* const* results, bool doubles, const CallRays& call,
+             const Scene& scene, uint32_t hits)
+      : asked_(asked), results_(results), doubles_(doubles), call_(call), scene_(scene), hits_(hits) {
     for (const OutputInfo* output : asked) {
       surface_ = surface_ || output->source == OutputSource::surface;
       needs_direction_ = needs_direction_ || output->source == OutputSource::surface || output->aov == Aov::position;
     }
   }
 
-  void miss(size_t k) const { hit(k, INFINITY, glm::dvec3(0.0), {no_object, no_object}); }
+  void miss(size_t k) const {
+    for (uint32_t layer = 0; layer < hits_; ++layer) hit(k, layer, INFINITY, glm::dvec3(0.0), {no_object, no_object});
+  }
 
   // The caller's arrays from ray `first` on, for Renderer::cast_rays_in_place: where the outputs
   // asked for are float32 t along the unit direction, normals and ids alone, and the traced rays are
   // the given ones (none was left out as bad).
   std::optional<HitArrays> arrays_from(size_t first) const {
-    if (doubles_ || !call_.length.empty() || call_.filtered) return std::nullopt;
+    if (doubles_ || !call_.length.empty() || call_.filtered || hits_ > 1) return std::nullopt;
     HitArrays arrays;
     for (size_t n = 0; n < asked_.size(); ++n) {
       if (std::count(asked_.begin(), asked_.begin() + static_cast<std::ptrdiff_t>(n), asked_[n]) > 0) return std::nullopt;  // asked twice
@@ -286,36 +290,38 @@ class RayOutputs {
     return arrays;
   }
 
-  void hit(size_t k, double t, const glm::dvec3& normal, ObjectPrimitive source) const {
+  // Hit `layer` of ray k.
+  void hit(size_t k, uint32_t layer, double t, const glm::dvec3& normal, ObjectPrimitive source) const {
     const bool missed = source.object == no_object;
     const glm::dvec3 origin = vec3_at(call_.rays[k].data(), 0, 6);
     const glm::dvec3 direction =
         missed || !needs_direction_ ? glm::dvec3(0.0) : unit_vector(vec3_at(call_.rays[k].data(), 0, 6, 3));
     SurfaceAt surface;
     if (surface_ && !missed) surface = surface_at(scene_, source, origin, direction, t);
+    const size_t at = k * hits_ + layer;
     for (size_t n = 0; n < asked_.size(); ++n) {
       void* result = results_[n];
       switch (asked_[n]->aov) {
-        case Aov::depth: put(result, k, 1, &t, doubles_, call_.length.empty() ? 1.0 : call_.length[k]); break;
-        case Aov::normal: put(result, k, 3, &normal[0], doubles_); break;
-        case Aov::mesh_id: static_cast<uint32_t*>(result)[k] = source.object; break;
-        case Aov::primitive_id: static_cast<uint32_t*>(result)[k] = source.primitive; break;
+        case Aov::depth: put(result, at, 1, &t, doubles_, call_.length.empty() ? 1.0 : call_.length[k]); break;
+        case Aov::normal: put(result, at, 3, &normal[0], doubles_); break;
+        case Aov::mesh_id: static_cast<uint32_t*>(result)[at] = source.object; break;
+        case Aov::primitive_id: static_cast<uint32_t*>(result)[at] = source.primitive; break;
         case Aov::position: {
           const glm::dvec3 p = missed ? glm::dvec3(0.0) : origin + t * direction;
-          put(result, k, 3, &p[0], false);
+          put(result, at, 3, &p[0], false);
           break;
         }
-        case Aov::barycentric: put(result, k, 2, &surface.barycentric[0], false); break;
-        case Aov::shading_normal: put(result, k, 3, &surface.shading_normal[0], false); break;
-        case Aov::texcoord: put(result, k, 2, &surface.texcoord[0], false); break;
-        case Aov::front_facing: static_cast<uint32_t*>(result)[k] = surface.front ? 1u : 0u; break;
+        case Aov::barycentric: put(result, at, 2, &surface.barycentric[0], false); break;
+        case Aov::shading_normal: put(result, at, 3, &surface.shading_normal[0], false); break;
+        case Aov::texcoord: put(result, at, 2, &surface.texcoord[0], false); break;
+        case Aov::front_facing: static_cast<uint32_t*>(result)[at] = surface.front ? 1u : 0u; break;
         default: break;  // output_named let no other through
       }
     }
   }
 
  private:
-  // components values of ray k, over `scale`, as float32 or float64.
+  // components values of entry k, over `scale`, as float32 or float64.
   static void put(void* result, size_t k, uint32_t components, const double* values, bool doubles, double scale = 1.0) {
     for (uint32_t c = 0; c < components; ++c) {
       if (doubles) static_cast<double*>(result)[k * components + c] = values[c] / scale;
@@ -330,6 +336,7 @@ class RayOutputs {
   const Scene& scene_;
   bool surface_ = false;
   bool needs_direction_ = false;  // the hit point or the surface outputs are asked for
+  uint32_t hits_;
 };
 
 nlohmann::json timings_json(const RenderTimings& t, bool constructor) {
@@ -695,10 +702,13 @@ vkray_status vkray_render(vkray_renderer* renderer, const char* camera_json, uin
 }
 
 vkray_status vkray_cast_rays(vkray_renderer* renderer, const double* rays, uint64_t count, const double* t_min, const double* t_max,
-                             uint32_t flags, uint32_t mask, uint32_t output_count, const char* const* outputs,
+                             uint32_t flags, uint32_t mask, uint32_t hits, uint32_t output_count, const char* const* outputs,
                              void* const* results) {
   return guarded([&] {
     require(renderer, "renderer");
+    if (hits < 1 || hits > VKRAY_HITS_MAX) {
+      throw InputError("hits: " + std::to_string(hits) + " is not between 1 and " + std::to_string(VKRAY_HITS_MAX));
+    }
     if (output_count > 0) {
       require(outputs, "outputs");
       require(results, "results");
@@ -709,7 +719,7 @@ vkray_status vkray_cast_rays(vkray_renderer* renderer, const double* rays, uint6
       if (count > 0) require(results[k], outputs[k]);
     }
     CallRays call(rays, count, t_min, t_max, flags);
-    const RayOutputs written(asked, results, renderer->doubles, call, renderer->scene);
+    const RayOutputs written(asked, results, renderer->doubles, call, renderer->scene, hits);
     const std::lock_guard one_call_at_a_time(renderer->busy);
     use_ray_mask(*renderer, mask);
     renderer->called = true;
@@ -722,22 +732,32 @@ vkray_status vkray_cast_rays(vkray_renderer* renderer, const double* rays, uint6
     };
     trace_call(*renderer, call, in_place, [&](size_t first, std::span<const GivenRay> run, const RayRanges& run_ranges) {
       if (renderer->renderer) {
-        const RayHits hits = renderer->renderer->cast_rays(run, run_ranges);
-        const bool doubles = !hits.t64.empty();
-        parallel_for_chunks(hits.count, [&](size_t begin, size_t end) {
-          for (size_t k = begin; k < end; ++k) {
-            const auto normal = [&](size_t c) { return doubles ? hits.normal64[c * hits.count + k] : double{hits.normal[c * hits.count + k]}; };
-            written.hit(call.given_index(first + k), doubles ? hits.t64[k] : hits.t[k], {normal(0), normal(1), normal(2)},
-                        {hits.object[k], hits.primitive[k]});
+        const RayHits traced = renderer->renderer->cast_rays(run, run_ranges, hits);
+        const bool doubles = !traced.t64.empty();
+        parallel_for_chunks(traced.count, [&](size_t begin, size_t end) {
+          for (size_t k = begin; k < end; ++k) {  // hit k % hits of ray k / hits
+            const auto normal = [&](size_t c) {
+              return doubles ? traced.normal64[c * traced.count + k] : double{traced.normal[c * traced.count + k]};
+            };
+            written.hit(call.given_index(first + k / hits), static_cast<uint32_t>(k % hits), doubles ? traced.t64[k] : traced.t[k],
+                        {normal(0), normal(1), normal(2)}, {traced.object[k], traced.primitive[k]});
           }
         });
         return;
       }
       const auto start = std::chrono::steady_clock::now();
-      const std::vector<ReferenceHit> hits = trace_reference_rays(*renderer->reference, run, run_ranges);
-      parallel_for_chunks(hits.size(), [&](size_t begin, size_t end) {
+      const ReferenceScene& reference = *renderer->reference;
+      check_given_rays(run);
+      check_ray_ranges(run, run_ranges);
+      parallel_for_chunks(run.size(), [&](size_t begin, size_t end) {
         for (size_t k = begin; k < end; ++k) {
-          written.hit(call.given_index(first + k), hits[k].t, hits[k].normal, renderer->reference->source(hits[k]));
+          // The nearest hit by its own rules (coincident surfaces, ties) where it is the one asked for.
+          const std::vector<ReferenceHit> listed =
+              hits == 1 ? std::vector<ReferenceHit>{trace_reference_ray(reference, run[k], run_ranges.start(k), run_ranges.end(k))}
+                        : first_reference_hits(reference, run[k], run_ranges.start(k), run_ranges.end(k), hits);
+          for (uint32_t layer = 0; layer < hits; ++layer) {
+            written.hit(call.given_index(first + k), layer, listed[layer].t, listed[layer].normal, reference.source(listed[layer]));
+          }
         }
       });
       renderer->reference_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();

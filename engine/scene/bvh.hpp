@@ -69,7 +69,7 @@ struct BvhBuildOptions {
 struct Bvh {
   // Node 0 is the root; every node has exactly two children (a tree of one primitive references
   // its single leaf twice, so the nearest-hit walk needs no special case for a lone leaf; counting
-  // crossings skips the second).
+  // crossings or listing first hits skips the second).
   std::vector<std::array<uint32_t, 2>> nodes;
   // Leaves reference ranges of this array; entries are indices into the builder's input boxes.
   std::vector<uint32_t> primitive_order;

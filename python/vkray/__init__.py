@@ -21,7 +21,7 @@ import numpy as np
 
 from . import _native
 
-__all__ = ["Error", "NO_HIT", "outputs", "traversals", "Scene", "load", "Renderer", "Reference", "__version__"]
+__all__ = ["Error", "NO_HIT", "HITS_MAX", "outputs", "traversals", "Scene", "load", "Renderer", "Reference", "__version__"]
 
 __version__: str = _native.lib.vkray_version().decode()
 
@@ -32,6 +32,8 @@ class Error(RuntimeError):
 
 #: mesh_id and primitive_id of a ray or pixel that hit nothing.
 NO_HIT: int = 0xFFFFFFFF
+#: The most first hits cast_rays lists a ray (VKRAY_HITS_MAX).
+HITS_MAX: int = 16
 
 
 def _outputs() -> Tuple[Dict[str, Any], ...]:
@@ -398,7 +400,7 @@ class _Caster:
 
     def cast_rays(self, rays: Any, *, t_min: Any = None, t_max: Any = None,
                   outputs: Union[str, Iterable[str]] = ("t", "normal", "primitive_id", "mesh_id"),
-                  t_along: str = "unit", bad_rays: str = "miss", mask: int = 255) -> Dict[str, np.ndarray]:
+                  t_along: str = "unit", bad_rays: str = "miss", mask: int = 255, hits: int = 1) -> Dict[str, np.ndarray]:
         """rays: any shape (..., 6), each an origin and a direction (any length but 0). t_min, t_max: None
         (0 and inf), a number, or one value a ray (broadcast over the leading shape): a hit counts at
         t_min < t < t_max. t_along: 'unit' (default), distances along the normalized direction; or
@@ -410,9 +412,15 @@ class _Caster:
         miss), position (3, the hit point), barycentric (2), front_facing (uint32), shading_normal (3),
         texcoord (2): as render() gives them. mask: the rays' mask, 1..255 (every bit by default): they hit
         only the meshes, spheres and planes whose mask (Scene's masks) shares a bit with it. A dict of
-        C-contiguous arrays of shape (...) or (..., C)."""
+        C-contiguous arrays of shape (...) or (..., C). hits: 1 (default) for the nearest hit; 2 to
+        HITS_MAX for each ray's first hits in order of distance (every surface it crosses, a sphere's
+        far side too, an edge passed exactly through once; misses past the last: multi-return LiDAR,
+        layered depth), each array then of shape (..., hits) or (..., hits, C)."""
         names = _output_names(outputs, "outputs")
         ray_mask = _mask(mask, "mask")
+        if isinstance(hits, bool) or not isinstance(hits, (int, np.integer)) or not 1 <= hits <= HITS_MAX:
+            raise ValueError(f"hits: expected a whole number from 1 to {HITS_MAX}, got {hits!r}")
+        layers = () if hits == 1 else (int(hits),)
         flat, leading, lo, hi = self._rays_and_ranges(rays, t_min, t_max)
         flags = self._flags(t_along, bad_rays)
         results, keys = [], []
@@ -422,13 +430,13 @@ class _Caster:
             if key not in RAY_OUTPUTS or output is None:
                 raise ValueError(f"outputs: '{name}' is not an output of given rays (they have {', '.join(RAY_OUTPUTS)})")
             dtype = np.uint32 if output["dtype"] == "uint32" else np.float64 if self._doubles and key in ("t", "normal") else np.float32
-            shape = leading if output["components"] == 1 else leading + (output["components"],)
+            shape = leading + layers + ((output["components"],) if output["components"] > 1 else ())
             results.append(np.empty(shape, dtype=dtype))
             keys.append(key)
         c_names = (ctypes.c_char_p * max(1, len(names)))(*[key.replace("_", "-").encode() for key in keys])
         c_results = (ctypes.c_void_p * max(1, len(names)))(*[array.ctypes.data for array in results])
         _check(_native.lib.vkray_cast_rays(self._handle, _pointer(flat), len(flat), _pointer(lo), _pointer(hi), flags,
-                                           ray_mask, len(keys), c_names, c_results))
+                                           ray_mask, int(hits), len(keys), c_names, c_results))
         return dict(zip(keys, results))
 
     def occluded(self, rays: Any, *, t_min: Any = None, t_max: Any = None, t_along: str = "unit",

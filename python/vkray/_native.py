@@ -64,7 +64,7 @@ _signatures = {
     "vkray_render": (Status, [_renderer, ctypes.c_char_p, ctypes.c_uint32, ctypes.c_uint32, ctypes.c_uint32, ctypes.c_uint32,
                               _names, _pointers]),
     "vkray_cast_rays": (Status, [_renderer, _doubles, ctypes.c_uint64, _doubles, _doubles, ctypes.c_uint32, ctypes.c_uint32,
-                                 ctypes.c_uint32, _names, _pointers]),
+                                 ctypes.c_uint32, ctypes.c_uint32, _names, _pointers]),
     "vkray_occluded": (Status, [_renderer, _doubles, ctypes.c_uint64, _doubles, _doubles, ctypes.c_uint32, ctypes.c_uint32,
                                 ctypes.POINTER(ctypes.c_uint8)]),
     "vkray_count_intersections": (Status, [_renderer, _doubles, ctypes.c_uint64, _doubles, _doubles, ctypes.c_uint32,
