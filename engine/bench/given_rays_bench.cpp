@@ -1,6 +1,7 @@
 #include "engine/bench/given_rays_bench.hpp"
 
 #include "engine/bench/embree_baseline.hpp"
+#include "engine/parallel.hpp"
 #include "engine/reference/reference.hpp"
 #include "engine/render/renderer.hpp"
 #include "engine/scene/camera.hpp"
@@ -67,6 +68,7 @@ const std::vector<RayKindInfo>& ray_kinds() {
       {RayKind::sensor, "sensor", "one origin, a spinning 64-ring sensor (rings x azimuths all the way round)"},
       {RayKind::incoherent, "incoherent", "random origins around the model towards random points within it"},
       {RayKind::occlusion, "occlusion", "whether anything lies between pairs of random points around the model"},
+      {RayKind::first_hits, "first-4-hits", "the incoherent rays' first 4 hits each, in order (multi-return)"},
   };
   return kinds;
 }
@@ -110,10 +112,11 @@ std::vector<GivenRay> make_rays(RayKind kind, const Scene& scene, size_t count) 
       break;
     }
     case RayKind::incoherent:
+    case RayKind::first_hits:
     case RayKind::occlusion: {
       const glm::dvec3 centre = scene_centre(scene);
       const double radius = std::max(scene_radius(scene, centre), 1e-300);
-      std::mt19937_64 random(kind == RayKind::incoherent ? 20261126 : 20261127);
+      std::mt19937_64 random(kind != RayKind::occlusion ? 20261126 : 20261127);  // first hits: the incoherent rays
       std::normal_distribution<double> gaussian;
       std::uniform_real_distribution<double> uniform;
       auto on_sphere = [&] {
@@ -124,7 +127,7 @@ std::vector<GivenRay> make_rays(RayKind kind, const Scene& scene, size_t count) 
       auto in_ball = [&] { return centre + radius * std::cbrt(uniform(random)) * on_sphere(); };
       rays.reserve(count);
       for (size_t k = 0; k < count; ++k) {
-        const glm::dvec3 origin = kind == RayKind::incoherent ? centre + 2.0 * radius * on_sphere() : in_ball();
+        const glm::dvec3 origin = kind != RayKind::occlusion ? centre + 2.0 * radius * on_sphere() : in_ball();
         rays.push_back(ray_from(origin, in_ball() - origin));
       }
       break;
@@ -145,10 +148,22 @@ GivenRaysRow bench_given_rays(GpuDevice& device, const Scene& scene, const std::
   row.kind = kind;
   row.rays = rays.size();
   const bool occlusion = ray_kind_from_name(kind) == RayKind::occlusion;
+  const uint32_t hits = ray_kind_from_name(kind) == RayKind::first_hits ? bench_first_hits : 1;
   const std::vector<double> ends = occlusion ? segment_ends(rays) : std::vector<double>{};
   const RayRanges ranges{{}, ends};
   const ReferenceScene reference_scene(scene);
-  const std::vector<ReferenceHit> reference = trace_reference_rays(reference_scene, rays, ranges);
+  std::vector<ReferenceHit> reference;
+  if (hits == 1) {
+    reference = trace_reference_rays(reference_scene, rays, ranges);
+  } else {  // every ray's hits in turn, as cast_rays lists them
+    reference.resize(rays.size() * hits);
+    parallel_for_chunks(rays.size(), [&](size_t begin, size_t end) {
+      for (size_t k = begin; k < end; ++k) {
+        const std::vector<ReferenceHit> first = first_reference_hits(reference_scene, rays[k], 0.0, no_hit, hits);
+        std::copy(first.begin(), first.end(), reference.begin() + static_cast<std::ptrdiff_t>(k * hits));
+      }
+    });
+  }
 
   Renderer renderer(device, scene);
   // What Python's cast_rays runs: in place where the device takes the rays so (its four default
@@ -160,8 +175,8 @@ GivenRaysRow bench_given_rays(GpuDevice& device, const Scene& scene, const std::
   bool in_place = false;
   auto cast = [&] {
     if (!occlusion) {
-      in_place = renderer.cast_rays_in_place(rays, {t_in_place.data(), normal.data(), object.data(), primitive.data()});
-      if (!in_place) found = std::move(renderer.cast_rays(rays, ranges).t);
+      in_place = hits == 1 && renderer.cast_rays_in_place(rays, {t_in_place.data(), normal.data(), object.data(), primitive.data()});
+      if (!in_place) found = std::move(renderer.cast_rays(rays, ranges, hits).t);
       return;
     }
     const std::vector<uint8_t> blocked = renderer.occluded(rays, ranges);
@@ -175,11 +190,14 @@ GivenRaysRow bench_given_rays(GpuDevice& device, const Scene& scene, const std::
     return elapsed_ms(start);
   }));
   row.walk = std::string(given_ray_walk_name(renderer.timings().given_walk)) + (in_place ? " (imported)" : "");
-  const EmbreeRays embree =
-      trace_rays_with_embree(scene, rays, timing.frames, ranges, occlusion ? HitQuery::any : HitQuery::nearest);
-  row.embree = embree.time;
-  row.embree_variant = occlusion ? "embree-occluded" : "embree-1m";
-  row.embree_threads = embree.threads;
+  const bool with_embree = hits == 1;  // Embree has no call for first hits
+  EmbreeRays embree;
+  if (with_embree) {
+    embree = trace_rays_with_embree(scene, rays, timing.frames, ranges, occlusion ? HitQuery::any : HitQuery::nearest);
+    row.embree = embree.time;
+    row.embree_variant = occlusion ? "embree-occluded" : "embree-1m";
+    row.embree_threads = embree.threads;
+  }
 
   auto errors = [&](std::span<const float> t) {
     if (occlusion) return occlusion_flips(reference, t);
@@ -190,15 +208,17 @@ GivenRaysRow bench_given_rays(GpuDevice& device, const Scene& scene, const std::
   row.both_hit = vkray_errors.both_hit;
   row.t_rel_p99 = vkray_errors.p99;
   row.t_rel_max = vkray_errors.max;
-  const DistanceErrors embree_errors = errors(embree.t);
-  row.embree_hit_mismatches = embree_errors.mismatches;
-  row.embree_t_rel_p99 = embree_errors.p99;
+  if (with_embree) {
+    const DistanceErrors embree_errors = errors(embree.t);
+    row.embree_hit_mismatches = embree_errors.mismatches;
+    row.embree_t_rel_p99 = embree_errors.p99;
+  }
   return row;
 }
 
 std::string given_rays_table_header() {
   char line[256];
-  std::snprintf(line, sizeof line, "%-28s %-11s %8s  %-32s %10s %10s %8s %6s %9s %7s\n", "scene", "rays", "count", "walk",
+  std::snprintf(line, sizeof line, "%-28s %-12s %8s  %-32s %10s %10s %8s %6s %9s %7s\n", "scene", "rays", "count", "walk",
                 "vkray ms", "Embree ms", "E/vkray", "flips", "t p99", "E flips");
   return line;
 }
@@ -206,7 +226,12 @@ std::string given_rays_table_header() {
 std::string given_rays_table_row(const std::string& scene, const GivenRaysRow& row) {
   char line[512];
   const std::string t_p99 = row.both_hit > 0 ? (std::snprintf(line, sizeof line, "%.2e", row.t_rel_p99), std::string(line)) : "-";
-  std::snprintf(line, sizeof line, "%-28s %-11s %8zu  %-32s %10.1f %10.1f %8.2f %6zu %9s %7zu\n", scene.c_str(),
+  if (row.embree_variant.empty()) {  // no Embree row to compare with
+    std::snprintf(line, sizeof line, "%-28s %-12s %8zu  %-32s %10.1f %10s %8s %6zu %9s %7s\n", scene.c_str(), row.kind.c_str(),
+                  row.rays, row.walk.c_str(), row.vkray.median_ms, "-", "-", row.hit_mismatches, t_p99.c_str(), "-");
+    return line;
+  }
+  std::snprintf(line, sizeof line, "%-28s %-12s %8zu  %-32s %10.1f %10.1f %8.2f %6zu %9s %7zu\n", scene.c_str(),
                 row.kind.c_str(), row.rays, row.walk.c_str(), row.vkray.median_ms, row.embree.median_ms,
                 row.embree.median_ms / row.vkray.median_ms, row.hit_mismatches, t_p99.c_str(), row.embree_hit_mismatches);
   return line;

@@ -17,7 +17,11 @@
 
 namespace vkray {
 
-enum class RayKind { camera_rows, sensor, incoherent, occlusion };
+enum class RayKind { camera_rows, sensor, incoherent, occlusion, first_hits };
+
+// How many first hits the first_hits kind asks each ray for (Renderer::cast_rays' `hits`): a
+// multi-return LiDAR's usual count.
+inline constexpr uint32_t bench_first_hits = 4;
 
 struct RayKindInfo {
   RayKind kind;
@@ -36,7 +40,8 @@ std::optional<RayKind> ray_kind_from_name(const std::string& name);
 // - incoherent: from random points on the sphere of the geometry's bounding box's diagonal around
 //   its centre towards random points in the box;
 // - occlusion: segments between pairs of random points within the box's bounding sphere, each ray's
-//   direction the segment itself (segment_ranges gives the ranges of its occlusion query).
+//   direction the segment itself (segment_ranges gives the ranges of its occlusion query);
+// - first_hits: the incoherent rays again, each asked for its first bench_first_hits hits.
 std::vector<GivenRay> make_rays(RayKind kind, const Scene& scene, size_t count);
 
 // The ranges of occlusion rays: each ray up to the length of its direction, the segment's far end.
@@ -50,12 +55,12 @@ struct GivenRaysRow {
   // reading back.
   TimeStats vkray;
   // rtcIntersect1M (rtcOccluded1M) in chunks of 1024 rays on every core, what Open3D's cast_rays
-  // (test_occlusions) does.
+  // (test_occlusions) does; none for first hits, which Embree has no call for.
   TimeStats embree;
-  std::string embree_variant;  // its name as a bench row: embree-1m, or embree-occluded for occlusion
+  std::string embree_variant;  // its name as a bench row: embree-1m, embree-occluded for occlusion, empty for none
   uint32_t embree_threads = 0;
   // vkray's and Embree's answers against the reference's (distances relative to it, where both hit;
-  // for occlusion rays, only whether each is occluded).
+  // for occlusion rays, only whether each is occluded; for first hits, each of a ray's hits).
   size_t hit_mismatches = 0, embree_hit_mismatches = 0;
   size_t both_hit = 0;
   double t_rel_p99 = 0.0, t_rel_max = 0.0, embree_t_rel_p99 = 0.0;
