@@ -678,10 +678,12 @@ std::string report_markdown(const std::string& json_text) {
   for (const Json* row : by_section["rays"]) {
     if (row->value("status", "") != "ok") continue;
     const double vkray_ms = (*row)["vkray_median_ms"], embree_ms = (*row)["embree_median_ms"];
-    text += format("| %s | %zu | %s | %s | %s | %.2f | %zu | %.2e | %zu |\n", row->value("row", "").c_str(),
-                   row->value("rays", size_t{0}), row->value("walk", "").c_str(), ms(vkray_ms).c_str(), ms(embree_ms).c_str(),
-                   embree_ms / vkray_ms, row->value("hit_mismatches", size_t{0}), row->value("t_rel_p99", 0.0),
-                   row->value("embree_hit_mismatches", size_t{0}));
+    const bool embree = embree_ms > 0.0;  // none for first hits, which Embree has no call for
+    text += format("| %s | %zu | %s | %s | %s | %s | %zu | %.2e | %s |\n", row->value("row", "").c_str(),
+                   row->value("rays", size_t{0}), row->value("walk", "").c_str(), ms(vkray_ms).c_str(),
+                   embree ? ms(embree_ms).c_str() : "-", embree ? format("%.2f", embree_ms / vkray_ms).c_str() : "-",
+                   row->value("hit_mismatches", size_t{0}), row->value("t_rel_p99", 0.0),
+                   embree ? std::to_string(row->value("embree_hit_mismatches", size_t{0})).c_str() : "-");
   }
   text += unfinished(by_section["rays"]);
   text += unfinished(by_section["device"]);
