@@ -388,6 +388,40 @@ void use_ray_mask(vkray_renderer& renderer, uint32_t mask) {
   renderer.ray_mask = ray_mask;
 }
 
+// A call that answers each ray with one value (occluded, count_intersections), as trace_call runs
+// it: `on_device` answers a run of rays on the renderer's device, `on_reference` one ray of a
+// reference renderer; a bad ray gets 0.
+template <typename T, typename OnDevice, typename OnReference>
+vkray_status answer_each_ray(vkray_renderer* renderer, const double* rays, uint64_t count, const double* t_min,
+                             const double* t_max, uint32_t flags, uint32_t mask, T* answers, const char* name,
+                             OnDevice&& on_device, OnReference&& on_reference) {
+  return guarded([&] {
+    require(renderer, "renderer");
+    if (count > 0) require(answers, name);
+    CallRays call(rays, count, t_min, t_max, flags);
+    const std::lock_guard one_call_at_a_time(renderer->busy);
+    use_ray_mask(*renderer, mask);
+    renderer->called = true;
+    const auto never_whole = [](std::span<const GivenRay>, const RayRanges&) { return false; };
+    trace_call(*renderer, call, never_whole, [&](size_t first, std::span<const GivenRay> run, const RayRanges& run_ranges) {
+      std::vector<T> answered;
+      if (renderer->renderer) {
+        answered = on_device(*renderer->renderer, run, run_ranges);
+      } else {
+        check_given_rays(run);  // InputError names a bad ray, as the device's call does
+        check_ray_ranges(run, run_ranges);
+        answered.resize(run.size());
+        parallel_for_chunks(run.size(), [&](size_t begin, size_t end) {
+          for (size_t k = begin; k < end; ++k) {
+            answered[k] = on_reference(*renderer->reference, run[k], run_ranges.start(k), run_ranges.end(k));
+          }
+        });
+      }
+      for (size_t k = 0; k < answered.size(); ++k) answers[call.given_index(first + k)] = answered[k];
+    }, [&](size_t given) { answers[given] = T{0}; });
+  });
+}
+
 }  // namespace
 
 extern "C" {
@@ -767,53 +801,21 @@ vkray_status vkray_cast_rays(vkray_renderer* renderer, const double* rays, uint6
 
 vkray_status vkray_occluded(vkray_renderer* renderer, const double* rays, uint64_t count, const double* t_min, const double* t_max,
                             uint32_t flags, uint32_t mask, uint8_t* occluded) {
-  return guarded([&] {
-    require(renderer, "renderer");
-    if (count > 0) require(occluded, "occluded");
-    CallRays call(rays, count, t_min, t_max, flags);
-    const std::lock_guard one_call_at_a_time(renderer->busy);
-    use_ray_mask(*renderer, mask);
-    renderer->called = true;
-    const auto never_whole = [](std::span<const GivenRay>, const RayRanges&) { return false; };
-    trace_call(*renderer, call, never_whole, [&](size_t first, std::span<const GivenRay> run, const RayRanges& run_ranges) {
-      std::vector<uint8_t> blocked;
-      if (renderer->renderer) {
-        blocked = renderer->renderer->occluded(run, run_ranges);
-      } else {
+  return answer_each_ray(
+      renderer, rays, count, t_min, t_max, flags, mask, occluded, "occluded",
+      [](Renderer& device, std::span<const GivenRay> run, const RayRanges& ranges) { return device.occluded(run, ranges); },
+      [](const ReferenceScene& reference, const GivenRay& ray, double start, double end) {
         // The nearest hit decides: exactly whether any hit lies in the range.
-        const std::vector<ReferenceHit> hits = trace_reference_rays(*renderer->reference, run, run_ranges);
-        blocked.resize(hits.size());
-        for (size_t k = 0; k < hits.size(); ++k) blocked[k] = hits[k].kind != PrimitiveKind::none ? 1 : 0;
-      }
-      for (size_t k = 0; k < blocked.size(); ++k) occluded[call.given_index(first + k)] = blocked[k];
-    }, [&](size_t given) { occluded[given] = 0; });
-  });
+        return uint8_t{trace_reference_ray(reference, ray, start, end).kind != PrimitiveKind::none};
+      });
 }
 
 vkray_status vkray_count_intersections(vkray_renderer* renderer, const double* rays, uint64_t count, const double* t_min,
                                        const double* t_max, uint32_t flags, uint32_t mask, uint32_t* crossings) {
-  return guarded([&] {
-    require(renderer, "renderer");
-    if (count > 0) require(crossings, "crossings");
-    CallRays call(rays, count, t_min, t_max, flags);
-    const std::lock_guard one_call_at_a_time(renderer->busy);
-    use_ray_mask(*renderer, mask);
-    renderer->called = true;
-    const auto never_whole = [](std::span<const GivenRay>, const RayRanges&) { return false; };
-    trace_call(*renderer, call, never_whole, [&](size_t first, std::span<const GivenRay> run, const RayRanges& run_ranges) {
-      if (renderer->renderer) {
-        const std::vector<uint32_t> counted = renderer->renderer->count_intersections(run, run_ranges);
-        for (size_t k = 0; k < counted.size(); ++k) crossings[call.given_index(first + k)] = counted[k];
-        return;
-      }
-      parallel_for_chunks(run.size(), [&](size_t begin, size_t end) {
-        for (size_t k = begin; k < end; ++k) {
-          crossings[call.given_index(first + k)] =
-              count_reference_crossings(*renderer->reference, run[k], run_ranges.start(k), run_ranges.end(k));
-        }
-      });
-    }, [&](size_t given) { crossings[given] = 0; });
-  });
+  return answer_each_ray(
+      renderer, rays, count, t_min, t_max, flags, mask, crossings, "crossings",
+      [](Renderer& device, std::span<const GivenRay> run, const RayRanges& ranges) { return device.count_intersections(run, ranges); },
+      count_reference_crossings);
 }
 
 }  // extern "C"

@@ -36,11 +36,13 @@ def test_odd_exactly_inside_a_closed_mesh(renderer, reference):
     assert np.array_equal(counts % 2 == 1, np.repeat((inside_cube ^ inside_sphere)[:, None], len(directions), axis=1))
 
 
-def test_ranges_masks_and_bad_rays(renderer):
+@pytest.mark.parametrize("caster", ["renderer", "reference"])
+def test_ranges_masks_and_bad_rays(caster, request):
     """From x = -3 along +x the ray crosses the first cube at -1 and 1, the sphere at -0.5 and 0.5, the
     second cube at 3 and 5. A range counts what lies within it, along the unit direction or, with
     t_along='direction', the direction as given (Open3D's segments p to q: t_max=1); the mask leaves out
-    the second cube; a bad ray counts 0, or raises with bad_rays='raise'."""
+    the second cube; a bad ray counts 0, or raises with bad_rays='raise'. The Renderer and the Reference alike."""
+    renderer = request.getfixturevalue(caster)
     ray = [-3.0, 0.1, 0.2, 1.0, 0.0, 0.0]
     assert renderer.count_intersections(ray) == 6
     assert renderer.count_intersections(ray, t_max=2.75) == 2
