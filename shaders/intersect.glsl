@@ -151,9 +151,10 @@ vec3 perpendicular_part(vec3 f_hi, vec3 f_lo, float b_over_a, vec3 dir) {
 //   difference of nearly equal numbers.
 // `normal` receives the hit point minus the centre over the radius, facing the ray by which root was
 // taken (outward for the near root, inward from inside), not by the sign of its dot product with
-// the ray, which rounding decides at the silhouette, where it is 0. `far_root` receives the farther
-// root whatever its sign (t_max on a miss), which counting crossings adds when both lie ahead, and
-// `far_normal` its normal facing the ray (inward: the ray leaves there), for a list of first hits.
+// the ray, which rounding decides at the silhouette, where it is 0. Where the near root is the one
+// taken (the ray enters ahead), `far_root` receives the far one, where it leaves, else t_max:
+// counting crossings adds it, a tangent ray's double root too (twice, so the count's parity is
+// kept); `far_normal` is its normal facing the ray (inward), for a list of first hits.
 // The textbook form, kept as a benchmark variant (VKRAY_SPHERE_NAIVE) to show what this buys:
 // b^2 - c cancels when the sphere is small against its distance, -b + sqrt(disc) when the camera is
 // inside, c = |f|^2 - r^2 near a large sphere's surface, and f + t dir for any small sphere far away.
@@ -166,9 +167,9 @@ float intersect_sphere_naive(vec3 f, float radius, vec3 dir, float t_max, out ve
   far_normal = vec3(0.0);
   if (disc < 0.0) return t_max;
   float root = sqrt(disc);
-  far_root = -b + root;
-  far_normal = -(f + far_root * dir) / radius;
   bool near = -b - root > 0.0;
+  far_root = near ? -b + root : t_max;
+  far_normal = -(f + (-b + root) * dir) / radius;
   float t = near ? -b - root : -b + root;
   normal = (near ? 1.0 : -1.0) * (f + t * dir) / radius;
   return (t > 0.0 && t < t_max) ? t : t_max;
@@ -227,16 +228,16 @@ float intersect_sphere(vec3 f_hi, vec3 f_lo, float r_hi, float r_lo, vec3 dir, f
   if (q == 0.0) return t_max;  // origin on the surface and tangent ray: no hit in front
   float t0 = c / q;
   float t1 = q / a;
-  far_root = max(t0, t1);
   float t_near = min(t0, t1);
   bool near = t_near > 0.0;
   float t = near ? t_near : max(t0, t1);  // camera inside the sphere: the far root
+  far_root = near ? max(t0, t1) : t_max;
   // The hit relative to the centre: for a sphere far away f_perp -+ sqrt(disc / a) dir (minus for
   // the near root), not f + t dir, a difference of two vectors as long as the distance; near, f + t
   // dir is within ~10 eps r.
   precise vec3 offset = far ? f_perp + ((near ? -root : root) / a) * dir : f + t * dir;
   normal = (near ? offset : -offset) / r_hi;  // facing the ray (see above)
-  precise vec3 far_offset = far ? f_perp + (root / a) * dir : f + far_root * dir;
+  precise vec3 far_offset = far ? f_perp + (root / a) * dir : f + max(t0, t1) * dir;
   far_normal = -far_offset / r_hi;
   return (t > 0.0 && t < t_max) ? t : t_max;
 }
@@ -259,12 +260,12 @@ double intersect_sphere(dvec3 f, double radius, dvec3 dir, double t_max, out dve
   if (q == 0.0) return t_max;
   double t0 = c / q;
   double t1 = q / a;
-  far_root = max(t0, t1);
   bool near = min(t0, t1) > 0.0;
   double t = near ? min(t0, t1) : max(t0, t1);
+  far_root = near ? max(t0, t1) : t_max;
   precise dvec3 offset = f + t * dir;
   normal = (near ? 1.0 : -1.0) * offset / radius;
-  precise dvec3 far_offset = f + far_root * dir;
+  precise dvec3 far_offset = f + max(t0, t1) * dir;
   far_normal = -far_offset / radius;
   return (t > 0.0 && t < t_max) ? t : t_max;
 }
@@ -361,8 +362,9 @@ bool claims_edges(real3 a, real3 b, real3 c, bvec3 on_edge, real det) {
   return !any(bvec3(uvec3(on_edge) & uvec3(not(owned))));
 }
 
-// Vertices relative to the ray origin. With claim_edges (counting crossings), an edge the ray
-// passes exactly through counts for one of its triangles alone (claims_edges).
+// Vertices relative to the ray origin. With claim_edges (counting crossings, first hits), an edge
+// the ray passes exactly through counts for one of its triangles alone (claims_edges); the
+// Moeller-Trumbore benchmark variant claims none, and may count such an edge twice or not at all.
 real intersect_triangle(RayFrame frame, real3 dir, real3 v0, real3 v1, real3 v2, real t_max, bool claim_edges) {
   if (TRIANGLE_TEST == VKRAY_TRIANGLE_MOLLER_TRUMBORE) return intersect_triangle_moller_trumbore(dir, v0, v1, v2, t_max);
   real3 a = to_ray_frame(frame, v0);
@@ -400,9 +402,16 @@ real intersect_triangle(RayFrame frame, real3 dir, real3 v0, real3 v1, real3 v2,
     two_product(right_x, right_y, right, right_error);
     uvw = (left - right) + (left_error - right_error);
   }
+#else
+  // Kahan's difference of products, as the reference takes it: within 2 ulp of the exact value
+  // (Jeannerod, Louvet and Muller, Math. Comp. 82, 2013), so every sign is exact and 0 exactly
+  // where the value is: the triangles around a vertex a ray passes near agree on which side it lies.
+  precise dvec3 right_error = fma(-right_x, right_y, right);
+  precise dvec3 difference = fma(left_x, left_y, -right);
+  uvw = difference + right_error;
 #endif
   if (any(lessThan(uvw, real3(0.0))) && any(greaterThan(uvw, real3(0.0)))) return t_max;
-  bvec3 on_edge = equal(uvw, real3(0.0));  // exact zeros: the small ones were evaluated error-free
+  bvec3 on_edge = equal(uvw, real3(0.0));  // exact zeros: float32's small ones error-free, float64's by Kahan
 #endif
   real u = uvw.x, v = uvw.y, w = uvw.z;
   real det = u + v + w;

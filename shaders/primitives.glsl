@@ -74,7 +74,8 @@ bool apart_visible(uint index) { return !MASKS || mask_hits(FETCH(apart_masks, i
 uint crossings = 0u;
 
 // FIRST_HITS: the first HITS crossings found so far, nearest first (ties by id, so that the order
-// does not depend on the walk's), VKRAY_HIT_NONE at the range's end where fewer were found. The
+// does not depend on the walk's; but a crossing tied with the last place is kept only where it was
+// found first), VKRAY_HIT_NONE at the range's end where fewer were found. The
 // walk's bound is the last one's distance: what lies beyond cannot enter the list. Indexed by
 // constants alone once unrolled, so the list stays in registers.
 real first_t[VKRAY_HITS_MAX];
@@ -159,18 +160,19 @@ real intersect_sphere_point(Point sphere, Origin origin, real3 dir, real t_max, 
 }
 
 // A sphere's crossings in (0, t_max), from the root intersect_sphere took (`t`: the near one where
-// it lies ahead, else the far one) and the far root: a tangent ray's double root counts twice, so
-// that it leaves the count's parity (inside or outside) as it was.
+// it lies ahead, else the far one) and its `far_root` (the far one after a near one taken, else
+// t_max): a tangent ray's double root counts twice, which leaves the count's parity as it was.
 uint sphere_crossings(real t, real far_root, real t_max) {
-  return uint(t < t_max) + uint(t < far_root && far_root < t_max);
+  return uint(t < t_max) + uint(far_root < t_max);
 }
 
 // A sphere's crossings (`t` and `far_root` as for sphere_crossings) into the list of first hits:
-// the root taken as `id`, the far one after it as id | VKRAY_HIT_FAR_ROOT. Returns the new bound.
+// the root taken as `id`, the far one after it as id | VKRAY_HIT_FAR_ROOT (after it at a tangent's
+// double root too: ties go by id). Returns the new bound.
 real list_sphere_hits(real t, real far_root, real t_max, uint id) {
   real bound = t_max;
   if (t < bound) bound = list_first_hit(t, id);
-  if (t < far_root && far_root < bound) bound = list_first_hit(far_root, id | VKRAY_HIT_FAR_ROOT);
+  if (far_root < bound) bound = list_first_hit(far_root, id | VKRAY_HIT_FAR_ROOT);
   return bound;
 }
 

@@ -141,17 +141,29 @@ TEST(Crossings, RangesMasksAndTheDefaultScene) {
   Scene scene;
   scene.spheres.push_back({{0.0, 0.0, 0.0}, 1.0, Mask(1)});
   scene.planes.push_back({{0.0, 0.0, -3.0}, {0.0, 0.0, 1.0}, Mask(2)});
-  const std::vector<GivenRay> rays{{0, 0, 5, 0, 0, -1}, {0, 0, 5, 0, 0, -1}, {0, 0, 5, 0, 0, -2}, {0, 0, 0, 0, 0, -1}};
-  const std::vector<double> t_min{0.0, 4.5, 0.0, 0.5}, t_max{no_hit, 6.5, 2.75, no_hit};
+  const std::vector<GivenRay> rays{{0, 0, 5, 0, 0, -1}, {0, 0, 5, 0, 0, -1}, {0, 0, 5, 0, 0, -2}, {0, 0, 0, 0, 0, -1},
+                                  {0, 1, 5, 0, 0, -1}};
+  const std::vector<double> t_min{0.0, 4.5, 0.0, 0.5, 0.0}, t_max{no_hit, 6.5, 2.75, no_hit, no_hit};
   // Ray 0 enters the sphere at 4, leaves at 6 and crosses the plane at 8; ray 1 sees the exit alone;
   // ray 2's range ends at 2.75 along its unit direction (not its own, twice as long), before the
-  // sphere; ray 3 starts inside it, its range past its origin, and leaves it and crosses the plane.
+  // sphere; ray 3 starts inside it, its range past its origin, and leaves it and crosses the plane;
+  // ray 4 touches the sphere (its discriminant exactly 0): the double root counts twice, so parity
+  // says outside.
   const RayRanges ranges{t_min, t_max};
-  const std::vector<uint32_t> every_bit{3, 1, 0, 2}, sphere_alone{2, 1, 0, 1};
+  const std::vector<uint32_t> every_bit{3, 1, 0, 2, 3}, sphere_alone{2, 1, 0, 1, 2};
+  const ReferenceScene reference(scene), sphere_reference(scene, 1);
+  for (size_t k = 0; k < rays.size(); ++k) {
+    EXPECT_EQ(count_reference_crossings(reference, rays[k], t_min[k], t_max[k]), every_bit[k]) << "reference, ray " << k;
+    EXPECT_EQ(count_reference_crossings(sphere_reference, rays[k], t_min[k], t_max[k]), sphere_alone[k]) << "reference, ray " << k;
+  }
   for (const RendererOptions& options : counting_variants()) {
     SCOPED_TRACE(variant_name(options));
     Renderer renderer(device(), scene, options);
     EXPECT_EQ(renderer.count_intersections(rays, ranges), every_bit);
+    // The touching ray's first hits: the sphere's double root twice at 5, then the plane at 8.
+    const RayHits touching = renderer.cast_rays(std::span(rays).subspan(4, 1), {}, 3);
+    EXPECT_EQ(std::vector<float>(touching.t.begin(), touching.t.end()), (std::vector<float>{5.0f, 5.0f, 8.0f}));
+    EXPECT_EQ(std::vector<uint32_t>(touching.object.begin(), touching.object.end()), (std::vector<uint32_t>{0, 0, 1}));
     renderer.set_ray_mask(1);
     EXPECT_EQ(renderer.count_intersections(rays, ranges), sphere_alone);
   }
@@ -273,7 +285,8 @@ TEST(FirstHits, InOrderAsTheReference) {
 }
 
 // The nearest of the first hits is the nearest hit, bit for bit (the same tests on the same
-// values); ranges and masks apply to the list as to the nearest hit; counts outside 1 to 16 are refused.
+// values; no two surfaces here lie at one distance, where the nearest hit's tie rules would
+// apply); ranges and masks apply to the list as to the nearest hit; counts outside 1 to 16 are refused.
 TEST(FirstHits, TheFirstIsTheNearestAndRangesAndMasksApply) {
   Scene scene = row_of_shapes();
   scene.meshes[1].mask = 2;

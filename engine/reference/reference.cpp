@@ -30,8 +30,8 @@ double intersect_sphere(const glm::dvec3& f, double radius, const glm::dvec3& di
   if (q == 0.0) return t_max;
   const double t0 = c / q;
   const double t1 = q / a;
-  if (far_root) *far_root = std::max(t0, t1);
   const bool near_root = std::min(t0, t1) > 0.0;
+  if (far_root) *far_root = near_root ? std::max(t0, t1) : t_max;
   const double t = near_root ? std::min(t0, t1) : std::max(t0, t1);
   if (near) *near = near_root;
   return (t > 0.0 && t < t_max) ? t : t_max;
@@ -64,9 +64,16 @@ double intersect_triangle(const glm::dvec3& v0, const glm::dvec3& v1, const glm:
     return glm::dvec3(p[kx] - sx * p[kz], p[ky] - sy * p[kz], p[kz]);
   };
   const glm::dvec3 a = to_ray_frame(v0), b = to_ray_frame(v1), c = to_ray_frame(v2);
-  const double u = c.x * b.y - c.y * b.x;
-  const double v = a.x * c.y - a.y * c.x;
-  const double w = b.x * a.y - b.y * a.x;
+  // p q - r s by Kahan's algorithm: within 2 ulp of the exact value (Jeannerod, Louvet and Muller,
+  // Math. Comp. 82, 2013), so every sign is exact and 0 exactly where the value is: the triangles
+  // around a vertex a ray passes near agree on which side of each edge it lies.
+  auto difference_of_products = [](double p, double q, double r, double s) {
+    const double rs = r * s;
+    return std::fma(p, q, -rs) + std::fma(-r, s, rs);
+  };
+  const double u = difference_of_products(c.x, b.y, c.y, b.x);
+  const double v = difference_of_products(a.x, c.y, a.y, c.x);
+  const double w = difference_of_products(b.x, a.y, b.y, a.x);
   if ((u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0)) return t_max;
   const double det = u + v + w;
   if (det == 0.0) return t_max;
@@ -248,7 +255,7 @@ std::vector<ReferenceHit> ReferenceScene::first_hits(const glm::dvec3& origin, c
         const double t = intersect_sphere(f, sphere.radius, dir, bound, &near, &far_root);
         // Facing the ray by the root, as test_sphere does; the far root after a near one faces inward.
         if (t < bound) add({t, (near ? 1.0 : -1.0) * (f + t * dir) / sphere.radius, PrimitiveKind::sphere, entry.index});
-        if (t < far_root && far_root < bound) {
+        if (far_root < bound) {
           add({far_root, -(f + far_root * dir) / sphere.radius, PrimitiveKind::sphere, entry.index});
         }
       } else {
@@ -279,7 +286,7 @@ uint32_t ReferenceScene::count_crossings(const glm::dvec3& origin, const glm::dv
       double far_root = t_max;
       const double t = intersect_sphere(origin - spheres_[entry.index].center, spheres_[entry.index].radius, dir, t_max,
                                         nullptr, &far_root);
-      crossings += (t < t_max ? 1 : 0) + (t < far_root && far_root < t_max ? 1 : 0);
+      crossings += (t < t_max ? 1 : 0) + (far_root < t_max ? 1 : 0);
     } else {
       const Triangle& triangle = triangles_[entry.index];
       if (intersect_triangle(triangle.v0, triangle.v1, triangle.v2, origin, dir, t_max, true) < t_max) ++crossings;

@@ -22,7 +22,8 @@ inline constexpr double no_hit = std::numeric_limits<double>::infinity();
 // The individual intersectors, in the same form as shaders/intersect.glsl. Each returns the ray
 // parameter of the nearest hit in (0, t_max), else t_max.
 // `near`, when given, receives whether the hit is the near root (the ray enters the sphere there);
-// `far_root` the farther root whatever its sign (t_max on a miss).
+// `far_root` the far root where the near one is taken (the ray enters ahead and leaves there; a
+// tangent's double root twice), else t_max.
 double intersect_sphere(const glm::dvec3& origin_minus_center, double radius, const glm::dvec3& dir, double t_max,
                         bool* near = nullptr, double* far_root = nullptr);
 double intersect_plane(const glm::dvec3& normal, const glm::dvec3& point, const glm::dvec3& origin,

@@ -328,6 +328,11 @@ GpuScene make_gpu_scene(const Scene& scene, const GpuSceneOptions& options, cons
     }
   }
   gpu.triangle_count = static_cast<uint32_t>(triangles.size());
+  // Slots stay below the bits a list of first hits tags its entries with (VKRAY_HIT_FAR_ROOT).
+  if (triangles.size() + scene.spheres.size() >= VKRAY_HIT_FAR_ROOT) {
+    throw InputError("the scene has " + std::to_string(triangles.size() + scene.spheres.size()) +
+                     " triangles and spheres; vkray numbers fewer than " + std::to_string(VKRAY_HIT_FAR_ROOT));
+  }
   const GpuSceneShape shape =
       shape_for_counts(triangles.size(), scene.spheres.size(), scene.planes.size(), scene.has_masks(), options);
   gpu.search = shape.search;

@@ -51,8 +51,10 @@ std::vector<AccelerationStructures::Build> AccelerationStructures::describe_buil
     const vk::AccelerationStructureGeometryTrianglesDataKHR triangles(
         vk::Format::eR32G32B32Sfloat, device_address(context, *input.vertices), input.vertex_stride,
         input.vertex_count - 1, vk::IndexType::eUint32, device_address(context, indices));
-    // Not opaque: every candidate goes to the shader, which tests it itself.
-    build.geometry = vk::AccelerationStructureGeometryKHR(vk::GeometryTypeKHR::eTriangles, triangles);
+    // Not opaque: every candidate goes to the shader, which tests it itself; each once (a device may
+    // otherwise propose a primitive it split twice), which counting crossings and listing first hits need.
+    build.geometry = vk::AccelerationStructureGeometryKHR(vk::GeometryTypeKHR::eTriangles, triangles,
+                                                          vk::GeometryFlagBitsKHR::eNoDuplicateAnyHitInvocation);
     build.primitives = mesh.count;
     build.primitive_offset = triangles_before * static_cast<uint32_t>(sizeof(input.triangles[0]));
     build.first_slot = mesh.first_slot;
@@ -63,7 +65,8 @@ std::vector<AccelerationStructures::Build> AccelerationStructures::describe_buil
   if (!input.sphere_boxes.empty()) {
     Build build;
     const vk::AccelerationStructureGeometryAabbsDataKHR aabbs(device_address(context, boxes), sizeof(input.sphere_boxes[0]));
-    build.geometry = vk::AccelerationStructureGeometryKHR(vk::GeometryTypeKHR::eAabbs, aabbs);
+    build.geometry = vk::AccelerationStructureGeometryKHR(vk::GeometryTypeKHR::eAabbs, aabbs,
+                                                          vk::GeometryFlagBitsKHR::eNoDuplicateAnyHitInvocation);
     build.primitives = static_cast<uint32_t>(input.sphere_boxes.size());
     build.first_slot = input.first_sphere_slot;
     builds.push_back(build);
