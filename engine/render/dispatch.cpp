@@ -41,7 +41,9 @@ double Renderer::Impl::dispatch_tile(const vk::raii::Pipeline& chosen, const gpu
          {&tile.depth, &tile.normal, &tile.uv, &tile.overflow, &tile.hits, to_image ? &depth_range : nullptr}) {
       if (!output || !*output || !(*output)->readback) continue;
       const OutputBuffer& written = **output;
-      const vk::DeviceSize pixels = vk::DeviceSize{tile.width} * params.image.w;
+      // First hits fill a run of the tile's planes each (TileOutputs::layers).
+      const vk::DeviceSize pixels = vk::DeviceSize{tile.width} * params.image.w *
+                                    (output == &tile.depth || output == &tile.normal || output == &tile.hits ? tile.layers : 1);
       // Of the list of rays the CPU finishes, its count alone: it is almost always 0, and the rays it
       // lists are fetched when it is not (finish_unfinished). At 8K the whole list is 127 MiB a frame.
       const vk::DeviceSize bytes = output == &tile.overflow ? written.header_bytes : written.bytes_written(pixels);

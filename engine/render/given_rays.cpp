@@ -81,8 +81,8 @@ void Renderer::Impl::cast_given(const GivenRays& given, RaycastMode mode, uint32
   const vk::raii::Pipeline& chosen = pipeline->pipeline(aovs, lo_parts, mode, timings.pipeline_ms, given.query, given.hits);
   // The planes' heights above the one origin; rays from their own origins subtract it themselves.
   if (origin) set_planes_above(*origin);
-  prepare_tile(width * given.hits, tile_rows, aovs, nullptr, mode);  // first hits: a run of planes each
-  double& ms_per_ray = origin ? camera_ms_per_pixel : given_ms_per_ray;  // packets cost as pixels do
+  prepare_tile(width, tile_rows, aovs, nullptr, mode, nullptr, given.hits);
+  double& ms_per_ray = origin ? camera_ms_per_pixel : given_ms_per_ray[{given.query, given.hits}];  // packets cost as pixels do
   DispatchSizer sizer(width, tile_rows, options.dispatch_budget_ms, ms_per_ray, workgroup_footprint(mode).height);
   gpu::RayGenParams params{};
   if (origin) params = make_ray_gen_params(CameraBasis{*origin, {}, {}, {}, 0.0}, anchor, precision(), 0, 0, 0, 0, counts);
@@ -191,7 +191,7 @@ RayHits Renderer::Impl::cast_rays(const GivenRays& given) {
     // Rows of `width` holding `positions`, at most as many as the device's buffers hold.
     auto tile_rows = [&](uint32_t width, size_t positions, RaycastMode mode) {
       const auto rows = static_cast<uint32_t>(std::min<size_t>((positions + width - 1) / width, UINT32_MAX));
-      return rows_per_tile(width * given.hits, rows, aovs, mode);
+      return rows_per_tile(width, rows, aovs, mode, given.hits);
     };
     // Rays from one origin (a camera's, a LiDAR's) walk the tree in packets as a camera's pixels
     // do, where the camera's rays would (the float32 packet walk): one by one they take five times
@@ -323,7 +323,7 @@ bool Renderer::Impl::cast_rays_in_place(std::span<const GivenRay> rays, const Hi
     gpu::RayGenParams params = make_ray_gen_params(CameraBasis{origin, {}, {}, {}, 0.0}, anchor, precision(), 0, 0, 0, 0, counts);
     params.counts = counts;
     params.camera[5] = glm::uvec4(written, 0u, hit_sources.first_sphere_object, hit_sources.first_plane_object);
-    double& ms_per_ray = packets ? camera_ms_per_pixel : given_ms_per_ray;  // packets cost as pixels do
+    double& ms_per_ray = packets ? camera_ms_per_pixel : given_ms_per_ray[{HitQuery::nearest, 1}];  // packets cost as pixels do
     DispatchSizer sizer(width, tile_rows, options.dispatch_budget_ms, ms_per_ray,
                         workgroup_footprint(RaycastMode::caller_arrays).height);
     for (uint32_t first_row = 0, rows = 0; first_row < total_rows; first_row += rows) {

@@ -52,11 +52,11 @@ OutputBuffer Renderer::Impl::make_output(vk::DeviceSize pixels, vk::DeviceSize p
 }
 
 void Renderer::Impl::prepare_tile(uint32_t width, uint32_t rows, AovSet aovs, const ImageTarget* target,
-                                  RaycastMode mode, const CallerArrays* caller) {
+                                  RaycastMode mode, const CallerArrays* caller, uint32_t layers) {
   const uint64_t image_id = target ? target->id() : 0;
   auto fits = [&](const TileOutputs& outputs) {
     return outputs.width == width && outputs.rows == rows && outputs.aov_bits == aovs.bits() &&
-           outputs.image_id == image_id && outputs.mode == mode;
+           outputs.image_id == image_id && outputs.mode == mode && outputs.layers == layers;
   };
   // A call's imported arrays are bound for that call alone.
   const bool bind_anew = caller || caller_arrays_bound;
@@ -66,20 +66,20 @@ void Renderer::Impl::prepare_tile(uint32_t width, uint32_t rows, AovSet aovs, co
     std::swap(tile, parked_tile);
   } else {
     if (is_given(tile.mode) != is_given(mode)) std::swap(tile, parked_tile);  // the other kind's, kept
-    tile = TileOutputs{width, rows, aovs.bits(), image_id, mode, {}, {}, {}, {}, {}, {}};
+    tile = TileOutputs{width, rows, aovs.bits(), image_id, mode, layers, {}, {}, {}, {}, {}, {}};
     const vk::DeviceSize pixels = vk::DeviceSize{width} * rows;
     // In place, the shader writes the caller's arrays and lists the rays it leaves to the host.
     const bool in_place = mode == RaycastMode::caller_arrays;
     if (!target && !in_place) {
-      if (aovs.has(Aov::depth)) tile.depth = make_output(pixels, depth_bytes(precision()));
-      if (aovs.has(Aov::normal)) tile.normal = make_output(pixels, normal_bytes(precision()));
+      if (aovs.has(Aov::depth)) tile.depth = make_output(pixels * layers, depth_bytes(precision()));
+      if (aovs.has(Aov::normal)) tile.normal = make_output(pixels * layers, normal_bytes(precision()));
       if (aovs.has(Aov::uv)) tile.uv = make_output(pixels, uv_bytes);
     }
     if (is_given(mode) && !in_place) {
       const vk::DeviceSize bytes = pixels * given_ray_bytes(mode);
       tile.rays = texel_views_of(context, create_upload_buffer(context, bytes, geometry_usage));
     }
-    if ((is_given(mode) && !in_place) || (!target && aovs.has(Aov::hit))) tile.hits = make_output(pixels, sizeof(uint32_t));
+    if ((is_given(mode) && !in_place) || (!target && aovs.has(Aov::hit))) tile.hits = make_output(pixels * layers, sizeof(uint32_t));
     if ((stats.loop_budget > 0 && aovs.needs_rays()) || in_place) {
       tile.overflow = make_output(pixels, sizeof(uint32_t), sizeof(uint32_t));
     }
@@ -149,11 +149,12 @@ void Renderer::Impl::prepare_tile(uint32_t width, uint32_t rows, AovSet aovs, co
 }
 
 uint32_t Renderer::Impl::rows_per_tile(uint32_t width, uint32_t height, AovSet buffer_aovs,
-                                       RaycastMode mode) const {
+                                       RaycastMode mode, uint32_t layers) const {
   vk::DeviceSize largest = is_given(mode) && mode != RaycastMode::caller_arrays ? sizeof(uint32_t) : 0;  // the hits
   if (buffer_aovs.has(Aov::depth)) largest = std::max(largest, depth_bytes(precision()));
   if (buffer_aovs.has(Aov::normal)) largest = std::max(largest, normal_bytes(precision()));
   if (buffer_aovs.has(Aov::uv)) largest = std::max(largest, uv_bytes);
+  largest *= layers;  // first hits: depth, normal and hits in a run of planes each (uv is a camera's alone)
   vk::DeviceSize limit = context.limits.maxStorageBufferRange;
   if (options.max_tile_bytes > 0) limit = std::min<vk::DeviceSize>(limit, options.max_tile_bytes);
   vk::DeviceSize by_bytes = largest > 0 ? std::max<vk::DeviceSize>(1, limit / (vk::DeviceSize{width} * largest)) : height;

@@ -194,7 +194,8 @@ void Renderer::prepare_pipelines(const Camera& camera, uint32_t width, uint32_t 
   }
   // Each pipeline's first dispatch above took its compilation too: no measure of what a pixel or a
   // ray costs (the first dispatch of the next call would be sized by it, and every one after it).
-  r.camera_ms_per_pixel = r.given_ms_per_ray = 0.0;
+  r.camera_ms_per_pixel = 0.0;
+  r.given_ms_per_ray.clear();
   r.timings = constructor;
   r.reset_timings();
   r.timings.pipeline_ms = elapsed_ms(start);

@@ -14,6 +14,7 @@
 #include "engine/vulkan/raycast_pipeline.hpp"
 
 #include <functional>
+#include <map>
 #include <optional>
 
 namespace vkray {
@@ -70,6 +71,8 @@ struct TileOutputs {
   uint32_t aov_bits = 0;
   uint64_t image_id = 0;  // ImageTarget::id
   RaycastMode mode = RaycastMode::image_buffers;
+  // First hits (VKRAY_SPEC_HITS): depth, normal and hits hold each ray's in this many runs of planes.
+  uint32_t layers = 1;
   std::optional<OutputBuffer> depth, normal, uv;
   std::optional<OutputBuffer> overflow;  // only where a loop budget applies
   // RaycastMode::given_rays: the tile's rays (GpuRay, written by the host) and what each hit.
@@ -136,8 +139,10 @@ struct Renderer::Impl {
   TileOutputs parked_tile;
   RenderTimings timings;
   // The slowest pixels' (or given rays') cost in the last render, ms each: the next one's first
-  // dispatch is sized by it (DispatchSizer).
-  double camera_ms_per_pixel = 0.0, given_ms_per_ray = 0.0;
+  // dispatch is sized by it (DispatchSizer). Given rays' by what they look for and how many hits:
+  // counting or listing 16 hits costs a ray several times a nearest hit.
+  double camera_ms_per_pixel = 0.0;
+  std::map<std::pair<HitQuery, uint32_t>, double> given_ms_per_ray;
 
   Precision precision() const { return options.shader.precision; }
 
@@ -165,14 +170,16 @@ struct Renderer::Impl {
   OutputBuffer make_output(vk::DeviceSize pixels, vk::DeviceSize pixel_bytes, vk::DeviceSize header_bytes = 0);
   // Output buffers and bindings for tiles of `width` x `rows` writing `aovs` to buffers, or to
   // `target` when given; with given rays, their buffer and the hits' too.
-  // RaycastMode::caller_arrays binds `caller`'s arrays in place of the tile's outputs.
+  // RaycastMode::caller_arrays binds `caller`'s arrays in place of the tile's outputs. `layers`:
+  // each given ray's first hits (TileOutputs::layers).
   void prepare_tile(uint32_t width, uint32_t rows, AovSet aovs, const ImageTarget* target,
-                    RaycastMode mode = RaycastMode::image_buffers, const CallerArrays* caller = nullptr);
+                    RaycastMode mode = RaycastMode::image_buffers, const CallerArrays* caller = nullptr,
+                    uint32_t layers = 1);
   // Rows per dispatch: every output buffer within the device's storage-buffer range (and the
   // caller's cap), and the workgroup count within the device's limit.
   // `buffer_aovs`: the outputs written to buffers (none with the storage-image target).
   uint32_t rows_per_tile(uint32_t width, uint32_t height, AovSet buffer_aovs,
-                         RaycastMode mode = RaycastMode::image_buffers) const;
+                         RaycastMode mode = RaycastMode::image_buffers, uint32_t layers = 1) const;
   void reset_timings();
   // What a render needs before its tiles: the pipeline (returned), the planes' heights above this
   // camera, the tile's outputs and bindings; `tile_rows` receives the rows per tile.
