@@ -143,7 +143,7 @@ typedef enum vkray_ray_flags {
  * VKRAY_HITS_MAX for each ray's first hits in order of distance (every surface it crosses, a
  * sphere's far root too, an edge passed exactly through once; misses past the last), results then
  * count x hits x components. */
-#define VKRAY_HITS_MAX 16 /* as shaders/gpu_layout.h defines it: a different value fails to compile */
+#define VKRAY_HITS_MAX 16 /* as shaders/gpu_layout.h defines it: a different value is a redefinition warning */
 VKRAY_API vkray_status vkray_cast_rays(vkray_renderer* renderer, const double* rays, uint64_t count, const double* t_min,
                                        const double* t_max, uint32_t flags, uint32_t mask, uint32_t hits,
                                        uint32_t output_count, const char* const* outputs, void* const* results);
