@@ -223,63 +223,95 @@ std::vector<GivenRay> rays_along_the_row(size_t count) {
   return rays;
 }
 
+// The row and its rays scaled by `scale` about the origin, then moved by `offset` (stiff cases: a
+// row far from the world's origin, a tiny one far away).
+struct Placement {
+  double scale;
+  glm::dvec3 offset;
+};
+
+Scene placed(Scene scene, const Placement& at) {
+  for (Mesh& mesh : scene.meshes) {
+    for (glm::dvec3& p : mesh.positions) p = at.offset + at.scale * p;
+  }
+  for (Sphere& sphere : scene.spheres) sphere.center = at.offset + at.scale * sphere.center, sphere.radius *= at.scale;
+  for (Plane& plane : scene.planes) plane.point = at.offset + at.scale * plane.point;
+  return scene;
+}
+
+std::vector<GivenRay> placed(std::vector<GivenRay> rays, const Placement& at) {
+  for (GivenRay& ray : rays) {
+    for (int c = 0; c < 3; ++c) ray[c] = at.offset[c] + at.scale * ray[c];
+  }
+  return rays;
+}
+
 // The first hits along the rays, 4 (fewer than the crossings) and 16 (VKRAY_HITS_MAX, more: misses
-// past the 11th),
-// are the reference's in every search and variant: the same objects and primitives in the same
-// order, each distance within float32's error and each normal within its angle. The error of a
-// distance: every position relative to the origin and the direction are good to 2 eps (eps = 2^-24)
-// of their size, and the tests' arithmetic adds a few eps, which a head-on hit (cos > 0.99) passes
-// to t as 8 eps (t + 16) (16: the scene's extent, the largest position from the anchor); a normal:
-// a triangle's is stored rounded (2 eps), a sphere's comes from an offset good to 10 eps of its
-// radius (intersect.glsl): 32 eps.
+// past the 11th), are the reference's in every search and variant: the same objects and primitives
+// in the same order, each distance within float32's error and each normal within its angle; 4 also
+// with the row 1e5 from the world's origin, and scaled by 1e-4 3e4 away. The error of a distance:
+// every position relative to the origin and the direction are good to 2 eps (eps = 2^-24) of their
+// size, and the tests' arithmetic adds a few eps, which a head-on hit (cos > 0.99) passes to t as
+// 8 eps (t + 16 s) (16 s: the row's extent, the largest position from the anchor, at scale s); a
+// normal: a triangle's is stored rounded (2 eps), a sphere's comes from an offset good to 10 eps of
+// its radius (intersect.glsl): 32 eps.
 TEST(FirstHits, InOrderAsTheReference) {
-  const Scene scene = row_of_shapes();
-  const std::vector<GivenRay> rays = rays_along_the_row(512);
-  const ReferenceScene reference(scene);
   constexpr double eps = 0x1p-24;
-  for (const uint32_t count : {4u, uint32_t{VKRAY_HITS_MAX}}) {
-    std::vector<std::vector<ReferenceHit>> expected(rays.size());
-    for (size_t k = 0; k < rays.size(); ++k) {
-      expected[k] = first_reference_hits(reference, rays[k], 0.0, no_hit, count);
-      ASSERT_EQ(std::count_if(expected[k].begin(), expected[k].end(), [](const ReferenceHit& h) { return h.kind != PrimitiveKind::none; }),
-                std::min(count, 11u));
-    }
-    for (const RendererOptions& options : counting_variants()) {
-      // The longest list (a pipeline of its own, slower to compile) in the per-ray walk and float64 alone.
-      if (count == VKRAY_HITS_MAX && (options.scene.search != PrimitiveSearch::bvh_per_ray || options.shader.generic ||
-                                      options.shader.storage_geometry || options.loop_budget > 0)) {
-        continue;
-      }
-      SCOPED_TRACE(variant_name(options) + ", " + std::to_string(count) + " hits");
-      Renderer renderer(device(), scene, options);
-      const RayHits hits = renderer.cast_rays(rays, {}, count);
-      if (options.loop_budget > 0) {
-        EXPECT_GT(renderer.timings().unfinished_rays, 0u) << "the loop budget must leave rays to the host";
-      }
-      ASSERT_EQ(hits.count, rays.size() * count);
-      ASSERT_EQ(hits.hits_per_ray, count);
-      size_t wrong_ids = 0, wrong_t = 0, wrong_normals = 0;
-      std::string first;
+  const std::vector<GivenRay> row_rays = rays_along_the_row(512);
+  for (const Placement& at : {Placement{1.0, glm::dvec3(0.0)}, Placement{1.0, glm::dvec3(1e5, -2e5, 5e4)},
+                              Placement{1e-4, glm::dvec3(3e4, 1e4, -2e4)}}) {
+    const Scene scene = placed(row_of_shapes(), at);
+    const std::vector<GivenRay> rays = placed(row_rays, at);
+    const ReferenceScene reference(scene);
+    const bool as_given = at.scale == 1.0 && at.offset == glm::dvec3(0.0);
+    for (const uint32_t count : {4u, uint32_t{VKRAY_HITS_MAX}}) {
+      if (!as_given && count == VKRAY_HITS_MAX) continue;
+      std::vector<std::vector<ReferenceHit>> expected(rays.size());
       for (size_t k = 0; k < rays.size(); ++k) {
-        for (uint32_t layer = 0; layer < count; ++layer) {
-          const size_t at = k * count + layer;
-          const ReferenceHit& want = expected[k][layer];
-          const ObjectPrimitive source = reference.source(want);
-          const bool ids_differ = hits.object[at] != source.object || hits.primitive[at] != source.primitive;
-          const double t = hits.t64.empty() ? double{hits.t[at]} : hits.t64[at];
-          const bool t_differs = want.kind == PrimitiveKind::none ? !std::isinf(t) : !(std::abs(t - want.t) <= 8 * eps * (want.t + 16.0));
-          const glm::dvec3 normal(hits.normal[at], hits.normal[hits.count + at], hits.normal[2 * hits.count + at]);
-          const bool normal_differs =
-              want.kind == PrimitiveKind::none ? normal != glm::dvec3(0.0) : !(angle_between(normal, want.normal) <= 32 * eps);
-          wrong_ids += ids_differ, wrong_t += t_differs, wrong_normals += normal_differs;
-          if ((ids_differ || t_differs || normal_differs) && first.empty()) {
-            first = "ray " + std::to_string(k) + " hit " + std::to_string(layer) + ": t " + std::to_string(t) + " (reference " +
-                    std::to_string(want.t) + "), object " + std::to_string(hits.object[at]) + " (" + std::to_string(source.object) + ")";
+        expected[k] = first_reference_hits(reference, rays[k], 0.0, no_hit, count);
+        ASSERT_EQ(std::count_if(expected[k].begin(), expected[k].end(), [](const ReferenceHit& h) { return h.kind != PrimitiveKind::none; }),
+                  std::min(count, 11u));
+      }
+      for (const RendererOptions& options : counting_variants()) {
+        // The longest list (a pipeline of its own, slower to compile) in the per-ray walk and float64 alone.
+        if (count == VKRAY_HITS_MAX && (options.scene.search != PrimitiveSearch::bvh_per_ray || options.shader.generic ||
+                                        options.shader.storage_geometry || options.loop_budget > 0)) {
+          continue;
+        }
+        SCOPED_TRACE(variant_name(options) + ", " + std::to_string(count) + " hits, scale " + std::to_string(at.scale) +
+                     ", offset " + std::to_string(glm::length(at.offset)));
+        Renderer renderer(device(), scene, options);
+        const RayHits hits = renderer.cast_rays(rays, {}, count);
+        if (options.loop_budget > 0) {
+          EXPECT_GT(renderer.timings().unfinished_rays, 0u) << "the loop budget must leave rays to the host";
+        }
+        ASSERT_EQ(hits.count, rays.size() * count);
+        ASSERT_EQ(hits.hits_per_ray, count);
+        size_t wrong_ids = 0, wrong_t = 0, wrong_normals = 0;
+        std::string first;
+        for (size_t k = 0; k < rays.size(); ++k) {
+          for (uint32_t layer = 0; layer < count; ++layer) {
+            const size_t at_hit = k * count + layer;
+            const ReferenceHit& want = expected[k][layer];
+            const ObjectPrimitive source = reference.source(want);
+            const bool ids_differ = hits.object[at_hit] != source.object || hits.primitive[at_hit] != source.primitive;
+            const double t = hits.t64.empty() ? double{hits.t[at_hit]} : hits.t64[at_hit];
+            const bool t_differs = want.kind == PrimitiveKind::none ? !std::isinf(t)
+                                                                    : !(std::abs(t - want.t) <= 8 * eps * (want.t + 16.0 * at.scale));
+            const glm::dvec3 normal(hits.normal[at_hit], hits.normal[hits.count + at_hit], hits.normal[2 * hits.count + at_hit]);
+            const bool normal_differs =
+                want.kind == PrimitiveKind::none ? normal != glm::dvec3(0.0) : !(angle_between(normal, want.normal) <= 32 * eps);
+            wrong_ids += ids_differ, wrong_t += t_differs, wrong_normals += normal_differs;
+            if ((ids_differ || t_differs || normal_differs) && first.empty()) {
+              first = "ray " + std::to_string(k) + " hit " + std::to_string(layer) + ": t " + std::to_string(t) + " (reference " +
+                      std::to_string(want.t) + "), object " + std::to_string(hits.object[at_hit]) + " (" +
+                      std::to_string(source.object) + ")";
+            }
           }
         }
+        EXPECT_EQ(wrong_ids + wrong_t + wrong_normals, 0u)
+            << wrong_ids << " ids, " << wrong_t << " distances, " << wrong_normals << " normals; first: " << first;
       }
-      EXPECT_EQ(wrong_ids + wrong_t + wrong_normals, 0u)
-          << wrong_ids << " ids, " << wrong_t << " distances, " << wrong_normals << " normals; first: " << first;
     }
   }
 }

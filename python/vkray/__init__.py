@@ -457,8 +457,8 @@ class _Caster:
         """How many times each ray crosses a surface at t_min < t < t_max, with cast_rays' rays, t_min, t_max,
         t_along, bad_rays and mask: a uint32 array of the rays' leading shape (a bad ray: 0). Every
         triangle, sphere root and plane counts; an edge or vertex a ray passes exactly through counts once,
-        so the count is odd exactly where a ray starts inside a closed mesh (Open3D's count_intersections:
-        inside = renderer.count_intersections(rays) % 2 == 1)."""
+        so the count is odd where a ray starts inside a closed mesh, farther from its surface than float32's
+        rounding (Open3D's count_intersections: inside = renderer.count_intersections(rays) % 2 == 1)."""
         flat, leading, lo, hi = self._rays_and_ranges(rays, t_min, t_max)
         flags = self._flags(t_along, bad_rays)
         crossings = np.empty(leading, dtype=np.uint32)
