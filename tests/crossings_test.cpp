@@ -32,13 +32,6 @@ std::vector<RendererOptions> counting_variants() {
   return variants;
 }
 
-std::string variant_name(const RendererOptions& options) {
-  const ShaderVariant& shader = options.shader;
-  return std::string(traversal_name(options.scene.search)) + (shader.generic ? ", generic" : "") +
-         (shader.storage_geometry ? ", storage geometry" : "") + (shader.precision == Precision::float64 ? ", float64" : "") +
-         (options.loop_budget ? ", loop budget 6" : "");
-}
-
 GivenRay ray_toward(const glm::dvec3& from, const glm::dvec3& to) {
   const glm::dvec3 d = to - from;
   return {from.x, from.y, from.z, d.x, d.y, d.z};
@@ -230,7 +223,7 @@ struct Placement {
   glm::dvec3 offset;
 };
 
-Scene placed(Scene scene, const Placement& at) {
+Scene placed_scene(Scene scene, const Placement& at) {
   for (Mesh& mesh : scene.meshes) {
     for (glm::dvec3& p : mesh.positions) p = at.offset + at.scale * p;
   }
@@ -239,7 +232,7 @@ Scene placed(Scene scene, const Placement& at) {
   return scene;
 }
 
-std::vector<GivenRay> placed(std::vector<GivenRay> rays, const Placement& at) {
+std::vector<GivenRay> placed_rays(std::vector<GivenRay> rays, const Placement& at) {
   for (GivenRay& ray : rays) {
     for (int c = 0; c < 3; ++c) ray[c] = at.offset[c] + at.scale * ray[c];
   }
@@ -260,8 +253,8 @@ TEST(FirstHits, InOrderAsTheReference) {
   const std::vector<GivenRay> row_rays = rays_along_the_row(512);
   for (const Placement& at : {Placement{1.0, glm::dvec3(0.0)}, Placement{1.0, glm::dvec3(1e5, -2e5, 5e4)},
                               Placement{1e-4, glm::dvec3(3e4, 1e4, -2e4)}}) {
-    const Scene scene = placed(row_of_shapes(), at);
-    const std::vector<GivenRay> rays = placed(row_rays, at);
+    const Scene scene = placed_scene(row_of_shapes(), at);
+    const std::vector<GivenRay> rays = placed_rays(row_rays, at);
     const ReferenceScene reference(scene);
     const bool as_given = at.scale == 1.0 && at.offset == glm::dvec3(0.0);
     for (const uint32_t count : {4u, uint32_t{VKRAY_HITS_MAX}}) {

@@ -3,6 +3,7 @@
 #pragma once
 
 #include "engine/render/renderer.hpp"
+#include "engine/render/search.hpp"
 #include "engine/reference/envelope.hpp"
 #include "tests/test_scenes.hpp"
 
@@ -10,11 +11,20 @@
 
 #include <cstdio>
 #include <cstdlib>
+#include <string>
 
 namespace vkray::test {
 
 using vkray::check_against_reference;
 using vkray::EnvelopeReport;
+
+// A renderer's search and shader variant, and its loop budget where it has one, for a test's trace.
+inline std::string variant_name(const RendererOptions& options) {
+  const ShaderVariant& shader = options.shader;
+  return std::string(traversal_name(options.scene.search)) + (shader.generic ? ", generic" : "") +
+         (shader.storage_geometry ? ", storage geometry" : "") + (shader.precision == Precision::float64 ? ", float64" : "") +
+         (options.loop_budget ? ", loop budget " + std::to_string(options.loop_budget) : "");
+}
 
 inline GpuDevice& device() {
   static GpuDevice gpu;  // fails the test with GpuError when no Vulkan device exists

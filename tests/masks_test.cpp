@@ -74,12 +74,6 @@ void expect_masks_render_as_reference(const Scene& scene, const RendererOptions&
       << "every object must be in view";
 }
 
-std::string variant_name(const RendererOptions& options) {
-  const ShaderVariant& shader = options.shader;
-  return std::string(traversal_name(options.scene.search)) + (shader.generic ? ", generic" : "") +
-         (shader.storage_geometry ? ", storage geometry" : "") + (shader.precision == Precision::float64 ? ", float64" : "");
-}
-
 TEST(Masks, EverySearchSeesWhatTheMaskLetsThrough) {
   for (const bool tree_spheres : {false, true}) {
     const Scene scene = masked_scene(tree_spheres);
@@ -105,7 +99,7 @@ TEST(Masks, ShaderVariantsAndRaysFinishedOnTheHost) {
   variants[3].shader.storage_geometry = true;
   variants[4].loop_budget = 6;
   for (const RendererOptions& options : variants) {
-    SCOPED_TRACE(variant_name(options) + (options.loop_budget ? ", loop budget 6" : ""));
+    SCOPED_TRACE(variant_name(options));
     expect_masks_render_as_reference(scene, options);
   }
   Renderer renderer(device(), scene, variants[4]);
