@@ -264,6 +264,9 @@ void test_primitive(RayFrame frame, Origin origin, real3 dir, uint slot, inout S
   }
 }
 
+// A triangle's or plane's normal turned to face the ray.
+real3 facing_the_ray(real3 normal, real3 dir) { return dot(normal, dir) > 0.0 ? -normal : normal; }
+
 // The winner's normal, facing the ray: a sphere's is computed again from its intersection (once
 // per ray), at its far root where the first hits list it so (VKRAY_HIT_FAR_ROOT).
 real3 primitive_normal(uint slot, Origin origin, real3 dir) {
@@ -277,7 +280,7 @@ real3 primitive_normal(uint slot, Origin origin, real3 dir) {
     return far ? far_normal : normal;
   }
   normal = fetch_normal(int(slot));
-  return dot(normal, dir) > 0.0 ? -normal : normal;
+  return facing_the_ray(normal, dir);
 }
 
 // Every sphere, then every triangle in batches of VKRAY_TRIANGLE_BATCH (one loop iteration each).

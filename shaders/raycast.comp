@@ -133,7 +133,7 @@ real3 first_hit_normal(uint id, Origin origin, real3 dir) {
 #else
     real3 plane_normal = fetch_point_hi(planes, 2 * int(index)).hi.xyz;
 #endif
-    return dot(plane_normal, dir) > 0.0 ? -plane_normal : plane_normal;
+    return facing_the_ray(plane_normal, dir);
   }
   if ((id & VKRAY_HIT_SPHERE_APART) != 0u) {
     real3 normal, far_normal;
@@ -310,7 +310,7 @@ void main() {
         if (apart_visible(spheres_apart + i)) primitive_t_max[r] = list_first_hit(t, VKRAY_HIT_PLANE | i);
       } else if (t < t_best[r] && apart_visible(spheres_apart + i)) {
         t_best[r] = t;
-        normal[r] = dot(plane_normal, dir) > 0.0 ? -plane_normal : plane_normal;
+        normal[r] = facing_the_ray(plane_normal, dir);
         primitive_t_max[r] = VKRAY_PRIMITIVE_T_MAX(t, abs(dot(plane_normal, dir)));
         hit_id[r] = VKRAY_HIT_PLANE | i;
       }
