@@ -15,7 +15,7 @@ cd "$(dirname "$0")/.."
 jobs="$(nproc)"
 
 # Without the Staging.* reruns: they change which device copies run, in memory the sanitizers do not
-# see, not the host code they check (Python.Module.staging still takes that path once). Without the
+# see, not the host code they check (Python.Module runs once, through that path). Without the
 # validation layer: the suite ran every Vulkan call of these tests under it, and here the subject is
 # the host's memory. Without the tests whose cost is their size, not their code
 # (tests/CMakeLists.txt, sized_by_scale_tests: the 7680x4320 renders, 14.7 GB at their peak under
