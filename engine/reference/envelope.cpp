@@ -65,7 +65,9 @@ double direction_uncertainty(const CameraBasis& camera, const glm::dvec2& uv) {
   return 2 * glm::length(across) / glm::length(ray) + eps * eps;
 }
 
-bool same_primitive(const ReferenceHit& a, const ReferenceHit& b) { return a.kind == b.kind && a.index == b.index; }
+bool same_primitive(const ReferenceHit& a, const ReferenceHit& b) {
+  return a.kind == b.kind && a.index == b.index && a.instance == b.instance;
+}
 
 // The distance from the camera of the farthest point that defines `hit`'s primitive (E above).
 // `triangle_reach` holds it for every triangle, numbered as the reference numbers them.

@@ -6,6 +6,7 @@
 #include "shaders/gpu_layout.h"
 
 #include <glm/geometric.hpp>
+#include <glm/matrix.hpp>
 
 #include <algorithm>
 #include <array>
@@ -91,55 +92,108 @@ double intersect_triangle(const glm::dvec3& v0, const glm::dvec3& v1, const glm:
   return (t > 0.0 && t < t_max) ? t : t_max;
 }
 
+namespace {
+
+constexpr double infinity = std::numeric_limits<double>::infinity();
+// At least one double step and box_margin outward: sphere boxes then hold the whole sphere, and
+// node boxes keep their faces off what they hold (see enter_box).
+constexpr double box_margin = 1e-200;
+double step(double v, double direction) {
+  return direction < 0 ? std::min(std::nextafter(v, -infinity), v - box_margin) : std::max(std::nextafter(v, infinity), v + box_margin);
+}
+glm::dvec3 below(const glm::dvec3& v) { return {step(v.x, -1), step(v.y, -1), step(v.z, -1)}; }
+glm::dvec3 above(const glm::dvec3& v) { return {step(v.x, 1), step(v.y, 1), step(v.z, 1)}; }
+
+Box triangle_box(const glm::dvec3& v0, const glm::dvec3& v1, const glm::dvec3& v2) {
+  return {glm::min(v0, glm::min(v1, v2)), glm::max(v0, glm::max(v1, v2))};
+}
+
+// The world box of `mesh_box` placed by `linear` and `translation`: its eight corners placed, and
+// 1e-12 of their magnitude more on each side. A triangle the ray meets in the mesh's coordinates lies
+// where the placed ray is, to the rounding of taking the ray there (a few units in the last place
+// of double): the margin, ten thousand times more, keeps the world's walk from culling it.
+Box placed_box(const Box& mesh_box, const glm::dmat3& linear, const glm::dvec3& translation) {
+  Bounds bounds;
+  glm::dvec3 magnitude = glm::abs(translation);
+  for (int corner = 0; corner < 8; ++corner) {
+    const glm::dvec3 p((corner & 1) ? mesh_box.upper.x : mesh_box.lower.x, (corner & 2) ? mesh_box.upper.y : mesh_box.lower.y,
+                       (corner & 4) ? mesh_box.upper.z : mesh_box.lower.z);
+    const glm::dvec3 placed_corner = linear * p + translation;
+    bounds.add(placed_corner);
+    magnitude = glm::max(magnitude, glm::abs(placed_corner));
+  }
+  const glm::dvec3 margin = 1e-12 * magnitude;
+  return {below(bounds.lower - margin), above(bounds.upper + margin)};
+}
+
+}  // namespace
+
+ReferenceScene::Tree ReferenceScene::build_tree(std::vector<TreeEntry> entries, const std::vector<Box>& boxes) {
+  Tree tree;
+  if (boxes.empty()) return tree;
+  const Bvh bvh = build_bvh(boxes);
+  tree.entries.reserve(entries.size());
+  for (uint32_t i : bvh.primitive_order) tree.entries.push_back(entries[i]);
+  tree.nodes = bvh.nodes;
+  tree.child_boxes = child_bounds<Box>(bvh, [&](uint32_t slot) { return boxes[bvh.primitive_order[slot]]; });
+  for (auto& children : tree.child_boxes) {
+    for (Box& box : children) box = {below(box.lower), above(box.upper)};
+  }
+  return tree;
+}
+
 ReferenceScene::ReferenceScene(const Scene& scene, Mask ray_mask)
-    : spheres_(scene.spheres), planes_(scene.planes), ray_mask_(ray_mask) {
+    : spheres_(scene.spheres), planes_(scene.planes), ray_mask_(ray_mask), mesh_trees_(scene.meshes.size()) {
   uint32_t index = 0;
+  std::vector<TreeEntry> entries;
   std::vector<Box> boxes;
-  for (const auto& mesh : scene.meshes) {
+  std::vector<bool> placed_mesh(scene.meshes.size(), false);
+  for (const Instance& instance : scene.instances) placed_mesh[instance.mesh] = placed_mesh[instance.mesh] || mask_hits(instance.mask, ray_mask);
+  for (size_t m = 0; m < scene.meshes.size(); ++m) {
+    const Mesh& mesh = scene.meshes[m];
     first_triangle_of_mesh_.push_back(index);
-    if (!mask_hits(mesh.mask, ray_mask)) {
+    // An instanced mesh's triangles in its own coordinates, where some instance the mask lets
+    // through places it; the others' in the world's, where the mask lets the mesh through.
+    const bool in_world = !mesh.instanced && mask_hits(mesh.mask, ray_mask);
+    if (!in_world && !placed_mesh[m]) {
       index += static_cast<uint32_t>(mesh.triangles.size());
       continue;
     }
+    std::vector<Triangle>& triangles = in_world ? triangles_ : mesh_trees_[m].triangles;
+    std::vector<TreeEntry> mesh_entries;
+    std::vector<Box> mesh_boxes;
     for (const auto& corners : mesh.triangles) {
       const glm::dvec3& v0 = mesh.positions[corners[0]];
       const glm::dvec3& v1 = mesh.positions[corners[1]];
       const glm::dvec3& v2 = mesh.positions[corners[2]];
       const glm::dvec3 cross = glm::cross(v1 - v0, v2 - v0);
       if (cross != glm::dvec3(0.0)) {
-        tree_entries_.push_back({PrimitiveKind::triangle, static_cast<uint32_t>(triangles_.size())});
-        triangles_.push_back({v0, v1, v2, unit_vector(cross), index});
-        boxes.push_back({glm::min(v0, glm::min(v1, v2)), glm::max(v0, glm::max(v1, v2))});
+        (in_world ? entries : mesh_entries).push_back({PrimitiveKind::triangle, static_cast<uint32_t>(triangles.size())});
+        triangles.push_back({v0, v1, v2, unit_vector(cross), index});
+        (in_world ? boxes : mesh_boxes).push_back(triangle_box(v0, v1, v2));
       }
       ++index;
     }
+    if (!in_world) mesh_trees_[m].tree = build_tree(std::move(mesh_entries), mesh_boxes);
   }
-  // At least one double step and box_margin outward: sphere boxes then hold the whole sphere, and
-  // node boxes keep their faces off what they hold (see enter_box).
-  constexpr double infinity = std::numeric_limits<double>::infinity();
-  constexpr double box_margin = 1e-200;
-  auto step = [&](double v, double direction) {
-    return direction < 0 ? std::min(std::nextafter(v, -infinity), v - box_margin)
-                         : std::max(std::nextafter(v, infinity), v + box_margin);
-  };
-  auto below = [&](const glm::dvec3& v) { return glm::dvec3(step(v.x, -1), step(v.y, -1), step(v.z, -1)); };
-  auto above = [&](const glm::dvec3& v) { return glm::dvec3(step(v.x, 1), step(v.y, 1), step(v.z, 1)); };
+  for (uint32_t k = 0; k < scene.instances.size(); ++k) {
+    const Instance& instance = scene.instances[k];
+    const glm::dmat3 to_mesh = glm::inverse(instance.linear);
+    const double winding = glm::determinant(instance.linear) < 0.0 ? -1.0 : 1.0;
+    instances_.push_back({instance.mesh, to_mesh, instance.translation, winding * glm::transpose(to_mesh)});
+    const Tree& mesh_tree = mesh_trees_[instance.mesh].tree;
+    if (!mask_hits(instance.mask, ray_mask) || mesh_tree.empty()) continue;
+    entries.push_back({PrimitiveKind::instance, k});
+    const auto& root = mesh_tree.child_boxes[0];
+    const Box mesh_box{glm::min(root[0].lower, root[1].lower), glm::max(root[0].upper, root[1].upper)};
+    boxes.push_back(placed_box(mesh_box, instance.linear, instance.translation));
+  }
   for (uint32_t i = 0; i < spheres_.size(); ++i) {
     if (!mask_hits(spheres_[i].mask, ray_mask)) continue;
-    tree_entries_.push_back({PrimitiveKind::sphere, i});
+    entries.push_back({PrimitiveKind::sphere, i});
     boxes.push_back({below(spheres_[i].center - spheres_[i].radius), above(spheres_[i].center + spheres_[i].radius)});
   }
-  if (boxes.empty()) return;
-  const Bvh bvh = build_bvh(boxes);
-  std::vector<TreeEntry> ordered;
-  ordered.reserve(tree_entries_.size());
-  for (uint32_t i : bvh.primitive_order) ordered.push_back(tree_entries_[i]);
-  tree_entries_ = std::move(ordered);
-  nodes_ = bvh.nodes;
-  child_boxes_ = child_bounds<Box>(bvh, [&](uint32_t slot) { return boxes[bvh.primitive_order[slot]]; });
-  for (auto& children : child_boxes_) {
-    for (Box& box : children) box = {below(box.lower), above(box.upper)};
-  }
+  tree_ = build_tree(std::move(entries), boxes);
 }
 
 void ReferenceScene::test_sphere(uint32_t index, const glm::dvec3& origin, const glm::dvec3& dir, ReferenceHit& hit) const {
@@ -151,14 +205,36 @@ void ReferenceScene::test_sphere(uint32_t index, const glm::dvec3& origin, const
 }
 
 void ReferenceScene::test_triangle(const Triangle& triangle, const glm::dvec3& origin, const glm::dvec3& dir,
-                                   ReferenceHit& hit) const {
+                                   ReferenceHit& hit, uint32_t instance) const {
   // Asking for hits up to the next double after the best distance lets an exact tie through, to be
-  // settled by index.
+  // settled by index, then by instance.
   const double t_max = std::nextafter(hit.t, no_hit);
   const double t = intersect_triangle(triangle.v0, triangle.v1, triangle.v2, origin, dir, t_max);
-  if (t < hit.t || (t == hit.t && t < t_max && hit.kind == PrimitiveKind::triangle && triangle.index < hit.index)) {
-    hit = {t, triangle.normal, PrimitiveKind::triangle, triangle.index};
+  const bool earlier = triangle.index < hit.index || (triangle.index == hit.index && instance < hit.instance);
+  if (t < hit.t || (t == hit.t && t < t_max && hit.kind == PrimitiveKind::triangle && earlier)) {
+    hit = {t, world_normal(triangle.normal, instance), PrimitiveKind::triangle, triangle.index, instance};
   }
+}
+
+glm::dvec3 ReferenceScene::world_normal(const glm::dvec3& normal, uint32_t instance) const {
+  return instance == no_object ? normal : unit_vector(instances_[instance].normal_to_world * normal);
+}
+
+template <typename Visit>
+void ReferenceScene::walk_instance(uint32_t instance, const glm::dvec3& origin, const glm::dvec3& dir, const double& t_max,
+                                   Visit visit) const {
+  const auto [mesh_origin, mesh_dir] = ray_in_mesh(instance, origin, dir);
+  const MeshTree& mesh = mesh_trees_[instances_[instance].mesh];
+  walk_tree(mesh.tree, mesh_origin, mesh_dir, t_max,
+            [&](const TreeEntry& entry) { visit(mesh.triangles[entry.index], mesh_origin, mesh_dir); });
+}
+
+std::pair<glm::dvec3, glm::dvec3> ReferenceScene::ray_in_mesh(uint32_t instance, const glm::dvec3& origin,
+                                                              const glm::dvec3& dir) const {
+  // The origin's difference first: near the instance it is exact or nearly (Sterbenz), however far
+  // both lie from the world's origin. Affine maps keep a ray's t: the same bound serves both walks.
+  const Placement& placement = instances_[instance];
+  return {placement.to_mesh * (origin - placement.translation), placement.to_mesh * dir};
 }
 
 namespace {
@@ -186,7 +262,8 @@ double enter_box(const Box& box, const glm::dvec3& origin, const glm::dvec3& inv
 }  // namespace
 
 template <typename Visit>
-void ReferenceScene::walk_tree(const glm::dvec3& origin, const glm::dvec3& dir, const double& t_max, Visit visit) const {
+void ReferenceScene::walk_tree(const Tree& tree, const glm::dvec3& origin, const glm::dvec3& dir, const double& t_max,
+                               Visit visit) {
   glm::dvec3 inv_dir;
   for (int axis = 0; axis < 3; ++axis) {
     constexpr double tiny = 1e-300;
@@ -199,10 +276,10 @@ void ReferenceScene::walk_tree(const glm::dvec3& origin, const glm::dvec3& dir, 
   while (true) {
     if (!is_leaf(current)) {
       // <= t_max rather than <: a triangle at exactly the best distance may still win the tie.
-      const double enter0 = enter_box(child_boxes_[current][0], origin, inv_dir, t_max);
-      const auto& children = nodes_[current];
+      const double enter0 = enter_box(tree.child_boxes[current][0], origin, inv_dir, t_max);
+      const auto& children = tree.nodes[current];
       // A tree of one leaf is a root with that leaf as both children (Bvh::nodes): visited once.
-      const double enter1 = children[1] == children[0] ? no_hit : enter_box(child_boxes_[current][1], origin, inv_dir, t_max);
+      const double enter1 = children[1] == children[0] ? no_hit : enter_box(tree.child_boxes[current][1], origin, inv_dir, t_max);
       if (enter0 < no_hit && enter1 < no_hit) {
         const bool second_first = enter1 < enter0;
         stack[stack_size++] = children[second_first ? 0 : 1];
@@ -214,7 +291,7 @@ void ReferenceScene::walk_tree(const glm::dvec3& origin, const glm::dvec3& dir, 
         continue;
       }
     } else {
-      for (uint32_t k = 0; k < leaf_count(current); ++k) visit(tree_entries_[leaf_first(current) + k]);
+      for (uint32_t k = 0; k < leaf_count(current); ++k) visit(tree.entries[leaf_first(current) + k]);
     }
     if (stack_size == 0) return;
     current = stack[--stack_size];
@@ -222,9 +299,13 @@ void ReferenceScene::walk_tree(const glm::dvec3& origin, const glm::dvec3& dir, 
 }
 
 void ReferenceScene::nearest_in_tree(const glm::dvec3& origin, const glm::dvec3& dir, ReferenceHit& hit) const {
-  walk_tree(origin, dir, hit.t, [&](const TreeEntry& entry) {
+  walk_tree(tree_, origin, dir, hit.t, [&](const TreeEntry& entry) {
     if (entry.kind == PrimitiveKind::sphere) {
       test_sphere(entry.index, origin, dir, hit);
+    } else if (entry.kind == PrimitiveKind::instance) {
+      walk_instance(entry.index, origin, dir, hit.t, [&](const Triangle& triangle, const glm::dvec3& o, const glm::dvec3& d) {
+        test_triangle(triangle, o, d, hit, entry.index);
+      });
     } else {
       test_triangle(triangles_[entry.index], origin, dir, hit);
     }
@@ -245,9 +326,14 @@ std::vector<ReferenceHit> ReferenceScene::first_hits(const glm::dvec3& origin, c
     if (!mask_hits(planes_[i].mask, ray_mask_)) continue;
     add({intersect_plane(planes_[i].normal, planes_[i].point, origin, dir, bound), planes_[i].normal, PrimitiveKind::plane, i});
   }
-  if (!nodes_.empty()) {
-    walk_tree(origin, dir, bound, [&](const TreeEntry& entry) {
-      if (entry.kind == PrimitiveKind::sphere) {
+  if (!tree_.empty()) {
+    walk_tree(tree_, origin, dir, bound, [&](const TreeEntry& entry) {
+      if (entry.kind == PrimitiveKind::instance) {
+        walk_instance(entry.index, origin, dir, bound, [&](const Triangle& triangle, const glm::dvec3& o, const glm::dvec3& d) {
+          add({intersect_triangle(triangle.v0, triangle.v1, triangle.v2, o, d, bound, true),
+               world_normal(triangle.normal, entry.index), PrimitiveKind::triangle, triangle.index, entry.index});
+        });
+      } else if (entry.kind == PrimitiveKind::sphere) {
         const Sphere& sphere = spheres_[entry.index];
         const glm::dvec3 f = origin - sphere.center;
         bool near = false;
@@ -278,9 +364,13 @@ uint32_t ReferenceScene::count_crossings(const glm::dvec3& origin, const glm::dv
   for (const Plane& plane : planes_) {
     if (mask_hits(plane.mask, ray_mask_) && intersect_plane(plane.normal, plane.point, origin, dir, t_max) < t_max) ++crossings;
   }
-  if (nodes_.empty()) return crossings;
-  walk_tree(origin, dir, t_max, [&](const TreeEntry& entry) {
-    if (entry.kind == PrimitiveKind::sphere) {
+  if (tree_.empty()) return crossings;
+  walk_tree(tree_, origin, dir, t_max, [&](const TreeEntry& entry) {
+    if (entry.kind == PrimitiveKind::instance) {
+      walk_instance(entry.index, origin, dir, t_max, [&](const Triangle& triangle, const glm::dvec3& o, const glm::dvec3& d) {
+        if (intersect_triangle(triangle.v0, triangle.v1, triangle.v2, o, d, t_max, true) < t_max) ++crossings;
+      });
+    } else if (entry.kind == PrimitiveKind::sphere) {
       // Both roots that lie ahead within the range, a tangent's double root twice (as the shader's
       // sphere_crossings).
       double far_root = t_max;
@@ -315,7 +405,14 @@ ReferenceHit ReferenceScene::trace_with(const glm::dvec3& origin, const glm::dve
       if (mask_hits(spheres_[i].mask, ray_mask_)) test_sphere(i, origin, dir, hit);
     }
     for (const auto& triangle : triangles_) test_triangle(triangle, origin, dir, hit);
-  } else if (!nodes_.empty()) {
+    for (const TreeEntry& entry : tree_.entries) {
+      if (entry.kind != PrimitiveKind::instance) continue;
+      const auto [mesh_origin, mesh_dir] = ray_in_mesh(entry.index, origin, dir);
+      for (const auto& triangle : mesh_trees_[instances_[entry.index].mesh].triangles) {
+        test_triangle(triangle, mesh_origin, mesh_dir, hit, entry.index);
+      }
+    }
+  } else if (!tree_.empty()) {
     nearest_in_tree(origin, dir, hit);
   }
   if (hit.kind == PrimitiveKind::none) hit = plane_hit;

@@ -13,6 +13,7 @@
 
 #include <functional>
 #include <limits>
+#include <utility>
 #include <vector>
 
 namespace vkray {
@@ -31,13 +32,15 @@ double intersect_plane(const glm::dvec3& normal, const glm::dvec3& point, const 
 double intersect_triangle(const glm::dvec3& v0, const glm::dvec3& v1, const glm::dvec3& v2, const glm::dvec3& origin,
                           const glm::dvec3& dir, double t_max, bool claim_edges = false);
 
-enum class PrimitiveKind : uint8_t { none, sphere, plane, triangle };
+// `instance` marks a tree entry alone: a hit on an instance is a triangle with ReferenceHit::instance.
+enum class PrimitiveKind : uint8_t { none, sphere, plane, triangle, instance };
 
 struct ReferenceHit {
   double t = no_hit;
   glm::dvec3 normal{0.0};  // unit, facing the ray; 0 on a miss
   PrimitiveKind kind = PrimitiveKind::none;
   uint32_t index = 0;  // within its kind; triangles are numbered across meshes in scene order
+  uint32_t instance = no_object;  // the instance whose mesh's triangle this is (Scene::instances)
 };
 
 class ReferenceScene {
@@ -46,8 +49,10 @@ class ReferenceScene {
   // numbered as in the whole scene.
   explicit ReferenceScene(const Scene& scene, Mask ray_mask = every_mask_bit);
   // The nearest hit before `t_max` (a miss where there is none). Among triangles at exactly the same
-  // distance the lowest index wins, so the tree and brute force agree on the triangle, not only on
-  // the distance.
+  // distance the lowest index wins (then the lowest instance), so the tree and brute force agree on
+  // the triangle, not only on the distance. An instance's triangles are tested with the ray taken
+  // into its mesh's coordinates (the inverse transform, in double): the ray's t is the same in both,
+  // and an instance far from the origin keeps the precision of its own size.
   ReferenceHit trace(const glm::dvec3& origin, const glm::dvec3& dir, double t_max = no_hit) const;
   // The same with every triangle tested: the check on the tree.
   ReferenceHit trace_brute_force(const glm::dvec3& origin, const glm::dvec3& dir) const;
@@ -66,17 +71,53 @@ class ReferenceScene {
     glm::dvec3 v0, v1, v2, normal;
     uint32_t index;
   };
-  // What a tree leaf holds: a triangle (into triangles_) or a sphere (into spheres_).
+  // What a tree leaf holds: a triangle (into triangles_, or an instanced mesh's), a sphere (into
+  // spheres_) or an instance (into instances_).
   struct TreeEntry {
     PrimitiveKind kind;
     uint32_t index;
   };
+  // A BVH (planes are infinite: always tested one by one) and what its leaves hold, in leaf order.
+  struct Tree {
+    std::vector<TreeEntry> entries;
+    std::vector<std::array<uint32_t, 2>> nodes;   // child references (engine/scene/bvh.hpp)
+    std::vector<std::array<Box, 2>> child_boxes;  // their boxes, exact in double
+    bool empty() const { return nodes.empty(); }
+  };
+  // An instanced mesh's triangles in its own coordinates, and their tree.
+  struct MeshTree {
+    std::vector<Triangle> triangles;
+    Tree tree;
+  };
+  // An instance as the walk needs it: what takes a ray into its mesh's coordinates, and a mesh
+  // normal back into the world's.
+  struct Placement {
+    uint32_t mesh;
+    glm::dmat3 to_mesh;  // the inverse of Instance::linear
+    glm::dvec3 translation;
+    // The inverse transpose, times the sign of the determinant: a placed triangle's normal by its
+    // winding (a mirrored instance turns its winding over with its triangles).
+    glm::dmat3 normal_to_world;
+  };
+  static Tree build_tree(std::vector<TreeEntry> entries, const std::vector<Box>& boxes);
   void test_sphere(uint32_t index, const glm::dvec3& origin, const glm::dvec3& dir, ReferenceHit& hit) const;
-  void test_triangle(const Triangle& triangle, const glm::dvec3& origin, const glm::dvec3& dir, ReferenceHit& hit) const;
-  // Calls visit(entry) for each tree entry in a box the ray enters before t_max, nearer child
+  // `instance`: the instance placing the triangle (the ray already in its mesh's coordinates), or
+  // no_object.
+  void test_triangle(const Triangle& triangle, const glm::dvec3& origin, const glm::dvec3& dir, ReferenceHit& hit,
+                     uint32_t instance = no_object) const;
+  // Calls visit(entry) for each entry of `tree` in a box the ray enters before t_max, nearer child
   // first; t_max is read again at every box (a nearest-hit search lowers it as it goes).
   template <typename Visit>
-  void walk_tree(const glm::dvec3& origin, const glm::dvec3& dir, const double& t_max, Visit visit) const;
+  static void walk_tree(const Tree& tree, const glm::dvec3& origin, const glm::dvec3& dir, const double& t_max, Visit visit);
+  // Calls visit(triangle, mesh_origin, mesh_dir) for each triangle of instance `instance` in a box of
+  // its mesh's tree the ray enters before t_max, the ray taken into the mesh's coordinates.
+  template <typename Visit>
+  void walk_instance(uint32_t instance, const glm::dvec3& origin, const glm::dvec3& dir, const double& t_max,
+                     Visit visit) const;
+  // The ray taken into instance `instance`'s mesh's coordinates: its origin and direction there.
+  std::pair<glm::dvec3, glm::dvec3> ray_in_mesh(uint32_t instance, const glm::dvec3& origin, const glm::dvec3& dir) const;
+  // A mesh normal of instance `instance` (or of no instance) in world coordinates, unit length.
+  glm::dvec3 world_normal(const glm::dvec3& normal, uint32_t instance) const;
   void nearest_in_tree(const glm::dvec3& origin, const glm::dvec3& dir, ReferenceHit& hit) const;
   ReferenceHit trace_with(const glm::dvec3& origin, const glm::dvec3& dir, double t_max, bool brute_force) const;
 
@@ -85,10 +126,9 @@ class ReferenceScene {
   std::vector<Plane> planes_;
   Mask ray_mask_;
   std::vector<Triangle> triangles_;  // zero-area triangles left out: no ray can hit them
-  // The BVH over triangles and spheres (planes are infinite: always tested one by one).
-  std::vector<TreeEntry> tree_entries_;           // in leaf order
-  std::vector<std::array<uint32_t, 2>> nodes_;    // child references (engine/scene/bvh.hpp)
-  std::vector<std::array<Box, 2>> child_boxes_;   // their boxes, exact in double
+  std::vector<MeshTree> mesh_trees_;    // by mesh: an instanced mesh's, empty for the others
+  std::vector<Placement> instances_;    // all of them, those the mask leaves out too
+  Tree tree_;  // triangles, spheres and instances in world coordinates
 };
 
 // Every pixel's hit for the scene's camera at width x height, on all cores. `progress`, when set,

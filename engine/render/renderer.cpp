@@ -5,6 +5,7 @@
 #include "engine/stopwatch.hpp"
 #include "engine/surface_outputs.hpp"
 
+#include <algorithm>
 #include <bit>
 #include <cmath>
 #include <future>
@@ -17,6 +18,11 @@ Renderer::Renderer(GpuDevice& device, const Scene& scene, RendererOptions option
   with_vulkan_errors("uploading the scene", [&] {
     const auto start = Clock::now();
     Impl& r = *impl_;
+    // Instances are traced by the reference alone so far (ReferenceScene); on the device they
+    // need a walk that takes rays into each instance's mesh, which is not built yet.
+    if (!scene.instances.empty() || std::ranges::any_of(scene.meshes, [](const Mesh& mesh) { return mesh.instanced; })) {
+      throw InputError("instances: the device cannot trace them yet (the reference can)");
+    }
     r.context.check_usable();
     r.check_workgroup();
     // A search asked for by name is refused before anything is built or uploaded (a ray-query

@@ -6,6 +6,7 @@
 #include "engine/unit_vector.hpp"
 
 #include <glm/geometric.hpp>
+#include <glm/matrix.hpp>
 
 #include <algorithm>
 #include <atomic>
@@ -134,6 +135,26 @@ void check_scene(Scene& scene) {
       }
     }
   }
+  for (size_t k = 0; k < scene.instances.size(); ++k) {
+    const Instance& instance = scene.instances[k];
+    const std::string path = item("instances", k);
+    if (instance.mesh >= scene.meshes.size() || !scene.meshes[instance.mesh].instanced) {
+      throw InputError(path + ".mesh: " + std::to_string(instance.mesh) + " is not an instanced mesh of the scene's " +
+                       std::to_string(scene.meshes.size()));
+    }
+    for (int column = 0; column < 3; ++column) check_coordinates(instance.linear[column], path + ".transform");
+    check_coordinates(instance.translation, path + ".transform");
+    // Invertible: a ray is taken into the mesh's coordinates by the inverse (a zero determinant, or
+    // one that underflows, flattens the mesh into a plane or less).
+    const double determinant = glm::determinant(instance.linear);
+    if (!(std::abs(determinant) >= std::numeric_limits<double>::min()) || !std::isfinite(determinant)) {
+      throw InputError(path + ".transform: cannot be inverted (its determinant is " + std::to_string(determinant) + ")");
+    }
+    const Mesh& mesh = scene.meshes[instance.mesh];
+    for (size_t v = 0; v < mesh.positions.size(); ++v) {
+      check_coordinates(placed(instance, mesh.positions[v]), path + ": the mesh's " + item("positions", v) + " placed");
+    }
+  }
 }
 
 const char* given_ray_fault(const GivenRay& ray) {
@@ -230,7 +251,11 @@ Bounds finite_bounds(const Scene& scene) {
     bounds.add(sphere.center + sphere.radius);
   }
   for (const auto& mesh : scene.meshes) {
+    if (mesh.instanced) continue;
     for (const auto& position : mesh.positions) bounds.add(position);
+  }
+  for (const auto& instance : scene.instances) {
+    for (const auto& position : scene.meshes[instance.mesh].positions) bounds.add(placed(instance, position));
   }
   return bounds;
 }
@@ -264,7 +289,13 @@ double scene_radius(const Scene& scene, const glm::dvec3& anchor) {
   double radius = 0.0;
   for (const auto& sphere : scene.spheres) radius = std::max(radius, glm::length(sphere.center - anchor) + sphere.radius);
   for (const auto& mesh : scene.meshes) {
+    if (mesh.instanced) continue;
     for (const auto& position : mesh.positions) radius = std::max(radius, glm::length(position - anchor));
+  }
+  for (const auto& instance : scene.instances) {
+    for (const auto& position : scene.meshes[instance.mesh].positions) {
+      radius = std::max(radius, glm::length(placed(instance, position) - anchor));
+    }
   }
   return radius;
 }
@@ -305,7 +336,18 @@ void add_geometry(Fnv1a& fnv, const Scene& scene) {
     fnv.add(uint64_t{mesh.triangles.size()});
     fnv.add_bytes(mesh.triangles.data(), mesh.triangles.size() * sizeof(mesh.triangles[0]));
   }
-  // Masks change what a call sees; a scene without them keeps the hash it had before masks existed.
+  // Instances and masks change what a call sees; a scene without them keeps the hash it had before
+  // either existed.
+  if (!scene.instances.empty()) {
+    fnv.add(uint64_t{scene.instances.size()});
+    for (const auto& mesh : scene.meshes) fnv.add(uint64_t{mesh.instanced});
+    for (const auto& instance : scene.instances) {
+      fnv.add(uint64_t{instance.mesh});
+      for (int column = 0; column < 3; ++column) fnv.add(instance.linear[column]);
+      fnv.add(instance.translation);
+      fnv.add(uint64_t{instance.mask});
+    }
+  }
   if (scene.has_masks()) {
     for (uint32_t object = 0; object < scene.object_count(); ++object) fnv.add(uint64_t{object_mask(scene, object)});
   }
@@ -313,7 +355,8 @@ void add_geometry(Fnv1a& fnv, const Scene& scene) {
 
 bool Scene::has_masks() const {
   const auto masked = [](const auto& item) { return item.mask != every_mask_bit; };
-  return std::ranges::any_of(meshes, masked) || std::ranges::any_of(spheres, masked) || std::ranges::any_of(planes, masked);
+  return std::ranges::any_of(meshes, masked) || std::ranges::any_of(instances, masked) || std::ranges::any_of(spheres, masked) ||
+         std::ranges::any_of(planes, masked);
 }
 
 namespace {

@@ -6,6 +6,7 @@
 #include "shaders/gpu_layout.h"
 
 #include <glm/common.hpp>
+#include <glm/mat3x3.hpp>
 #include <glm/vec3.hpp>
 
 #include <array>
@@ -69,7 +70,26 @@ struct Mesh {
   // glTF's node ("scene.glb#Wheel"), or a scene file's entry ("scene.json: meshes[2]").
   std::string source;
   Mask mask = every_mask_bit;
+  // Drawn only where instances place it (Scene::instances), not where its positions stand.
+  bool instanced = false;
 };
+
+// A placement of an instanced mesh: each of its positions p drawn at linear * p + translation (an
+// affine map, invertible), with the instance's own mask in place of the mesh's. The mesh is stored
+// once however many instances place it; each keeps its own transform, so a ray is taken into the
+// mesh's own coordinates (transformed back, in double on the host) rather than the mesh into the
+// world's: an instance 1e-6 across placed 1e5 away keeps the precision of its own size.
+struct Instance {
+  uint32_t mesh = 0;  // into Scene::meshes, a mesh with `instanced`
+  glm::dmat3 linear{1.0};
+  glm::dvec3 translation{0.0};
+  Mask mask = every_mask_bit;
+};
+
+// Where `instance` places the mesh position `position`.
+inline glm::dvec3 placed(const Instance& instance, const glm::dvec3& position) {
+  return instance.linear * position + instance.translation;
+}
 
 // Largest coordinate or radius magnitude accepted. The shader squares distances in float32 (max
 // ~3.4e38) and splits them with a factor of 4097 for the exact sphere term, so magnitudes must stay
@@ -90,6 +110,7 @@ struct Scene {
   std::vector<Sphere> spheres;
   std::vector<Plane> planes;
   std::vector<Mesh> meshes;
+  std::vector<Instance> instances;
 
   size_t triangle_count() const;
   // Triangles of zero area (coincident or collinear vertices: their edge vectors' cross product is
@@ -98,8 +119,8 @@ struct Scene {
   size_t zero_area_triangle_count() const;
   // The objects the outputs' mesh_id numbers: the meshes, then the spheres, then the planes.
   size_t object_count() const { return meshes.size() + spheres.size() + planes.size(); }
-  // Whether any mesh, sphere or plane has a mask other than every bit: only then do the shaders test
-  // masks (VKRAY_SPEC_MASKS).
+  // Whether any mesh, instance, sphere or plane has a mask other than every bit: only then do the
+  // shaders test masks (VKRAY_SPEC_MASKS).
   bool has_masks() const;
 };
 
@@ -143,7 +164,8 @@ struct Bounds {
   bool empty() const { return !(lower.x <= upper.x); }
 };
 
-// The box of the finite primitives: every sphere and mesh vertex (planes are infinite).
+// The box of the finite primitives: every sphere and vertex where it is drawn, an instanced mesh's
+// where each instance places it (planes are infinite).
 Bounds finite_bounds(const Scene& scene);
 
 // The centre of finite_bounds, where the framed camera looks; the camera for a scene of planes alone.
@@ -156,7 +178,8 @@ glm::dvec3 scene_centre(const Scene& scene);
 // object's stored positions as they were and redoes the moved one's part alone.
 glm::dvec3 scene_anchor(const Scene& scene);
 
-// The largest distance from `anchor` of a sphere's surface or a mesh vertex (0 without either).
+// The largest distance from `anchor` of a sphere's surface or a vertex where it is drawn (0 without
+// either).
 double scene_radius(const Scene& scene, const glm::dvec3& anchor);
 
 // Moves the vertices of scene.meshes[mesh] to `positions`, one a vertex in its order. Throws
@@ -193,7 +216,9 @@ void check_camera_reach(const Camera& camera, uint32_t width, uint32_t height, c
 // by its path ("meshes[2].triangles[7]: ..."): every coordinate finite and within max_coordinate,
 // radii > 0, plane normals non-zero (made unit length here), vertex indices within their mesh, at
 // least one triangle a mesh, the camera's from and to apart, its up non-zero and its fovy in
-// (0, 180) degrees, the image size within limits. Throws InputError.
+// (0, 180) degrees, the image size within limits; each instance placing an instanced mesh by a
+// finite transform that can be inverted, every vertex it places within max_coordinate. Throws
+// InputError.
 void check_scene(Scene& scene);
 
 // A ray the caller gives (Python's cast_rays): its origin, then its direction (any length but 0), in
