@@ -19,7 +19,8 @@ jobs="$(nproc)"
 # validation layer: the suite ran every Vulkan call of these tests under it, and here the subject is
 # the host's memory. Without the tests whose cost is their size, not their code
 # (tests/CMakeLists.txt, sized_by_scale_tests: the 7680x4320 renders, 14.7 GB at their peak under
-# ASan, the 120 random scenes, the camera inside a million triangles, the README's commands): the
+# ASan, the 120 random scenes, the camera inside a million triangles, the README's commands), nor
+# those whose subject is the device's arithmetic over many variants (arithmetic_tests there): the
 # README's test command runs them, and smaller tests of the same kind run their host code here.
 # A unity build: each target's sources compiled in batches (CMakeLists.txt, CMAKE_UNITY_BUILD). The
 # tests' cache is the suite's (build/test-cache, when there): the pipelines it compiled are taken from
@@ -27,7 +28,7 @@ jobs="$(nproc)"
 cache_home="$PWD/build-sanitize/test-cache"
 [ -d build/test-cache ] && cache_home="$PWD/build/test-cache"
 step "sanitizer build" sh -c "cmake -S . -B build-sanitize -DVKRAY_SANITIZE=ON -DVKRAY_WERROR=ON -DVKRAY_TEST_STAGING=OFF \
-                                -DVKRAY_TEST_VALIDATION=0 -DVKRAY_TEST_SIZED=OFF -DCMAKE_UNITY_BUILD=ON \
+                                -DVKRAY_TEST_VALIDATION=0 -DVKRAY_TEST_SIZED=OFF -DVKRAY_TEST_ARITHMETIC=OFF -DCMAKE_UNITY_BUILD=ON \
                                 -DVKRAY_TEST_CACHE_HOME=$cache_home &&
                               cmake --build build-sanitize -j$jobs"
 # LeakSanitizer checks the tests that run on the host alone. Where the Vulkan driver is loaded,
