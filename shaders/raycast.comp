@@ -34,6 +34,9 @@ const bool RAY_INPUT = RAY_INPUT_KIND != VKRAY_RAY_INPUT_NONE;
 const bool GIVEN_ORIGINS = RAY_INPUT_KIND == VKRAY_RAY_INPUT_RAYS;
 // The caller's rays and arrays, in place (VKRAY_RAY_INPUT_CALLER_DIRECTIONS).
 const bool CALLER_ARRAYS = RAY_INPUT_KIND == VKRAY_RAY_INPUT_CALLER_DIRECTIONS;
+// Whether rays are cast at all: a camera's for depth or normal (uv alone needs none), given rays
+// always (an occlusion query or a count of crossings writes its hits alone).
+const bool CASTS_RAYS = WRITE_DEPTH || WRITE_NORMAL || RAY_INPUT;
 
 layout(push_constant) uniform PushConstants { RayGenParams params; };
 
@@ -216,7 +219,7 @@ void main() {
         uv_out[plane_size + out_index] = uv.y;
       }
     }
-    if (!WRITE_DEPTH && !WRITE_NORMAL) continue;
+    if (!CASTS_RAYS) continue;
 
     // A GpuRay is two points; lanes past the last ray read the first (their t_max is 0). float32
     // shaders take the direction rounded to float, as a camera's. A given ray's range ends at its
@@ -318,7 +321,7 @@ void main() {
     // An occlusion query hit by a plane is answered: its walk finds nothing below 0.
     if (ANY_HIT && hit_id[r] != VKRAY_HIT_NONE) primitive_t_max[r] = 0.0;
   }
-  if (!WRITE_DEPTH && !WRITE_NORMAL) return;
+  if (!CASTS_RAYS) return;
 
   // Spheres and triangles: each ray on its own, or the packet's rays together.
   PrimitiveHit hits[VKRAY_PACKET_ROWS];

@@ -2,6 +2,7 @@
 // fence timeout of 1 ms, the validation layer hidden from the loader): a device that refuses the
 // packet walk and ray queries, work that never finishes, a machine without the layer, a discrete
 // GPU's transfer. Each test makes its own devices after setting the environment and restores it.
+#include "engine/reference/reference.hpp"
 #include "engine/render/renderer.hpp"
 #include "engine/scene/scene_loader.hpp"
 #include "tests/gpu_test_support.hpp"
@@ -11,6 +12,7 @@
 #include <cstdlib>
 #include <optional>
 #include <string>
+#include <vector>
 
 namespace vkray {
 namespace {
@@ -162,6 +164,45 @@ TEST(GpuTraits, StagingReadsBackOnlyTheRowsWritten) {
   EXPECT_EQ(renderer.timings().unfinished_rays, 0u);
   EXPECT_EQ(renderer.timings().readback_bytes, expected);
   test::expect_frame_matches_reference(scene, frame);
+}
+
+// An occlusion query and a count of crossings write and read back each ray's answer alone, 4 bytes,
+// not a nearest hit's depth and normal beside it; the answers are the nearest-hit call's (whether
+// it hit) and the reference's (how many crossings). Rays through a 128x40 image, listed as its rows:
+// whole packet blocks and workgroup rows, so every position written is a ray's.
+TEST(GpuTraits, OcclusionQueriesAndCountsReadBackTheirAnswersAlone) {
+  GpuDevice device({}, TransferMode::staging);
+  const Scene scene = default_scene();
+  constexpr uint32_t width = 128, height = 40;
+  const CameraBasis basis = make_camera_basis(scene.camera, width, height);
+  std::vector<GivenRay> rays;
+  for (uint32_t j = 0; j < height; ++j) {
+    for (uint32_t i = 0; i < width; ++i) {
+      const PixelRay ray = pixel_ray(scene.camera, basis, i, j, width, height);
+      rays.push_back({ray.origin.x, ray.origin.y, ray.origin.z, ray.direction.x, ray.direction.y, ray.direction.z});
+    }
+  }
+  Renderer renderer(device, scene);
+  const bool budget = renderer.scene_stats().loop_budget > 0;
+  auto answers_alone = [&] {
+    return uint64_t{rays.size()} * sizeof(uint32_t) + (budget ? renderer.timings().tiles * sizeof(uint32_t) : 0);
+  };
+  const RayHits nearest = renderer.cast_rays(rays);
+  EXPECT_GT(renderer.timings().readback_bytes, 4 * answers_alone()) << "a nearest hit's depth and normal too";
+  const std::vector<uint8_t> occluded = renderer.occluded(rays);
+  EXPECT_EQ(renderer.timings().readback_bytes, answers_alone());
+  const std::vector<uint32_t> crossings = renderer.count_intersections(rays);
+  EXPECT_EQ(renderer.timings().readback_bytes, answers_alone());
+  EXPECT_EQ(renderer.timings().unfinished_rays, 0u);
+  const ReferenceScene reference(scene);
+  size_t hit = 0;
+  for (size_t k = 0; k < rays.size(); ++k) {
+    EXPECT_EQ(occluded[k], nearest.object[k] != no_object ? 1 : 0) << "ray " << k;
+    hit += occluded[k];
+    EXPECT_EQ(crossings[k], count_reference_crossings(reference, rays[k], 0.0, no_hit)) << "ray " << k;
+  }
+  EXPECT_GT(hit, rays.size() / 4);
+  EXPECT_LT(hit, rays.size());
 }
 
 }  // namespace

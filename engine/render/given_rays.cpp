@@ -20,6 +20,13 @@ constexpr uint32_t packet_rays = VKRAY_PACKET_COLUMNS * VKRAY_PACKET_ROWS;
 constexpr uint32_t packet_block_positions = VKRAY_PACKET_GROUP_WIDTH * VKRAY_PACKET_ROWS;
 static_assert(VKRAY_PACKET_GROUP_WIDTH % VKRAY_PACKET_COLUMNS == 0);
 
+// What the shader writes for `query` besides each ray's hit: the depth and normal of the nearest
+// hit or the first hits; nothing for an occlusion query or a count, whose answer is in the hits
+// buffer alone (16 bytes a ray neither written nor read back).
+AovSet given_ray_outputs(HitQuery query) {
+  return query == HitQuery::nearest ? AovSet{Aov::depth, Aov::normal} : AovSet{};
+}
+
 }  // namespace
 
 const char* given_ray_walk_name(GivenRayWalk walk) {
@@ -65,7 +72,7 @@ void Renderer::Impl::cast_given(const GivenRays& given, RaycastMode mode, uint32
   };
   // Ray k as traced: from the start of its range (RayRanges).
   auto traced = [&](size_t k) { return ranges.start(k) > 0.0 ? range_start_ray(rays[k], ranges.start(k)) : rays[k]; };
-  const AovSet aovs{Aov::depth, Aov::normal};
+  const AovSet aovs = given_ray_outputs(given.query);
   // The lo parts of positions as for a camera (needs_lo_parts), wherever any of the rays starts.
   bool lo_parts = origin && needs_lo_parts(anchor, scene_radius, *origin);
   if (!origin) {
@@ -129,6 +136,12 @@ void Renderer::Impl::cast_given(const GivenRays& given, RaycastMode mode, uint32
     };
     if (given.query == HitQuery::count) {  // one by one: no order
       std::memcpy(hits.crossings.data() + first, slots, count * sizeof(uint32_t));
+    } else if (given.query == HitQuery::any) {  // whether each ray hit: its slot alone
+      parallel_for_chunks(count, [&](size_t begin, size_t end) {
+        for (size_t p = begin; p < end; ++p) {
+          if (const size_t k = ray_at(first + p); k < rays.size()) hits.object[k] = hit_sources(slots[p]).object;
+        }
+      });
     } else if (!order && precision() == Precision::float32 && ranges.t_min.empty() && given.hits == 1) {  // in place: the planes as they are, the ids named
       const auto* unit_normals = static_cast<const float*>(tile.normal->host());
       std::memcpy(hits.t.data() + first, tile.depth->host(), count * sizeof(float));
@@ -180,14 +193,18 @@ RayHits Renderer::Impl::cast_rays(const GivenRays& given) {
     throw InputError("hits: " + std::to_string(given.hits) + " is not between 1 and " + std::to_string(VKRAY_HITS_MAX));
   }
   RayHits hits;
-  hits.allocate(rays.size() * given.hits, precision() == Precision::float64);
   hits.hits_per_ray = given.hits;
-  if (given.query == HitQuery::count) hits.crossings.resize(rays.size());
+  if (given.query == HitQuery::count) {
+    hits.count = rays.size();
+    hits.crossings.resize(rays.size());
+  } else {
+    hits.allocate(rays.size() * given.hits, precision() == Precision::float64);
+  }
   reset_timings();
   if (rays.empty()) return hits;
 
   with_vulkan_errors("casting rays", [&] {
-    const AovSet aovs{Aov::depth, Aov::normal};
+    const AovSet aovs = given_ray_outputs(given.query);
     // Rows of `width` holding `positions`, at most as many as the device's buffers hold.
     auto tile_rows = [&](uint32_t width, size_t positions, RaycastMode mode) {
       const auto rows = static_cast<uint32_t>(std::min<size_t>((positions + width - 1) / width, UINT32_MAX));

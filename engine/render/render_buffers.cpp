@@ -80,7 +80,7 @@ void Renderer::Impl::prepare_tile(uint32_t width, uint32_t rows, AovSet aovs, co
       tile.rays = texel_views_of(context, create_upload_buffer(context, bytes, geometry_usage));
     }
     if ((is_given(mode) && !in_place) || (!target && aovs.has(Aov::hit))) tile.hits = make_output(pixels * layers, sizeof(uint32_t));
-    if ((stats.loop_budget > 0 && aovs.needs_rays()) || in_place) {
+    if ((stats.loop_budget > 0 && (aovs.needs_rays() || is_given(mode))) || in_place) {
       tile.overflow = make_output(pixels, sizeof(uint32_t), sizeof(uint32_t));
     }
   }

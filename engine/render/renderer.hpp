@@ -101,7 +101,8 @@ struct RayHits {
   // empty for the float32 shader.
   UninitializedVector<double> t64, normal64;
   // HitQuery::count alone: how many surfaces each ray crosses (Renderer::count_intersections); the
-  // arrays above are then left as they are.
+  // arrays above are then empty. HitQuery::any writes `object` alone (but for rays the host
+  // finished: Renderer::occluded reads no more).
   UninitializedVector<uint32_t> crossings;
   // Room for `ray_count` rays, their values unset: cast_rays stores every one.
   void allocate(size_t ray_count, bool doubles = false);
