@@ -2,8 +2,9 @@
 // in a temporary copy of the layout the README assumes (build/vkray, ../shared/models, docs/ with
 // its bench scenes, a scene.json made of the README's own scene example). So an option renamed, removed or misspelt in
 // the README fails here. To keep the suite short, image sizes are cut to 64x36, the bench to one
-// frame of one round and the rays suite to 4096 rays a kind: what this checks is that each command is accepted and works, not the figures beside it
-// (those come from the commands as printed, re-run by hand). `view` commands run under xvfb-run for
+// frame of one round and the rays suite to 4096 rays a kind: what this checks is that each
+// command is accepted and works, not the figures beside it (those come from the commands as
+// printed, re-run by hand). `view` commands run under xvfb-run for
 // two frames. The setup and test commands (install-deps, cmake, ctest) are what CI itself runs.
 #include "tests/temp_dir_test.hpp"
 

@@ -99,7 +99,8 @@ constexpr double infinity = std::numeric_limits<double>::infinity();
 // node boxes keep their faces off what they hold (see enter_box).
 constexpr double box_margin = 1e-200;
 double step(double v, double direction) {
-  return direction < 0 ? std::min(std::nextafter(v, -infinity), v - box_margin) : std::max(std::nextafter(v, infinity), v + box_margin);
+  return direction < 0 ? std::min(std::nextafter(v, -infinity), v - box_margin)
+                       : std::max(std::nextafter(v, infinity), v + box_margin);
 }
 glm::dvec3 below(const glm::dvec3& v) { return {step(v.x, -1), step(v.y, -1), step(v.z, -1)}; }
 glm::dvec3 above(const glm::dvec3& v) { return {step(v.x, 1), step(v.y, 1), step(v.z, 1)}; }
@@ -148,7 +149,9 @@ ReferenceScene::ReferenceScene(const Scene& scene, Mask ray_mask)
   std::vector<TreeEntry> entries;
   std::vector<Box> boxes;
   std::vector<bool> placed_mesh(scene.meshes.size(), false);
-  for (const Instance& instance : scene.instances) placed_mesh[instance.mesh] = placed_mesh[instance.mesh] || mask_hits(instance.mask, ray_mask);
+  for (const Instance& instance : scene.instances) {
+    if (mask_hits(instance.mask, ray_mask)) placed_mesh[instance.mesh] = true;
+  }
   for (size_t m = 0; m < scene.meshes.size(); ++m) {
     const Mesh& mesh = scene.meshes[m];
     first_triangle_of_mesh_.push_back(index);
