@@ -36,6 +36,8 @@ const OutputInfo output_table[] = {
      OutputError::mismatches, "id_mismatches", "ids", nullptr, &Frame::mesh_id},
     {Aov::primitive_id, "primitive-id", "triangle hit, in its file", 1, true, OutputSource::ids, {"primitive_id"}, false,
      OutputError::mismatches, "id_mismatches", "ids", nullptr, &Frame::primitive_id},
+    {Aov::instance_id, "instance-id", "instance placing the mesh hit", 1, true, OutputSource::ids, {"instance_id"}, false,
+     OutputError::mismatches, "id_mismatches", "ids", nullptr, &Frame::instance_id},
     {Aov::barycentric, "barycentric", "weights of the triangle's second and third vertices", 2, false,
      OutputSource::surface, {"barycentric.U", "barycentric.V"}, false, OutputError::absolute_max, "barycentric_max",
      "bary", &Frame::barycentric},
@@ -130,7 +132,7 @@ AovSet computed_outputs(AovSet aovs) {
   for (const auto& output : output_table) {
     if (aovs.on_device().has(output.aov)) computed.add(output.aov);
   }
-  if (aovs.has_surface_outputs()) computed.add(Aov::mesh_id), computed.add(Aov::primitive_id);
+  if (aovs.has_surface_outputs()) computed.add(Aov::mesh_id), computed.add(Aov::primitive_id), computed.add(Aov::instance_id);
   return computed;
 }
 
@@ -183,9 +185,10 @@ void fill_pixel_uv(Frame& frame) {
   }, 16);
 }
 
-void store_ids(Frame& frame, size_t pixel, ObjectPrimitive source) {
+void store_ids(Frame& frame, size_t pixel, ObjectPrimitive source, uint32_t instance) {
   if (!frame.mesh_id.empty()) frame.mesh_id[pixel] = source.object;
   if (!frame.primitive_id.empty()) frame.primitive_id[pixel] = source.primitive;
+  if (!frame.instance_id.empty()) frame.instance_id[pixel] = instance;
 }
 
 void add_camera_outputs(Frame& frame) {

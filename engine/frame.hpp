@@ -35,6 +35,7 @@ enum class Aov : uint32_t {
   shading_normal = 1024,
   texcoord = 2048,
   front_facing = 4096,
+  instance_id = 8192,
 };
 
 // Where an output is computed: on the device (depth, normal, uv); on the host from the depth and
@@ -138,6 +139,8 @@ struct Frame {
   // the primitive within it; no_object on a miss.
   std::vector<uint32_t> mesh_id;
   std::vector<uint32_t> primitive_id;
+  // The instance placing the mesh hit (Scene::instances), no_object for anything else and a miss.
+  std::vector<uint32_t> instance_id;
   // The surface outputs (README, "Output contract"), 0 where nothing or no triangle gives them: the
   // hit's weights of its triangle's second and third vertices (2 planes), the shading normal (3
   // planes), the texture coordinates (2 planes) and the side of the primitive the ray meets.
@@ -170,7 +173,8 @@ struct Frame {
 };
 
 // mesh_id and primitive_id of `pixel`, where the frame has them (for the ids or the surface outputs).
-void store_ids(Frame& frame, size_t pixel, ObjectPrimitive source);
+// `instance`: the instance placing the mesh hit, or no_object.
+void store_ids(Frame& frame, size_t pixel, ObjectPrimitive source, uint32_t instance = no_object);
 
 // The uv output: every pixel's image-plane coordinates (pixel_uv).
 void fill_pixel_uv(Frame& frame);

@@ -5,6 +5,7 @@
 #include "engine/unit_vector.hpp"
 
 #include <glm/geometric.hpp>
+#include <glm/matrix.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -80,9 +81,19 @@ glm::dvec3 facing(const glm::dvec3& normal, const glm::dvec3& dir) { return glm:
 
 }  // namespace
 
-SurfaceAt surface_at(const Scene& scene, ObjectPrimitive hit, const glm::dvec3& origin, const glm::dvec3& dir, double t) {
+SurfaceAt surface_at(const Scene& scene, ObjectPrimitive hit, const glm::dvec3& origin, const glm::dvec3& dir, double t,
+                     uint32_t instance) {
   const size_t meshes = scene.meshes.size(), spheres = scene.spheres.size();
   SurfaceAt surface;
+  if (hit.object < meshes && instance != no_object) {
+    const Instance& placement = scene.instances[instance];
+    const glm::dmat3 to_mesh = glm::inverse(placement.linear);
+    const auto [mesh_origin, mesh_dir] = ray_in_mesh(placement.translation, to_mesh, origin, dir);
+    surface = triangle_surface(scene.meshes[hit.object], hit.primitive, mesh_origin, mesh_dir, t);
+    surface.shading_normal = unit_vector(glm::transpose(to_mesh) * surface.shading_normal);
+    if (glm::determinant(placement.linear) < 0.0) surface.front = !surface.front;
+    return surface;
+  }
   if (hit.object < meshes) return triangle_surface(scene.meshes[hit.object], hit.primitive, origin, dir, t);
   if (hit.object < meshes + spheres) {
     // A sphere's front is its outside: the ray starts outside it.
@@ -113,7 +124,8 @@ void add_surface_outputs(Frame& frame, const Scene& scene) {
         if (object == no_object) continue;  // the outputs stay 0
         const PixelRay ray = pixel_ray(*frame.camera, basis, i, j, frame.width, frame.height);
         const double t = frame.depth64.empty() ? double{frame.depth[p]} : frame.depth64[p];
-        const SurfaceAt surface = surface_at(scene, {object, primitive}, ray.origin, ray.direction, t);
+        const uint32_t instance = frame.instance_id.empty() ? no_object : frame.instance_id[p];
+        const SurfaceAt surface = surface_at(scene, {object, primitive}, ray.origin, ray.direction, t, instance);
         for (int c = 0; c < 2; ++c) {
           if (!frame.barycentric.empty()) frame.barycentric[c * pixels + p] = static_cast<float>(surface.barycentric[c]);
           if (!frame.texcoord.empty()) frame.texcoord[c * pixels + p] = static_cast<float>(surface.texcoord[c]);

@@ -34,6 +34,11 @@ struct SurfaceAt {
   glm::dvec2 texcoord{0.0};
   bool front = false;
 };
-SurfaceAt surface_at(const Scene& scene, ObjectPrimitive hit, const glm::dvec3& origin, const glm::dvec3& dir, double t);
+// A triangle an instance places (`instance`, else no_object) is evaluated in its mesh's coordinates,
+// the ray taken there as the reference takes it; its shading normal comes back through the inverse
+// transpose (which keeps the side of the ray it lies on), and a mirroring instance turns its winding
+// over: front where the placed vertices run counter-clockwise, as the scene flattened would have it.
+SurfaceAt surface_at(const Scene& scene, ObjectPrimitive hit, const glm::dvec3& origin, const glm::dvec3& dir, double t,
+                     uint32_t instance = no_object);
 
 }  // namespace vkray

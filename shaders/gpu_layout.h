@@ -68,10 +68,14 @@ using uvec4 = glm::uvec4;
 // With VKRAY_SPEC_MASKS: the masks of the spheres tested one by one, then of the planes, one a
 // texel (x; the tree's primitives carry theirs in GpuPrimitive).
 #define VKRAY_BINDING_APART_MASKS 20     // texels, RGBA32UI
+// With VKRAY_SPEC_INSTANCES: the instances (VKRAY_TEXELS_PER_INSTANCE_*), and with WRITE_HIT or given rays, the
+// instance each ray hit (VKRAY_NO_INSTANCE for none), beside VKRAY_BINDING_HITS.
+#define VKRAY_BINDING_INSTANCES 21       // texels, as positions
+#define VKRAY_BINDING_INSTANCE_HITS 22   // storage buffer
 // The ray-query traversal's top-level acceleration structure (VKRAY_SEARCH_RAY_QUERY): in its
 // pipelines' descriptor sets alone, the last binding.
-#define VKRAY_BINDING_TOP_STRUCTURE 21
-#define VKRAY_BINDING_COUNT 22
+#define VKRAY_BINDING_TOP_STRUCTURE 23
+#define VKRAY_BINDING_COUNT 24
 
 // How the shader finds the nearest triangle or sphere (VKRAY_SPEC_SEARCH_MODE). Planes are
 // infinite: they stay outside the tree, in their own loop.
@@ -235,7 +239,11 @@ VKRAY_SHARED_FUNCTION uint direction_key(float x, float y, float z, uint bits) {
 // each output's planes. 1: the nearest hit alone.
 #define VKRAY_SPEC_HITS 25
 #define VKRAY_HITS_MAX 16
-#define VKRAY_SPEC_COUNT 26
+// The scene places meshes by instances (Scene::instances): the tree's leaves may hold an instance
+// (VKRAY_PRIMITIVE_INSTANCE), whose mesh's own tree the ray then walks in the mesh's coordinates
+// (primitives.glsl). Without, no instance is read or tested.
+#define VKRAY_SPEC_INSTANCES 26
+#define VKRAY_SPEC_COUNT 27
 #define VKRAY_STACK_REGISTERS_MAX 32
 
 #define VKRAY_SPHERE_STABLE 0               // Ray Tracing Gems ch. 7 (intersect.glsl)
@@ -322,6 +330,8 @@ struct GpuPrimitive {
 VKRAY_CHECK_SIZE(GpuPrimitive, 16);
 #define VKRAY_PRIMITIVE_TRIANGLE 0u
 #define VKRAY_PRIMITIVE_SPHERE 1u
+// x = the instance's index (VKRAY_BINDING_INSTANCES), y = its mesh's root node; only in the world's tree.
+#define VKRAY_PRIMITIVE_INSTANCE 2u
 #define VKRAY_PRIMITIVE_KIND_BITS 0xffu
 #define VKRAY_PRIMITIVE_MASK_SHIFT 8
 #define VKRAY_TEXELS_PER_POINT 2
@@ -346,6 +356,23 @@ struct GpuBvhNode {
   uvec4 children;  // x, y: child references; z, w: 0
 };
 VKRAY_CHECK_SIZE(GpuBvhNode, 64);
+
+// An instance (VKRAY_TEXELS_PER_INSTANCE_* texels): what takes a ray into its mesh's coordinates, where the mesh's triangles (their
+// vertices relative to the mesh's own origin) and tree (nodes after the world's, boxes in the mesh's
+// coordinates) are stored once for all its instances. A ray (o, d) becomes (A (o - T), A d), A the
+// inverse of the instance's linear map and T its translation relative to the anchor: the same t in
+// both, so one bound serves both walks; o - T is formed first, from hi and lo parts as positions
+// are, so it is accurate to float32 relative to the ray's distance from the instance however far
+// both lie from the anchor.
+// - float32 shaders: rows k = 0, 1, 2 of A in texel k's xyz, T's hi part in their w, T's lo part in
+//   texel 3's xyz. 64 bytes.
+// - float64 shaders: the rows of A, each with T's component in w, as three GpuPoints. 96 bytes.
+// The world tree's record of an instance holds its index and its mesh's root node
+// (VKRAY_PRIMITIVE_INSTANCE).
+#define VKRAY_TEXELS_PER_INSTANCE_FLOAT32 4
+#define VKRAY_TEXELS_PER_INSTANCE_FLOAT64 6
+// What an instance hit reads for no instance: the world's own triangles and spheres.
+#define VKRAY_NO_INSTANCE 0xffffffffu
 
 // Node boxes are widened by at least this much beyond what they hold (see safe_inverse in
 // shaders/intersect.glsl); relative to a scene's size that is nothing for any scene float32 can hold.

@@ -24,6 +24,7 @@ const bool ANY_HIT = HIT_QUERY == VKRAY_HIT_QUERY_ANY;
 const bool COUNT_CROSSINGS = HIT_QUERY == VKRAY_HIT_QUERY_COUNT;
 layout(constant_id = VKRAY_SPEC_MASKS) const bool MASKS = false;
 layout(constant_id = VKRAY_SPEC_HITS) const uint HITS = 1u;
+layout(constant_id = VKRAY_SPEC_INSTANCES) const bool INSTANCES = false;
 const bool FIRST_HITS = HITS > 1u;
 // Crossings counted or listed are each met once: an edge or vertex a ray passes exactly through,
 // a tree's lone leaf.
@@ -58,6 +59,7 @@ GEOMETRY_BUFFER(VKRAY_BINDING_NORMALS, GeometryTexel, GeometrySampler, normals);
 GEOMETRY_BUFFER(VKRAY_BINDING_BVH_BOUNDS, vec4, samplerBuffer, bvh_bounds);        // GpuBvhNode: 4 texels
 GEOMETRY_BUFFER(VKRAY_BINDING_BVH_LINKS, uvec4, usamplerBuffer, bvh_links);        // the same, as uints
 GEOMETRY_BUFFER(VKRAY_BINDING_APART_MASKS, uvec4, usamplerBuffer, apart_masks);    // MASKS only
+GEOMETRY_BUFFER(VKRAY_BINDING_INSTANCES, GeometryTexel, GeometrySampler, instances);  // INSTANCES only
 
 // The call's ray mask (RayGenParams.counts.w), set by main before any search. A primitive counts
 // only where its mask shares a bit with it: tested after the intersection, which leaves every
@@ -183,12 +185,14 @@ struct PrimitiveHit {
   real3 normal;     // geometric normal facing the ray, not yet unit length
   bool unfinished;  // the walk ran out of LOOP_BUDGET: the host must finish this ray
   uint id;          // what was hit (VKRAY_BINDING_HITS): its slot, a tagged sphere, or VKRAY_HIT_NONE
+  uint instance;    // the instance placing it (VKRAY_BINDING_INSTANCE_HITS), or VKRAY_NO_INSTANCE
 };
 
 // The nearest hit among primitive slots so far; the normal is computed once, for the winner.
 struct SlotHit {
   real t;
   uint slot;
+  uint instance;  // INSTANCES: the instance placing the slot's triangle, or VKRAY_NO_INSTANCE
 };
 
 // The vertices of a triangle relative to the ray origin.
@@ -286,7 +290,7 @@ real3 primitive_normal(uint slot, Origin origin, real3 dir) {
 // Every sphere, then every triangle in batches of VKRAY_TRIANGLE_BATCH (one loop iteration each).
 PrimitiveHit nearest_primitive_brute_force(RayFrame frame, Origin origin, real3 dir, real t_max, uint sphere_count,
                                            uint triangle_slots) {
-  PrimitiveHit result = PrimitiveHit(t_max, real3(0.0), false, VKRAY_HIT_NONE);
+  PrimitiveHit result = PrimitiveHit(t_max, real3(0.0), false, VKRAY_HIT_NONE, VKRAY_NO_INSTANCE);
   for (uint i = 0; i < sphere_count; ++i) {
     real3 normal;
     real far_root;
@@ -301,14 +305,14 @@ PrimitiveHit nearest_primitive_brute_force(RayFrame frame, Origin origin, real3 
       result.id = VKRAY_HIT_SPHERE_APART | i;
     }
   }
-  SlotHit hit = SlotHit(result.t, no_primitive);
+  SlotHit hit = SlotHit(result.t, no_primitive, VKRAY_NO_INSTANCE);
   for (uint batch = 0; batch < triangle_slots; batch += VKRAY_TRIANGLE_BATCH) {
     [[unroll]] for (uint k = 0; k < VKRAY_TRIANGLE_BATCH; ++k) test_triangle(frame, origin, dir, batch + k, hit);
   }
   if (FIRST_HITS) {
     result.t = hit.t;  // the list's bound; its hits' normals are read when they are written
   } else if (hit.slot != no_primitive) {
-    result = PrimitiveHit(hit.t, primitive_normal(hit.slot, origin, dir), false, hit.slot);
+    result = PrimitiveHit(hit.t, primitive_normal(hit.slot, origin, dir), false, hit.slot, VKRAY_NO_INSTANCE);
   }
   return result;
 }
@@ -346,12 +350,73 @@ uint pop_registers(inout RegisterStack s) {
   return entry;
 }
 
+// INSTANCES: instance `index`'s rows of A and its translation T (see VKRAY_TEXELS_PER_INSTANCE_*).
+struct Placement {
+  real3 row0, row1, row2;
+#ifdef VKRAY_FLOAT64
+  dvec3 translation;
+#else
+  vec3 translation_hi, translation_lo;
+#endif
+};
+
+Placement fetch_placement(uint index) {
+#ifdef VKRAY_FLOAT64
+  int first = VKRAY_TEXELS_PER_INSTANCE_FLOAT64 * int(index);
+  dvec4 r0 = point_from_texels(FETCH(instances, first), FETCH(instances, first + 1)).value;
+  dvec4 r1 = point_from_texels(FETCH(instances, first + 2), FETCH(instances, first + 3)).value;
+  dvec4 r2 = point_from_texels(FETCH(instances, first + 4), FETCH(instances, first + 5)).value;
+  return Placement(r0.xyz, r1.xyz, r2.xyz, dvec3(r0.w, r1.w, r2.w));
+#else
+  int first = VKRAY_TEXELS_PER_INSTANCE_FLOAT32 * int(index);
+  vec4 r0 = FETCH(instances, first), r1 = FETCH(instances, first + 1), r2 = FETCH(instances, first + 2);
+  vec3 lo = use_lo_parts ? FETCH(instances, first + 3).xyz : vec3(0.0);
+  return Placement(r0.xyz, r1.xyz, r2.xyz, vec3(r0.w, r1.w, r2.w), lo);
+#endif
+}
+
+// A times v, each row's dot product `precise` (the same bits in every pipeline).
+real3 times_rows(Placement placement, real3 v) {
+  precise real3 product = real3(dot(placement.row0, v), dot(placement.row1, v), dot(placement.row2, v));
+  return product;
+}
+
+// The ray in the instance's mesh coordinates: origin A (o - T), o - T from hi and lo parts as a
+// vertex relative to the camera is, and direction A d (not unit length: t stays the world's).
+void ray_in_mesh(Placement placement, Origin origin, real3 dir, out Origin mesh_origin, out real3 mesh_dir) {
+#ifdef VKRAY_FLOAT64
+  mesh_origin = Origin(times_rows(placement, origin.position - placement.translation));
+#else
+  vec3 from_instance = -relative_to_camera(placement.translation_hi, placement.translation_lo, origin.hi, origin.lo);
+  mesh_origin = Origin(times_rows(placement, from_instance), vec3(0.0));
+#endif
+  mesh_dir = times_rows(placement, dir);
+}
+
+// A mesh normal of the instance in world coordinates, facing the world's ray: A^T n (the inverse
+// transpose of the linear map). Whether it faces the ray is the same in both coordinates,
+// (A^T n).d = n.(A d).
+real3 instance_normal(uint slot, uint instance, real3 dir) {
+  Placement placement = fetch_placement(instance);
+  real3 normal = fetch_normal(int(slot));
+  precise real3 world = normal.x * placement.row0 + normal.y * placement.row1 + normal.z * placement.row2;
+  return facing_the_ray(world, dir);
+}
+
+// An entry the walk pushes below an instance's mesh tree: reached, the walk returns to the world's ray.
+const uint instance_marker = 0x7ffffffeu;
+
 // The tree walk, nearer child first, the other on a stack; boxes entered beyond the nearest hit so
 // far are skipped. Each iteration takes one step down the tree and tests one primitive of the leaf
 // found last: llvmpipe runs both sides of every branch masked, so an iteration costs the node step
 // plus the primitive test whatever the ray needs; doing both every time wastes neither. (A node may
 // be tested against a nearest hit not yet updated by its leaf's last primitive; that only makes the
 // test looser, never culls a hit.) An occlusion query (ANY_HIT) stops at its first hit.
+// An instance met in a leaf (INSTANCES) turns the ray into its mesh's coordinates and continues the
+// same loop in the mesh's tree: what remained of the world's walk (the node being stepped, the
+// leaf's other primitives) goes on the stack under instance_marker, whose pop restores the world's
+// ray once the mesh's last leaf is done. One loop keeps lavapipe's lanes in step whichever level
+// each is on. One level of instances: an instanced mesh's tree holds triangles alone.
 PrimitiveHit nearest_primitive_in_tree(RayFrame frame, Origin origin, real3 dir, real t_max) {
   real3 inv_dir = safe_inverse(dir);
 #ifdef VKRAY_FLOAT64
@@ -361,12 +426,32 @@ PrimitiveHit nearest_primitive_in_tree(RayFrame frame, Origin origin, real3 dir,
   vec3 box_origin = origin.hi;
   vec3 box_margin = abs(origin.lo);
 #endif
-  SlotHit hit = SlotHit(t_max, no_primitive);
+  // The ray the walk tests with: the world's, or an instance's mesh's (INSTANCES).
+  RayFrame walk_frame = frame;
+  Origin walk_origin = origin;
+  real3 walk_dir = dir;
+  real3 walk_inv_dir = inv_dir;
+  real3 walk_box_origin = box_origin;
+  vec3 walk_box_margin = box_margin;
+  uint instance = VKRAY_NO_INSTANCE;
+  SlotHit hit = SlotHit(t_max, no_primitive, VKRAY_NO_INSTANCE);
   bool unfinished = false;
-  uint stack[VKRAY_BVH_MAX_DEPTH];  // STACK_REGISTERS == 0 only
+  // A walk holds at most one entry per inner node on its path; an instance's adds three.
+  uint stack[INSTANCES ? 2 * VKRAY_BVH_MAX_DEPTH + 3 : VKRAY_BVH_MAX_DEPTH];  // STACK_REGISTERS == 0 only
   RegisterStack registers = RegisterStack(uvec4(0u), uvec4(0u), uvec4(0u), uvec4(0u), uvec4(0u), uvec4(0u), uvec4(0u),
                                           uvec4(0u));
   uint stack_size = 0;
+#define PUSH_ENTRY(entry)                                   \
+  if (STACK_REGISTERS > 0) push_registers(registers, entry); \
+  else stack[stack_size] = entry;                            \
+  ++stack_size;
+#define POP_ENTRY(into)                                                        \
+  if (stack_size == 0) {                                                       \
+    into = no_node;                                                            \
+  } else {                                                                     \
+    --stack_size;                                                              \
+    into = STACK_REGISTERS > 0 ? pop_registers(registers) : stack[stack_size]; \
+  }
   uint current = 0;  // the root, always an inner node
   uint leaf_next = 0;  // the leaf's primitives still to test: [leaf_next, leaf_end)
   uint leaf_end = 0;
@@ -377,10 +462,52 @@ PrimitiveHit nearest_primitive_in_tree(RayFrame frame, Origin origin, real3 dir,
       break;
     }
     ++iterations;
-    if (leaf_next < leaf_end) test_primitive(frame, origin, dir, leaf_next++, hit);
+    if (leaf_next < leaf_end) {
+      uint slot = leaf_next++;
+      uvec4 record = INSTANCES ? FETCH(primitives, int(slot)) : uvec4(0u);
+      if (INSTANCES && (record.w & VKRAY_PRIMITIVE_KIND_BITS) == VKRAY_PRIMITIVE_INSTANCE) {
+        if (slot_visible(slot)) {
+          if (current != no_node) {
+            PUSH_ENTRY(current)
+          }
+          if (leaf_next < leaf_end) {
+            PUSH_ENTRY(VKRAY_BVH_LEAF_BIT | (leaf_next << VKRAY_BVH_LEAF_COUNT_BITS) | (leaf_end - leaf_next - 1u))
+          }
+          PUSH_ENTRY(instance_marker)
+          instance = record.x;
+          ray_in_mesh(fetch_placement(instance), origin, dir, walk_origin, walk_dir);
+          walk_frame = make_ray_frame(walk_dir);
+          walk_inv_dir = safe_inverse(walk_dir);
+#ifdef VKRAY_FLOAT64
+          walk_box_origin = walk_origin.position;
+#else
+          walk_box_origin = walk_origin.hi;
+#endif
+          walk_box_margin = vec3(0.0);
+          current = record.y;
+          leaf_next = leaf_end;
+        }
+      } else {
+        real before = hit.t;
+        test_primitive(walk_frame, walk_origin, walk_dir, slot, hit);
+        if (INSTANCES && hit.t != before) hit.instance = instance;
+      }
+    }
 
     bool pop = false;
-    if ((current & VKRAY_BVH_LEAF_BIT) != 0) {
+    if (INSTANCES && current == instance_marker) {
+      // Back to the world's ray once the mesh's last leaf is done.
+      if (leaf_next == leaf_end) {
+        walk_frame = frame;
+        walk_origin = origin;
+        walk_dir = dir;
+        walk_inv_dir = inv_dir;
+        walk_box_origin = box_origin;
+        walk_box_margin = box_margin;
+        instance = VKRAY_NO_INSTANCE;
+        pop = true;
+      }
+    } else if ((current & VKRAY_BVH_LEAF_BIT) != 0) {
       // A leaf waits until the previous one is done.
       if (leaf_next == leaf_end) {
         leaf_next = (current & ~VKRAY_BVH_LEAF_BIT) >> VKRAY_BVH_LEAF_COUNT_BITS;
@@ -390,20 +517,14 @@ PrimitiveHit nearest_primitive_in_tree(RayFrame frame, Origin origin, real3 dir,
     } else if (current != no_node) {
       real2 enter;
       bvec2 hits = ray_hits_boxes(FETCH(bvh_bounds, 4 * int(current)), FETCH(bvh_bounds, 4 * int(current) + 1),
-                                  FETCH(bvh_bounds, 4 * int(current) + 2), box_origin, box_margin, inv_dir,
-                                  hit.t, enter);
+                                  FETCH(bvh_bounds, 4 * int(current) + 2), walk_box_origin, walk_box_margin,
+                                  walk_inv_dir, hit.t, enter);
       uvec2 children = FETCH(bvh_links, 4 * int(current) + 3).xy;
       // A tree of one leaf is a root with that leaf as both children (Bvh::nodes): visited once.
       if (EVERY_CROSSING_ONCE && children.x == children.y) hits.y = false;
       bool second_first = hits.y && (!hits.x || enter.y < enter.x);
       if (hits.x && hits.y) {
-        uint later = second_first ? children.x : children.y;
-        if (STACK_REGISTERS > 0) {
-          push_registers(registers, later);
-        } else {
-          stack[stack_size] = later;
-        }
-        ++stack_size;
+        PUSH_ENTRY(second_first ? children.x : children.y)
         current = second_first ? children.y : children.x;
       } else if (hits.x || hits.y) {
         current = hits.x ? children.x : children.y;
@@ -412,16 +533,16 @@ PrimitiveHit nearest_primitive_in_tree(RayFrame frame, Origin origin, real3 dir,
       }
     }
     if (pop) {
-      if (stack_size == 0) {
-        current = no_node;
-      } else {
-        --stack_size;
-        current = STACK_REGISTERS > 0 ? pop_registers(registers) : stack[stack_size];
-      }
+      POP_ENTRY(current)
     }
   }
-  PrimitiveHit result = PrimitiveHit(hit.t, real3(0.0), unfinished, hit.slot);
-  if (hit.slot != no_primitive && !FIRST_HITS) result.normal = primitive_normal(hit.slot, origin, dir);
+#undef PUSH_ENTRY
+#undef POP_ENTRY
+  PrimitiveHit result = PrimitiveHit(hit.t, real3(0.0), unfinished, hit.slot, hit.instance);
+  if (hit.slot != no_primitive && !FIRST_HITS) {
+    result.normal = INSTANCES && hit.instance != VKRAY_NO_INSTANCE ? instance_normal(hit.slot, hit.instance, dir)
+                                                                   : primitive_normal(hit.slot, origin, dir);
+  }
   return result;
 }
 

@@ -37,7 +37,7 @@ uint candidate_slot(rayQueryEXT query) {
 }
 
 PrimitiveHit nearest_primitive_ray_query(RayFrame frame, Origin origin, vec3 dir, float t_max) {
-  SlotHit hit = SlotHit(t_max, no_primitive);
+  SlotHit hit = SlotHit(t_max, no_primitive, VKRAY_NO_INSTANCE);
   bool unfinished = false;
   rayQueryEXT query;
   // The structures hold the hi parts of positions relative to the anchor, as float32: the query's
@@ -53,7 +53,7 @@ PrimitiveHit nearest_primitive_ray_query(RayFrame frame, Origin origin, vec3 dir
     // vkray's own test of the candidate, against the whole ray: "it misses" and "it hits, but not
     // nearer" must not look alike, or with crossing or coplanar triangles the device's float32
     // ordering would bring its distance and another triangle's normal.
-    SlotHit own = SlotHit(t_max, no_primitive);
+    SlotHit own = SlotHit(t_max, no_primitive, VKRAY_NO_INSTANCE);
     test_primitive(frame, origin, dir, slot, own);
     // Counting crossings or listing the first hits commits nothing, so the device proposes every
     // candidate along the range; test_primitive counted or listed this one where vkray's test takes
@@ -69,7 +69,7 @@ PrimitiveHit nearest_primitive_ray_query(RayFrame frame, Origin origin, vec3 dir
       // proposal is taken at the device's distance, one rounding away from the shared edge's
       // point; a pixel there lies on the boundary the error envelope allows either side of.
       const float device_t = rayQueryGetIntersectionTEXT(query, false);
-      if (device_t < hit.t) hit = SlotHit(device_t, slot);
+      if (device_t < hit.t) hit = SlotHit(device_t, slot, VKRAY_NO_INSTANCE);
     }
     if (hit.t < before) {
       // Committing it lets the device cull what lies beyond: at its own distance for a triangle,
@@ -99,7 +99,7 @@ PrimitiveHit nearest_primitive_ray_query(RayFrame frame, Origin origin, vec3 dir
                           0.0, dir, min(hit.t + window, 3.4e38) - start);
     while (next_candidate(query, iterations, unfinished)) test_primitive(frame, origin, dir, candidate_slot(query), hit);
   }
-  PrimitiveHit result = PrimitiveHit(hit.t, vec3(0.0), unfinished, hit.slot);
+  PrimitiveHit result = PrimitiveHit(hit.t, vec3(0.0), unfinished, hit.slot, VKRAY_NO_INSTANCE);
   if (hit.slot != no_primitive && !FIRST_HITS) result.normal = primitive_normal(hit.slot, origin, dir);
   return result;
 }

@@ -37,6 +37,8 @@ const bool CALLER_ARRAYS = RAY_INPUT_KIND == VKRAY_RAY_INPUT_CALLER_DIRECTIONS;
 // Whether rays are cast at all: a camera's for depth or normal (uv alone needs none), given rays
 // always (an occlusion query or a count of crossings writes its hits alone).
 const bool CASTS_RAYS = WRITE_DEPTH || WRITE_NORMAL || RAY_INPUT;
+// Beside what each ray hit, the instance placing it (VKRAY_BINDING_INSTANCE_HITS).
+const bool WRITE_INSTANCE_HITS = INSTANCES && !COUNT_CROSSINGS && (WRITE_HIT || RAY_INPUT);
 
 layout(push_constant) uniform PushConstants { RayGenParams params; };
 
@@ -58,6 +60,7 @@ layout(std430, binding = VKRAY_BINDING_HIT_SOURCES) readonly buffer HitSourcesIn
 layout(std430, binding = VKRAY_BINDING_MESH_IDS) writeonly buffer MeshIdsOut { uint mesh_id_out[]; };
 layout(std430, binding = VKRAY_BINDING_PRIMITIVE_IDS) writeonly buffer PrimitiveIdsOut { uint primitive_id_out[]; };
 layout(std430, binding = VKRAY_BINDING_RAY_ORDER) readonly buffer RayOrder { uint ray_order[]; };
+layout(std430, binding = VKRAY_BINDING_INSTANCE_HITS) writeonly buffer InstanceHitsOut { uint instance_hit_out[]; };
 
 // The mesh id and primitive id of what a ray hit (VKRAY_HIT_*), as HitSources gives them on the host.
 uvec2 hit_source(uint hit) {
@@ -187,6 +190,7 @@ void main() {
   real primitive_t_max[VKRAY_PACKET_ROWS];
   real3 normal[VKRAY_PACKET_ROWS];
   uint hit_id[VKRAY_PACKET_ROWS];
+  uint hit_instance[VKRAY_PACKET_ROWS];  // INSTANCES
   bool unfinished[VKRAY_PACKET_ROWS];
   // CALLER_ARRAYS: each ray's index in the caller's arrays, and whether it can be traced here (from
   // the shared origin, with a direction that has one).
@@ -282,6 +286,7 @@ void main() {
     t_best[r] = inside[r] ? range_end : 0.0;
     normal[r] = real3(0.0);
     hit_id[r] = VKRAY_HIT_NONE;
+    hit_instance[r] = VKRAY_NO_INSTANCE;
     if (FIRST_HITS) clear_first_hits(t_best[r]);
 
     // Planes first; spheres and triangles then search up to VKRAY_PRIMITIVE_T_MAX (coincident
@@ -338,7 +343,7 @@ void main() {
     nearest_primitives_packet(origin, dirs, t_max, slots, packet_unfinished);
     for (uint r = 0; r < RAYS; ++r) {
       // The normal is read for the winner alone.
-      if (slots[r] != no_primitive) hits[r] = PrimitiveHit(t_max[r], primitive_normal(slots[r], origin, dirs[r]), false, slots[r]);
+      if (slots[r] != no_primitive) hits[r] = PrimitiveHit(t_max[r], primitive_normal(slots[r], origin, dirs[r]), false, slots[r], VKRAY_NO_INSTANCE);
       hits[r].unfinished = packet_unfinished;
     }
   }
@@ -351,6 +356,7 @@ void main() {
       t_best[r] = hits[r].t;
       normal[r] = hits[r].normal;
       hit_id[r] = hits[r].id;
+      hit_instance[r] = hits[r].instance;
     }
     uint out_index = tile_pixel[r].y * width + tile_pixel[r].x;
     if ((hits[r].unfinished || !traceable[r]) && inside[r]) {
@@ -403,6 +409,7 @@ void main() {
       continue;
     }
     if (RAY_INPUT || WRITE_HIT) hit_out[out_index] = COUNT_CROSSINGS ? crossings : hit_id[r];
+    if (WRITE_INSTANCE_HITS) instance_hit_out[out_index] = hit_instance[r];
     if (WRITE_DEPTH) depth_out[out_index] = t_best[r];
     if (WRITE_NORMAL) {
       normal_out[out_index] = normal[r].x;

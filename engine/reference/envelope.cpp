@@ -44,6 +44,7 @@
 #include "engine/reference/reference.hpp"
 
 #include <glm/geometric.hpp>
+#include <glm/matrix.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -69,17 +70,48 @@ bool same_primitive(const ReferenceHit& a, const ReferenceHit& b) {
   return a.kind == b.kind && a.index == b.index && a.instance == b.instance;
 }
 
+// The max-row-sum norm of a 3x3 matrix, which bounds what it does to componentwise errors.
+double row_sum_norm(const glm::dmat3& m) {
+  double norm = 0.0;
+  for (int row = 0; row < 3; ++row) norm = std::max(norm, std::abs(m[0][row]) + std::abs(m[1][row]) + std::abs(m[2][row]));
+  return norm;
+}
+
+// kappa = |L| |A| (row-sum norms) of the instance placing `hit`'s triangle (see primitive_reach), 1
+// for none.
+double placement_condition(const Scene& scene, const ReferenceHit& hit) {
+  if (hit.kind != PrimitiveKind::triangle || hit.instance == no_object) return 1.0;
+  const glm::dmat3& linear = scene.instances[hit.instance].linear;
+  return row_sum_norm(linear) * row_sum_norm(glm::inverse(linear));
+}
+
 // The distance from the camera of the farthest point that defines `hit`'s primitive (E above).
-// `triangle_reach` holds it for every triangle, numbered as the reference numbers them.
-double primitive_reach(const Scene& scene, const std::vector<double>& triangle_reach, const ReferenceHit& hit) {
+// `triangle_reach` holds it for every triangle of the world's, numbered as the reference numbers them.
+// A triangle an instance places is hit in its mesh's coordinates: the ray goes there in float32 as
+// A (o - T) and A d (A the inverse of the linear map L, rounded to float), each within a few eps of
+// |A| times what it transforms, and the vertices relative to that origin round as the world's do,
+// in mesh units. Back in the world, L multiplies all of it: the errors are those of a world triangle
+// times kappa = |L| |A| (row-sum norms), on a reach of |o - T| + E + t <= |o - T| + 2 E (the hit is
+// no farther than the triangle's farthest vertex).
+double primitive_reach(const Scene& scene, const std::vector<double>& triangle_reach, const ReferenceScene& reference,
+                       const ReferenceHit& hit) {
   const glm::dvec3& origin = scene.camera.from;
   switch (hit.kind) {
     case PrimitiveKind::sphere:
       return glm::length(scene.spheres[hit.index].center - origin) + scene.spheres[hit.index].radius;
     case PrimitiveKind::plane:
       return std::abs(glm::dot(scene.planes[hit.index].normal, scene.planes[hit.index].point - origin));
-    case PrimitiveKind::triangle:
-      return triangle_reach[hit.index];
+    case PrimitiveKind::triangle: {
+      if (hit.instance == no_object) return triangle_reach[hit.index];
+      const Instance& instance = scene.instances[hit.instance];
+      const ObjectPrimitive source = reference.source(hit);
+      const Mesh& mesh = scene.meshes[source.object];
+      double farthest = 0.0;
+      for (const uint32_t corner : mesh.triangles[source.primitive]) {
+        farthest = std::max(farthest, glm::length(placed(instance, mesh.positions[corner]) - origin));
+      }
+      return placement_condition(scene, hit) * (glm::length(origin - instance.translation) + 2.0 * farthest);
+    }
     default:
       return 0.0;
   }
@@ -91,7 +123,7 @@ std::vector<double> triangle_reaches(const Scene& scene) {
     for (const auto& corners : mesh.triangles) {
       double farthest = 0.0;
       for (uint32_t corner : corners) farthest = std::max(farthest, glm::length(mesh.positions[corner] - scene.camera.from));
-      reach.push_back(farthest);
+      reach.push_back(farthest);  // an instanced mesh's are unused: its instances' are found per hit
     }
   }
   return reach;
@@ -103,7 +135,11 @@ double reach_radius(const Scene& scene, const glm::dvec3& anchor) {
   for (const auto& sphere : scene.spheres) radius = std::max(radius, glm::length(sphere.center - anchor) + sphere.radius);
   for (const auto& plane : scene.planes) radius = std::max(radius, std::abs(glm::dot(plane.normal, plane.point - anchor)));
   for (const auto& mesh : scene.meshes) {
+    if (mesh.instanced) continue;
     for (const auto& p : mesh.positions) radius = std::max(radius, glm::length(p - anchor));
+  }
+  for (const auto& instance : scene.instances) {
+    for (const auto& p : scene.meshes[instance.mesh].positions) radius = std::max(radius, glm::length(placed(instance, p) - anchor));
   }
   return radius;
 }
@@ -155,7 +191,7 @@ EnvelopeReport check_against_reference(const Scene& scene, const Frame& frame, u
     const ReferenceHit& hit = samples[p].hits[0];
     if (hit.kind != PrimitiveKind::none) {
       // E from the camera, and as far again as an orthographic pixel's origin lies from it.
-      const double reach = primitive_reach(scene, triangle_reach, hit) + glm::length(ray.origin - camera.origin);
+      const double reach = primitive_reach(scene, triangle_reach, reference, hit) + glm::length(ray.origin - camera.origin);
       position_angle[p] = 2 * eps * (hit.t + reach) / hit.t;
     }
     samples[p].eta = pinhole ? direction_uncertainty(camera, pixel_uv(i, j, width, height)) : given_direction_uncertainty;
@@ -232,7 +268,7 @@ EnvelopeReport check_against_reference(const Scene& scene, const Frame& frame, u
       const ReferenceHit& main = s.hits[0].kind != PrimitiveKind::none ? s.hits[0] : *std::find_if(std::begin(s.hits), std::end(s.hits), [](const ReferenceHit& h) { return h.kind != PrimitiveKind::none; });
       if (main.kind == PrimitiveKind::sphere) curvature_radius = scene.spheres[main.index].radius;
       const double cos_theta = std::max(std::abs(glm::dot(main.normal, s.dir)), 1e-12);
-      const double reach = primitive_reach(scene, triangle_reach, main);
+      const double reach = primitive_reach(scene, triangle_reach, reference, main);
       const double position_slack = (16 * eps * (main.t + reach) + split_error) / cos_theta;
       const double grazing = stable ? 0.0 : std::sqrt(2 * s.eta);
       const double depth_lo = lo * (1 - grazing) - position_slack, depth_hi = hi * (1 + grazing) + position_slack;
@@ -243,7 +279,8 @@ EnvelopeReport check_against_reference(const Scene& scene, const Frame& frame, u
         failure = text;
       }
       // A surface shifted by d moves the hit along it by d / cos(theta): the normal turns by that over rho.
-      const double normal_slack = 16 * eps * (1 + reach / (curvature_radius * cos_theta)) +
+      // An instance's triangle normal is A^T n in float32: its error grows by kappa as positions' do.
+      const double normal_slack = 16 * eps * placement_condition(scene, main) * (1 + reach / (curvature_radius * cos_theta)) +
                                   split_error / (curvature_radius * cos_theta);
       double best = INFINITY;
       for (const auto& h : s.hits) {

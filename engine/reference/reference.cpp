@@ -109,24 +109,6 @@ Box triangle_box(const glm::dvec3& v0, const glm::dvec3& v1, const glm::dvec3& v
   return {glm::min(v0, glm::min(v1, v2)), glm::max(v0, glm::max(v1, v2))};
 }
 
-// The world box of `mesh_box` placed by `linear` and `translation`: its eight corners placed, and
-// 1e-12 of their magnitude more on each side. A triangle the ray meets in the mesh's coordinates lies
-// where the placed ray is, to the rounding of taking the ray there (a few units in the last place
-// of double): the margin, ten thousand times more, keeps the world's walk from culling it.
-Box placed_box(const Box& mesh_box, const glm::dmat3& linear, const glm::dvec3& translation) {
-  Bounds bounds;
-  glm::dvec3 magnitude = glm::abs(translation);
-  for (int corner = 0; corner < 8; ++corner) {
-    const glm::dvec3 p((corner & 1) ? mesh_box.upper.x : mesh_box.lower.x, (corner & 2) ? mesh_box.upper.y : mesh_box.lower.y,
-                       (corner & 4) ? mesh_box.upper.z : mesh_box.lower.z);
-    const glm::dvec3 placed_corner = linear * p + translation;
-    bounds.add(placed_corner);
-    magnitude = glm::max(magnitude, glm::abs(placed_corner));
-  }
-  const glm::dvec3 margin = 1e-12 * magnitude;
-  return {below(bounds.lower - margin), above(bounds.upper + margin)};
-}
-
 }  // namespace
 
 ReferenceScene::Tree ReferenceScene::build_tree(std::vector<TreeEntry> entries, const std::vector<Box>& boxes) {
@@ -189,7 +171,8 @@ ReferenceScene::ReferenceScene(const Scene& scene, Mask ray_mask)
     entries.push_back({PrimitiveKind::instance, k});
     const auto& root = mesh_tree.child_boxes[0];
     const Box mesh_box{glm::min(root[0].lower, root[1].lower), glm::max(root[0].upper, root[1].upper)};
-    boxes.push_back(placed_box(mesh_box, instance.linear, instance.translation));
+    const Bounds placed_bounds = placed_box({mesh_box.lower, mesh_box.upper}, instance);
+    boxes.push_back({below(placed_bounds.lower), above(placed_bounds.upper)});
   }
   for (uint32_t i = 0; i < spheres_.size(); ++i) {
     if (!mask_hits(spheres_[i].mask, ray_mask)) continue;
@@ -234,10 +217,7 @@ void ReferenceScene::walk_instance(uint32_t instance, const glm::dvec3& origin, 
 
 std::pair<glm::dvec3, glm::dvec3> ReferenceScene::ray_in_mesh(uint32_t instance, const glm::dvec3& origin,
                                                               const glm::dvec3& dir) const {
-  // The origin's difference first: near the instance it is exact or nearly (Sterbenz), however far
-  // both lie from the world's origin. Affine maps keep a ray's t: the same bound serves both walks.
-  const Placement& placement = instances_[instance];
-  return {placement.to_mesh * (origin - placement.translation), placement.to_mesh * dir};
+  return vkray::ray_in_mesh(instances_[instance].translation, instances_[instance].to_mesh, origin, dir);
 }
 
 namespace {
@@ -545,7 +525,7 @@ Frame reference_frame(const ReferenceScene& scene, const Scene& source, const st
   frame.allocate(doubles || aovs.has_camera_outputs());  // the camera outputs from the exact depth
   for (size_t p = 0; p < frame.pixel_count(); ++p) {
     store_reference_hit(frame, p, hits[p]);
-    if (aovs.has_ids() || aovs.has_surface_outputs()) store_ids(frame, p, scene.source(hits[p]));
+    if (aovs.has_ids() || aovs.has_surface_outputs()) store_ids(frame, p, scene.source(hits[p]), hits[p].instance);
   }
   if (aovs.has(Aov::uv)) fill_pixel_uv(frame);
   add_camera_outputs(frame);

@@ -38,12 +38,14 @@ double Renderer::Impl::dispatch_tile(const vk::raii::Pipeline& chosen, const gpu
                              {});
     bool copied = false;
     for (const auto* output :
-         {&tile.depth, &tile.normal, &tile.uv, &tile.overflow, &tile.hits, to_image ? &depth_range : nullptr}) {
+         {&tile.depth, &tile.normal, &tile.uv, &tile.overflow, &tile.hits, &tile.instance_hits, to_image ? &depth_range : nullptr}) {
       if (!output || !*output || !(*output)->readback) continue;
       const OutputBuffer& written = **output;
       // First hits fill a run of the tile's planes each (TileOutputs::layers).
       const vk::DeviceSize pixels = vk::DeviceSize{tile.width} * params.image.w *
-                                    (output == &tile.depth || output == &tile.normal || output == &tile.hits ? tile.layers : 1);
+                                    (output == &tile.depth || output == &tile.normal || output == &tile.hits || output == &tile.instance_hits
+                                         ? tile.layers
+                                         : 1);
       // Of the list of rays the CPU finishes, its count alone: it is almost always 0, and the rays it
       // lists are fetched when it is not (finish_unfinished). At 8K the whole list is 127 MiB a frame.
       const vk::DeviceSize bytes = output == &tile.overflow ? written.header_bytes : written.bytes_written(pixels);

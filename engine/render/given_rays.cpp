@@ -39,8 +39,9 @@ const char* given_ray_walk_name(GivenRayWalk walk) {
   }
 }
 
-void RayHits::allocate(size_t ray_count, bool doubles) {
+void RayHits::allocate(size_t ray_count, bool doubles, bool instances) {
   count = ray_count;
+  instance.resize(instances ? count : 0);
   t.resize(count);
   normal.resize(3 * count);
   object.resize(count);
@@ -49,7 +50,9 @@ void RayHits::allocate(size_t ray_count, bool doubles) {
   normal64.resize(doubles ? 3 * count : 0);
 }
 
-void RayHits::store(size_t ray, double distance, const glm::dvec3& unit_normal, ObjectPrimitive source) {
+void RayHits::store(size_t ray, double distance, const glm::dvec3& unit_normal, ObjectPrimitive source,
+                    uint32_t placing_instance) {
+  if (!instance.empty()) instance[ray] = placing_instance;
   t[ray] = static_cast<float>(distance);
   for (int c = 0; c < 3; ++c) normal[c * count + ray] = static_cast<float>(unit_normal[c]);
   if (!t64.empty()) {
@@ -119,6 +122,7 @@ void Renderer::Impl::cast_given(const GivenRays& given, RaycastMode mode, uint32
 
     const auto copy_start = Clock::now();
     const auto* slots = static_cast<const uint32_t*>(tile.hits->host());  // with HitQuery::count: crossings
+    const auto* instance_hits = tile.instance_hits ? static_cast<const uint32_t*>(tile.instance_hits->host()) : nullptr;
     const size_t plane_size = size_t{width} * params.image.w;  // the shader's planes span whole rows
     auto copy = [&]<typename T>(const T* depths, const T* unit_normals) {
       parallel_for_chunks(count, [&](size_t begin, size_t end) {
@@ -129,7 +133,8 @@ void Renderer::Impl::cast_given(const GivenRays& given, RaycastMode mode, uint32
             const size_t at = layer * plane_size + p;
             const T* layer_normals = unit_normals + 3 * layer * plane_size;
             const glm::dvec3 normal(layer_normals[p], layer_normals[plane_size + p], layer_normals[2 * plane_size + p]);
-            hits.store(k * given.hits + layer, ranges.start(k) + depths[at], normal, hit_sources(slots[at]));
+            hits.store(k * given.hits + layer, ranges.start(k) + depths[at], normal, hit_sources(slots[at]),
+                       instance_hits ? instance_hits[at] : no_object);
           }
         }
       });
@@ -153,6 +158,7 @@ void Renderer::Impl::cast_given(const GivenRays& given, RaycastMode mode, uint32
           const ObjectPrimitive source = hit_sources(slots[k]);
           hits.object[first + k] = source.object;
           hits.primitive[first + k] = source.primitive;
+          if (instance_hits) hits.instance[first + k] = instance_hits[k];
         }
       });
     } else if (precision() == Precision::float64) {
@@ -179,7 +185,7 @@ void Renderer::Impl::cast_given(const GivenRays& given, RaycastMode mode, uint32
           return;
         }
         const ReferenceHit hit = trace_reference_ray(*reference, rays[k], ranges.start(k), ranges.end(k));
-        hits.store(k, hit.t, hit.normal, reference->source(hit));
+        hits.store(k, hit.t, hit.normal, reference->source(hit), hit.instance);
       });
     }
   }
@@ -192,13 +198,15 @@ RayHits Renderer::Impl::cast_rays(const GivenRays& given) {
   if (given.hits < 1 || given.hits > VKRAY_HITS_MAX) {
     throw InputError("hits: " + std::to_string(given.hits) + " is not between 1 and " + std::to_string(VKRAY_HITS_MAX));
   }
+  // A list of first hits names slots alone, not the instance placing each (the reference can).
+  if (given.hits > 1 && instances.has_value()) throw InputError("hits: the device lists first hits in scenes without instances alone, yet");
   RayHits hits;
   hits.hits_per_ray = given.hits;
   if (given.query == HitQuery::count) {
     hits.count = rays.size();
     hits.crossings.resize(rays.size());
   } else {
-    hits.allocate(rays.size() * given.hits, precision() == Precision::float64);
+    hits.allocate(rays.size() * given.hits, precision() == Precision::float64, instances.has_value());
   }
   reset_timings();
   if (rays.empty()) return hits;

@@ -5,6 +5,8 @@
 #include "engine/unit_vector.hpp"
 
 #include <glm/geometric.hpp>
+#include <glm/gtc/matrix_access.hpp>
+#include <glm/matrix.hpp>
 
 #include <algorithm>
 #include <array>
@@ -266,10 +268,26 @@ void lay_out_for_ray_queries(GpuScene& gpu, const Scene& scene, std::vector<Enco
 
 // What the scene's counts decide (GpuSceneShape), for plan_gpu_scene before anything is built and
 // for make_gpu_scene with the triangles it keeps: one set of decisions, so the two agree.
-GpuSceneShape shape_for_counts(size_t triangles, size_t spheres, size_t planes, bool masks, const GpuSceneOptions& options) {
+// With instances, `triangles` counts the world's own and the instanced meshes' once each.
+GpuSceneShape shape_for_counts(size_t triangles, size_t spheres, size_t planes, size_t instances, bool masks,
+                               const GpuSceneOptions& options) {
   GpuSceneShape shape;
   shape.planes = static_cast<uint32_t>(planes);
   shape.masks = masks;
+  // (Instances of meshes without a triangle of non-zero area place nothing.)
+  shape.instances = instances > 0 && triangles > 0;
+  if (shape.instances) {
+    // Instances are walked into by the per-ray walk alone (nearest_primitive_in_tree).
+    if (options.search != PrimitiveSearch::automatic && options.search != PrimitiveSearch::bvh_per_ray) {
+      throw InputError(std::string("instances: the ") + search_info(options.search).name +
+                       " search cannot trace them yet; " + search_info(PrimitiveSearch::bvh_per_ray).name + " can");
+    }
+    shape.search = PrimitiveSearch::bvh_per_ray;
+    shape.spheres_apart = keeps_spheres_apart(triangles, spheres) ? static_cast<uint32_t>(spheres) : 0;
+    shape.tree_has_triangles = true;
+    shape.tree_has_spheres = spheres > 0 && shape.spheres_apart == 0;
+    return shape;
+  }
   shape.search = options.search == PrimitiveSearch::automatic ? choose_search(triangles, spheres, options.packet_walk)
                                                               : options.search;
   if (triangles == 0 && spheres == 0) shape.search = PrimitiveSearch::brute_force;
@@ -288,10 +306,84 @@ GpuSceneShape shape_for_counts(size_t triangles, size_t spheres, size_t planes, 
   return shape;
 }
 
+// Instanced mesh `mesh_index`'s triangles in its own coordinates (relative to its origin, not the
+// anchor: a ray is taken there), their vertices stored once for all its instances; the instance's
+// mask stands for theirs.
+std::vector<EncodedPrimitive> encode_instanced_mesh(GpuScene& gpu, const Scene& scene, uint32_t mesh_index) {
+  const Mesh& mesh = scene.meshes[mesh_index];
+  VertexTable vertex_table(gpu.vertices, gpu.precision);
+  std::vector<EncodedPrimitive> triangles;
+  for (uint32_t triangle_index = 0; triangle_index < mesh.triangles.size(); ++triangle_index) {
+    const CanonicalTriangle triangle = canonical_triangle(mesh, triangle_index, glm::dvec3(0.0));
+    if (triangle.normal == glm::dvec3(0.0)) {
+      gpu.left_out.push_back({mesh_index, triangle_index});
+      continue;
+    }
+    std::array<uint32_t, 3> index;
+    for (size_t c = 0; c < 3; ++c) index[c] = vertex_table.index(triangle.v[c]);
+    const gpu::GpuPrimitive record{glm::uvec4(index[0], index[1], index[2], primitive_word(VKRAY_PRIMITIVE_TRIANGLE, every_mask_bit))};
+    triangles.push_back({record, triangle.normal, triangle.box(), {mesh_index, triangle_index}});
+  }
+  return triangles;
+}
+
+// The instanced meshes' triangles and trees after the world's (their leaves' slots and inner nodes
+// offset to where they land), each instance's record given its mesh's root, and the instances'
+// texels (see VKRAY_TEXELS_PER_INSTANCE_* in gpu_layout.h).
+void lay_out_instanced_meshes(GpuScene& gpu, const Scene& scene,
+                              const std::vector<std::vector<EncodedPrimitive>>& instanced_triangles,
+                              const std::vector<Bvh>& mesh_trees) {
+  const size_t world_slots = gpu.primitives.size();
+  std::vector<uint32_t> root(scene.meshes.size(), 0);
+  uint32_t deepest = 0;
+  for (uint32_t m = 0; m < scene.meshes.size(); ++m) {
+    if (instanced_triangles[m].empty()) continue;
+    const Bvh& tree = mesh_trees[m];
+    const auto first_slot = static_cast<uint32_t>(gpu.primitives.size());
+    const auto first_node = static_cast<uint32_t>(gpu.bvh_nodes.size());
+    for (const uint32_t i : tree.primitive_order) {
+      const EncodedPrimitive& triangle = instanced_triangles[m][i];
+      gpu.primitives.push_back(triangle.primitive);
+      append_normal(gpu.normal_texels, triangle.normal, gpu.precision);
+      gpu.hit_sources.slots.push_back(triangle.source);
+    }
+    for (gpu::GpuBvhNode node : encode_nodes(tree, [&](uint32_t slot) { return instanced_triangles[m][tree.primitive_order[slot]].box; })) {
+      for (int side = 0; side < 2; ++side) {
+        const uint32_t child = node.children[side];
+        node.children[side] = is_leaf(child) ? make_leaf(leaf_first(child) + first_slot, leaf_count(child)) : child + first_node;
+      }
+      gpu.bvh_nodes.push_back(node);
+    }
+    root[m] = first_node;
+    deepest = std::max(deepest, tree.depth);
+  }
+  gpu.bvh_depth += 3 + deepest;
+  for (size_t slot = 0; slot < world_slots; ++slot) {
+    glm::uvec4& record = gpu.primitives[slot].indices;
+    if ((record.w & VKRAY_PRIMITIVE_KIND_BITS) == VKRAY_PRIMITIVE_INSTANCE) record.y = root[scene.instances[record.x].mesh];
+  }
+  for (const Instance& instance : scene.instances) {
+    const glm::dmat3 to_mesh = glm::inverse(instance.linear);
+    const glm::dvec3 translation = instance.translation - gpu.anchor;
+    if (gpu.precision == Precision::float64) {
+      for (int row = 0; row < 3; ++row) {
+        const gpu::GpuPoint point = encode_point(glm::dvec4(glm::row(to_mesh, row), translation[row]), gpu.precision);
+        gpu.instance_texels.push_back(point.first);
+        gpu.instance_texels.push_back(point.second);
+      }
+      continue;
+    }
+    const gpu::GpuPoint split = encode_point(glm::dvec4(translation, 0.0), gpu.precision);
+    for (int row = 0; row < 3; ++row) gpu.instance_texels.push_back(glm::vec4(glm::vec3(glm::row(to_mesh, row)), split.first[row]));
+    gpu.instance_texels.push_back(split.second);
+  }
+}
+
 }  // namespace
 
 GpuSceneShape plan_gpu_scene(const Scene& scene, const GpuSceneOptions& options) {
-  return shape_for_counts(scene.triangle_count(), scene.spheres.size(), scene.planes.size(), scene.has_masks(), options);
+  return shape_for_counts(scene.triangle_count(), scene.spheres.size(), scene.planes.size(), scene.instances.size(),
+                          scene.has_masks(), options);
 }
 
 GpuScene make_gpu_scene(const Scene& scene, const GpuSceneOptions& options, const ShaderVariant& shader,
@@ -311,10 +403,16 @@ GpuScene make_gpu_scene(const Scene& scene, const GpuSceneOptions& options, cons
   VertexTable vertex_table(gpu.vertices, gpu.precision);
   std::vector<EncodedPrimitive> triangles;
   gpu.stored_vertex.resize(scene.meshes.size());
+  // An instanced mesh's triangles in its own coordinates (encode_instances), the others' here.
+  std::vector<std::vector<EncodedPrimitive>> instanced_triangles(scene.meshes.size());
   for (uint32_t mesh_index = 0; mesh_index < scene.meshes.size(); ++mesh_index) {
     const Mesh& mesh = scene.meshes[mesh_index];
     std::vector<uint32_t>& stored = gpu.stored_vertex[mesh_index];
     stored.assign(mesh.positions.size(), GpuScene::no_vertex);
+    if (mesh.instanced) {
+      instanced_triangles[mesh_index] = encode_instanced_mesh(gpu, scene, mesh_index);
+      continue;
+    }
     for (uint32_t triangle_index = 0; triangle_index < mesh.triangles.size(); ++triangle_index) {
       const CanonicalTriangle triangle = canonical_triangle(mesh, triangle_index, gpu.anchor);
       if (triangle.normal == glm::dvec3(0.0)) {
@@ -327,14 +425,17 @@ GpuScene make_gpu_scene(const Scene& scene, const GpuSceneOptions& options, cons
       triangles.push_back({record, triangle.normal, triangle.box(), {mesh_index, triangle_index}});
     }
   }
-  gpu.triangle_count = static_cast<uint32_t>(triangles.size());
+  size_t instanced_count = 0;
+  for (const auto& mesh_triangles : instanced_triangles) instanced_count += mesh_triangles.size();
+  gpu.triangle_count = static_cast<uint32_t>(triangles.size() + instanced_count);
   // Slots stay below the bits a list of first hits tags its entries with (VKRAY_HIT_FAR_ROOT).
-  if (triangles.size() + scene.spheres.size() >= VKRAY_HIT_FAR_ROOT) {
-    throw InputError("the scene has " + std::to_string(triangles.size() + scene.spheres.size()) +
-                     " triangles and spheres; vkray numbers fewer than " + std::to_string(VKRAY_HIT_FAR_ROOT));
+  const size_t slot_count = gpu.triangle_count + scene.spheres.size() + scene.instances.size();
+  if (slot_count >= VKRAY_HIT_FAR_ROOT) {
+    throw InputError("the scene has " + std::to_string(slot_count) +
+                     " triangles, spheres and instances; vkray numbers fewer than " + std::to_string(VKRAY_HIT_FAR_ROOT));
   }
-  const GpuSceneShape shape =
-      shape_for_counts(triangles.size(), scene.spheres.size(), scene.planes.size(), scene.has_masks(), options);
+  const GpuSceneShape shape = shape_for_counts(gpu.triangle_count, scene.spheres.size(), scene.planes.size(),
+                                               scene.instances.size(), scene.has_masks(), options);
   gpu.search = shape.search;
   gpu.tree_has_triangles = shape.tree_has_triangles;
   gpu.tree_has_spheres = shape.tree_has_spheres;
@@ -376,6 +477,28 @@ GpuScene make_gpu_scene(const Scene& scene, const GpuSceneOptions& options, cons
   if (spheres_apart) {
     for (const auto& sphere : scene.spheres) gpu.spheres.push_back({encode(sphere.center - gpu.anchor, sphere.radius)});
   }
+  // Each instance as a primitive of the world's tree, boxed where it places its mesh; its mesh's tree
+  // is laid out after the world's (lay_out_instanced_meshes), which gives its root.
+  std::vector<Bvh> mesh_trees(scene.meshes.size());
+  for (uint32_t m = 0; m < scene.meshes.size(); ++m) {
+    if (instanced_triangles[m].empty()) continue;
+    std::vector<Box> mesh_boxes;
+    for (const auto& triangle : instanced_triangles[m]) {
+      mesh_boxes.push_back({glm::dvec3(triangle.box.lower), glm::dvec3(triangle.box.upper)});
+    }
+    mesh_trees[m] = build_bvh(mesh_boxes, options.bvh);
+  }
+  for (uint32_t k = 0; k < scene.instances.size(); ++k) {
+    const Instance& instance = scene.instances[k];
+    if (instanced_triangles[instance.mesh].empty()) continue;
+    Bounds mesh_box;
+    for (const auto& triangle : instanced_triangles[instance.mesh]) {
+      mesh_box.add(glm::dvec3(triangle.box.lower)), mesh_box.add(glm::dvec3(triangle.box.upper));
+    }
+    const Bounds placed = placed_box(mesh_box, instance);
+    const gpu::GpuPrimitive record{glm::uvec4(k, 0, 0, primitive_word(VKRAY_PRIMITIVE_INSTANCE, instance.mask))};
+    unordered.push_back({record, glm::dvec3(0.0), outward(placed.lower - gpu.anchor, placed.upper - gpu.anchor), {}});
+  }
   std::vector<Box> boxes;
   boxes.reserve(unordered.size());
   for (const auto& primitive : unordered) boxes.push_back({glm::dvec3(primitive.box.lower), glm::dvec3(primitive.box.upper)});
@@ -399,7 +522,11 @@ GpuScene make_gpu_scene(const Scene& scene, const GpuSceneOptions& options, cons
   }
   gpu.bvh_nodes = encode_nodes(bvh, [&](uint32_t slot) { return unordered[bvh.primitive_order[slot]].box; });
   gpu.bvh_depth = bvh.depth;
-  gpu.tree = bvh;
+  if (shape.instances) {
+    lay_out_instanced_meshes(gpu, scene, instanced_triangles, mesh_trees);
+  } else {
+    gpu.tree = bvh;  // what a refit keeps; a scene with instances is built again
+  }
   if (options.search == PrimitiveSearch::automatic && gpu.search == PrimitiveSearch::bvh_packet &&
       !packet_walk_fits(bvh.depth)) {
     gpu.search = PrimitiveSearch::bvh_per_ray;
@@ -590,7 +717,8 @@ GpuSceneShape GpuScene::shape() const {
           brute_force_triangle_slots(),
           tree_has_triangles,
           tree_has_spheres,
-          masks};
+          masks,
+          !instance_texels.empty()};
 }
 
 void set_plane_heights(std::vector<gpu::GpuPlane>& planes, const std::vector<Plane>& scene_planes,

@@ -66,7 +66,7 @@ void Renderer::Impl::prepare_tile(uint32_t width, uint32_t rows, AovSet aovs, co
     std::swap(tile, parked_tile);
   } else {
     if (is_given(tile.mode) != is_given(mode)) std::swap(tile, parked_tile);  // the other kind's, kept
-    tile = TileOutputs{width, rows, aovs.bits(), image_id, mode, layers, {}, {}, {}, {}, {}, {}};
+    tile = TileOutputs{width, rows, aovs.bits(), image_id, mode, layers, {}, {}, {}, {}, {}, {}, {}};
     const vk::DeviceSize pixels = vk::DeviceSize{width} * rows;
     // In place, the shader writes the caller's arrays and lists the rays it leaves to the host.
     const bool in_place = mode == RaycastMode::caller_arrays;
@@ -80,6 +80,7 @@ void Renderer::Impl::prepare_tile(uint32_t width, uint32_t rows, AovSet aovs, co
       tile.rays = texel_views_of(context, create_upload_buffer(context, bytes, geometry_usage));
     }
     if ((is_given(mode) && !in_place) || (!target && aovs.has(Aov::hit))) tile.hits = make_output(pixels * layers, sizeof(uint32_t));
+    if (tile.hits && instances) tile.instance_hits = make_output(pixels * layers, sizeof(uint32_t));
     if ((stats.loop_budget > 0 && (aovs.needs_rays() || is_given(mode))) || in_place) {
       tile.overflow = make_output(pixels, sizeof(uint32_t), sizeof(uint32_t));
     }
@@ -109,6 +110,8 @@ void Renderer::Impl::prepare_tile(uint32_t width, uint32_t rows, AovSet aovs, co
   resources.texel_views[VKRAY_BINDING_BVH_BOUNDS] = floats(bvh_nodes);
   resources.texel_views[VKRAY_BINDING_BVH_LINKS] = uints(bvh_nodes);
   resources.texel_views[VKRAY_BINDING_APART_MASKS] = uints(apart_masks);
+  resources.texel_views[VKRAY_BINDING_INSTANCES] = geometry(instances);
+  resources.buffers[VKRAY_BINDING_INSTANCE_HITS] = output(tile.instance_hits);
   // The same buffers whole, for the storage-geometry variant (pipeline->binding_type picks which
   // one a binding takes).
   auto whole = [&](const std::optional<TexelBuffer>& texels) {
@@ -118,7 +121,7 @@ void Renderer::Impl::prepare_tile(uint32_t width, uint32_t rows, AovSet aovs, co
                                         {VKRAY_BINDING_PRIMITIVES, &primitives}, {VKRAY_BINDING_VERTICES, &vertices},
                                         {VKRAY_BINDING_NORMALS, &normals}, {VKRAY_BINDING_BVH_BOUNDS, &bvh_nodes},
                                         {VKRAY_BINDING_BVH_LINKS, &bvh_nodes}, {VKRAY_BINDING_RAYS, &tile.rays},
-                                        {VKRAY_BINDING_APART_MASKS, &apart_masks}}) {
+                                        {VKRAY_BINDING_APART_MASKS, &apart_masks}, {VKRAY_BINDING_INSTANCES, &instances}}) {
     resources.buffers[binding] = whole(*texels);
   }
   resources.buffers[VKRAY_BINDING_DEPTH] = output(tile.depth);
@@ -239,8 +242,11 @@ void Renderer::Impl::read_tile(Frame& frame, uint32_t first_row, uint32_t rows) 
   });
   if (tile.hits) {  // the device's slots, as the scene numbers them
     const auto* slots = static_cast<const uint32_t*>(tile.hits->host());
+    const auto* instance_hits = tile.instance_hits ? static_cast<const uint32_t*>(tile.instance_hits->host()) : nullptr;
     parallel_for_chunks(tile_pixels, [&](size_t begin, size_t end) {
-      for (size_t k = begin; k < end; ++k) store_ids(frame, first_pixel + k, hit_sources(slots[k]));
+      for (size_t k = begin; k < end; ++k) {
+        store_ids(frame, first_pixel + k, hit_sources(slots[k]), instance_hits ? instance_hits[k] : no_object);
+      }
     });
   }
   timings.readback_ms += elapsed_ms(copy_start);

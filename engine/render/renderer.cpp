@@ -18,11 +18,6 @@ Renderer::Renderer(GpuDevice& device, const Scene& scene, RendererOptions option
   with_vulkan_errors("uploading the scene", [&] {
     const auto start = Clock::now();
     Impl& r = *impl_;
-    // Instances are traced by the reference alone so far (ReferenceScene); on the device they
-    // need a walk that takes rays into each instance's mesh, which is not built yet.
-    if (!scene.instances.empty() || std::ranges::any_of(scene.meshes, [](const Mesh& mesh) { return mesh.instanced; })) {
-      throw InputError("instances: the device cannot trace them yet (the reference can)");
-    }
     r.context.check_usable();
     r.check_workgroup();
     // A search asked for by name is refused before anything is built or uploaded (a ray-query
@@ -252,7 +247,7 @@ void Renderer::Impl::render_camera_rows(const Camera& camera, AovSet device_aovs
       if (tile.overflow) {
         finish_unfinished_rays(basis, width, height, first_row, [&](uint32_t i, uint32_t j, const ReferenceHit& hit) {
           store_reference_hit(frame, size_t{j} * width + i, hit);
-          store_ids(frame, size_t{j} * width + i, reference->source(hit));
+          store_ids(frame, size_t{j} * width + i, reference->source(hit), hit.instance);
         });
       }
     });

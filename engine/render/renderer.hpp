@@ -97,6 +97,8 @@ struct RayHits {
   UninitializedVector<float> normal;    // 3 planes (all x, then y, then z): unit normal facing the ray, 0 on a miss
   UninitializedVector<uint32_t> object;     // ObjectPrimitive::object, no_object on a miss
   UninitializedVector<uint32_t> primitive;  // ObjectPrimitive::primitive, no_object on a miss
+  // In a scene with instances, the instance placing the mesh hit (no_object for none); empty without.
+  UninitializedVector<uint32_t> instance;
   // The float64 shader's distances and normals as it computed them, before t and normal round them;
   // empty for the float32 shader.
   UninitializedVector<double> t64, normal64;
@@ -105,8 +107,9 @@ struct RayHits {
   // finished: Renderer::occluded reads no more).
   UninitializedVector<uint32_t> crossings;
   // Room for `ray_count` rays, their values unset: cast_rays stores every one.
-  void allocate(size_t ray_count, bool doubles = false);
-  void store(size_t ray, double distance, const glm::dvec3& unit_normal, ObjectPrimitive source);
+  void allocate(size_t ray_count, bool doubles = false, bool instances = false);
+  void store(size_t ray, double distance, const glm::dvec3& unit_normal, ObjectPrimitive source,
+             uint32_t placing_instance = no_object);
 };
 
 // A caller's arrays for cast_rays_in_place, one entry a ray in the rays' order (x, y, z together

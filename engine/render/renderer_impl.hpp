@@ -78,6 +78,7 @@ struct TileOutputs {
   // RaycastMode::given_rays: the tile's rays (GpuRay, written by the host) and what each hit.
   std::optional<TexelBuffer> rays;
   std::optional<OutputBuffer> hits;
+  std::optional<OutputBuffer> instance_hits;  // beside `hits` in a scene with instances: the instance each hit
 };
 
 // RaycastMode::caller_arrays: a call's rays and hit arrays where the caller holds them, imported
@@ -113,7 +114,7 @@ struct Renderer::Impl {
   // Bound wherever the scene lacks a primitive type or an output is off.
   GpuBuffer placeholder;
   TexelBuffer placeholder_texels;
-  std::optional<TexelBuffer> spheres, planes, primitives, vertices, normals, bvh_nodes, apart_masks;
+  std::optional<TexelBuffer> spheres, planes, primitives, vertices, normals, bvh_nodes, apart_masks, instances;
   std::optional<AccelerationStructures> structures;  // the ray-query traversal's
   HitSources hit_sources;
   // hit_sources.slots as the shader reads them (VKRAY_BINDING_HIT_SOURCES), made by the first

@@ -51,6 +51,7 @@ void Renderer::Impl::upload_scene(const GpuScene& gpu_scene, const Scene& scene)
   normals = upload(gpu_scene.normal_texels, "triangle normals");
   bvh_nodes = upload(gpu_scene.bvh_nodes, "BVH nodes");
   apart_masks = upload(gpu_scene.apart_masks, "masks");
+  instances = upload(gpu_scene.instance_texels, "instances");
   hit_sources = gpu_scene.hit_sources;
   hit_source_table.reset();
   stats = SceneStats{gpu_scene.triangle_count, static_cast<uint32_t>(scene.spheres.size()),

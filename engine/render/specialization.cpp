@@ -53,6 +53,7 @@ PipelineSpecialization specialization_for(const GpuSceneShape& shape, uint32_t d
   specialization.tree_has_triangles = shape.tree_has_triangles;
   specialization.tree_has_spheres = shape.tree_has_spheres;
   specialization.masks = shape.masks;
+  specialization.instances = shape.instances;
   specialization.loop_budget = loop_budget;
   const bool stack_in_registers = shader.stack_in_registers && !shader.generic;
   specialization.stack_registers = !stack_in_registers                           ? 0

@@ -244,6 +244,20 @@ std::vector<uint8_t> refused_rays(std::span<const GivenRay> rays, const RayRange
   return refused;
 }
 
+Bounds placed_box(const Bounds& mesh_box, const Instance& instance) {
+  Bounds bounds;
+  glm::dvec3 magnitude = glm::abs(instance.translation);
+  for (int corner = 0; corner < 8; ++corner) {
+    const glm::dvec3 p((corner & 1) ? mesh_box.upper.x : mesh_box.lower.x, (corner & 2) ? mesh_box.upper.y : mesh_box.lower.y,
+                       (corner & 4) ? mesh_box.upper.z : mesh_box.lower.z);
+    const glm::dvec3 placed_corner = placed(instance, p);
+    bounds.add(placed_corner);
+    magnitude = glm::max(magnitude, glm::abs(placed_corner));
+  }
+  const glm::dvec3 margin = 1e-12 * magnitude;
+  return {bounds.lower - margin, bounds.upper + margin};
+}
+
 Bounds finite_bounds(const Scene& scene) {
   Bounds bounds;
   for (const auto& sphere : scene.spheres) {

@@ -16,6 +16,7 @@
 #include <span>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace vkray {
@@ -91,6 +92,15 @@ inline glm::dvec3 placed(const Instance& instance, const glm::dvec3& position) {
   return instance.linear * position + instance.translation;
 }
 
+// The ray (origin, dir) taken into an instance's mesh coordinates, given its translation and
+// `to_mesh`, the inverse of its linear map: its origin and direction there. The origin's difference
+// first: near the instance it is exact or nearly (Sterbenz), however far both lie from the world's
+// origin. Affine maps keep a ray's t.
+inline std::pair<glm::dvec3, glm::dvec3> ray_in_mesh(const glm::dvec3& translation, const glm::dmat3& to_mesh,
+                                                     const glm::dvec3& origin, const glm::dvec3& dir) {
+  return {to_mesh * (origin - translation), to_mesh * dir};
+}
+
 // Largest coordinate or radius magnitude accepted. The shader squares distances in float32 (max
 // ~3.4e38) and splits them with a factor of 4097 for the exact sphere term, so magnitudes must stay
 // well below 1e19; 1e15 leaves room and is far beyond any real scene.
@@ -163,6 +173,12 @@ struct Bounds {
   }
   bool empty() const { return !(lower.x <= upper.x); }
 };
+
+// The world box of `mesh_box` placed by `instance`: its eight corners placed, and 1e-12 of their
+// magnitude more on each side. A triangle a ray meets in the mesh's coordinates lies where the
+// placed ray is, to the rounding of taking the ray there (in double, a few units in the last
+// place): the margin, ten thousand times more, keeps a walk of the world's boxes from culling it.
+Bounds placed_box(const Bounds& mesh_box, const Instance& instance);
 
 // The box of the finite primitives: every sphere and vertex where it is drawn, an instanced mesh's
 // where each instance places it (planes are infinite).

@@ -94,6 +94,7 @@ const vk::raii::Pipeline& RaycastPipeline::pipeline(AovSet aovs, bool lo_parts, 
   values[VKRAY_SPEC_HIT_QUERY] = static_cast<uint32_t>(query);
   values[VKRAY_SPEC_MASKS] = specialization_.masks ? 1u : 0u;
   values[VKRAY_SPEC_HITS] = hits;
+  values[VKRAY_SPEC_INSTANCES] = specialization_.instances ? 1u : 0u;
   std::array<vk::SpecializationMapEntry, values.size()> entries;
   for (uint32_t id = 0; id < entries.size(); ++id) entries[id] = vk::SpecializationMapEntry(id, id * 4u, 4u);
   const vk::SpecializationInfo specialization(entries, vk::ArrayProxyNoTemporaries<const uint32_t>(values));

@@ -27,6 +27,7 @@ struct PipelineSpecialization {
   uint32_t loop_budget = 0;
   uint32_t stack_registers = 0;  // VKRAY_SPEC_STACK_REGISTERS
   bool masks = false;            // VKRAY_SPEC_MASKS
+  bool instances = false;        // VKRAY_SPEC_INSTANCES
   ShaderVariant variant;
   bool operator==(const PipelineSpecialization&) const = default;
 };

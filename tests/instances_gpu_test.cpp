@@ -1,0 +1,228 @@
+// Instances on the device: a mesh stored once and placed by transforms is traced by taking each ray
+// into the mesh's coordinates (shaders/primitives.glsl), and every pixel and given ray agrees with
+// the fp64 reference within the error envelope, ids included: rotated, sheared, mirrored, masked,
+// at extreme scales far from the origin, in every shader variant that walks them.
+#include "engine/reference/reference.hpp"
+#include "engine/render/gpu_scene.hpp"
+#include "engine/scene/mesh_generators.hpp"
+#include "tests/gpu_test_support.hpp"
+
+#include <glm/matrix.hpp>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <set>
+
+namespace vkray {
+namespace {
+
+using namespace test;
+
+glm::dmat3 turned_about_y(double radians) {
+  const double c = std::cos(radians), s = std::sin(radians);
+  return glm::dmat3(glm::dvec3(c, 0.0, -s), glm::dvec3(0.0, 1.0, 0.0), glm::dvec3(s, 0.0, c));  // columns
+}
+
+// An ordinary mesh, a sphere and a ground plane, with a fine closed mesh (meshes[1]) and a coarse one
+// (meshes[2]) placed four times: turned, sheared and unevenly scaled, mirrored by a negative scale,
+// and the coarse one masked 2.
+Scene instanced_scene(uint32_t width = 96, uint32_t height = 64) {
+  Scene scene;
+  scene.width = width, scene.height = height;
+  scene.meshes.push_back(make_sphere_mesh(300, glm::dvec3(-2.5, 0.5, 0.0), 0.7));
+  Mesh ball = make_sphere_mesh(1500);
+  ball.instanced = true;
+  scene.meshes.push_back(ball);
+  Mesh facets = make_sphere_mesh(48, glm::dvec3(0.0), 0.6);  // coarse: flat facets, sharp edges
+  facets.instanced = true;
+  scene.meshes.push_back(facets);
+  scene.spheres.push_back({glm::dvec3(2.5, 0.4, -1.0), 0.6});
+  scene.planes.push_back({glm::dvec3(0.0, -1.5, 0.0), glm::dvec3(0.0, 1.0, 0.0)});
+  glm::dmat3 sheared(1.0);
+  sheared[1][0] = 0.4;  // x += 0.4 y
+  sheared = sheared * glm::dmat3(glm::dvec3(0.5, 0.0, 0.0), glm::dvec3(0.0, 1.3, 0.0), glm::dvec3(0.0, 0.0, 0.8));
+  const glm::dmat3 mirrored(glm::dvec3(-0.6, 0.0, 0.0), glm::dvec3(0.0, 0.6, 0.0), glm::dvec3(0.0, 0.0, 0.6));
+  scene.instances = {{1, turned_about_y(0.7), glm::dvec3(0.0)},
+                     {1, sheared, glm::dvec3(0.3, 1.4, 1.5)},
+                     {1, mirrored, glm::dvec3(1.0, -0.6, 2.2)},
+                     {2, turned_about_y(0.3) * 0.8, glm::dvec3(-1.2, -1.0, 1.8), 2}};
+  scene.camera = {glm::dvec3(0.5, 2.0, 7.0), glm::dvec3(0.0, 0.0, 0.0), glm::dvec3(0.0, 1.0, 0.0), 55.0};
+  check_scene(scene);
+  return scene;
+}
+
+std::vector<ObjectPrimitive> frame_ids(const Frame& frame) {
+  std::vector<ObjectPrimitive> ids(frame.pixel_count());
+  for (size_t p = 0; p < ids.size(); ++p) ids[p] = {frame.mesh_id[p], frame.primitive_id[p]};
+  return ids;
+}
+
+// Renders depth, normal and ids and checks every pixel against the reference of `mask`; returns the
+// objects hit.
+std::set<uint32_t> expect_render_as_reference(const Scene& scene, const RendererOptions& options, Mask mask = every_mask_bit) {
+  Renderer renderer(device(), scene, options);
+  renderer.set_ray_mask(mask);
+  const Frame frame = renderer.render(scene.camera, scene.width, scene.height,
+                                      {Aov::depth, Aov::normal, Aov::mesh_id, Aov::primitive_id});
+  const std::vector<ObjectPrimitive> ids = frame_ids(frame);
+  const EnvelopeReport report = check_against_reference(scene, frame, 1, &ids, mask);
+  EXPECT_EQ(report.failures, 0u) << report.describe();
+  std::set<uint32_t> objects;
+  for (const ObjectPrimitive& id : ids) objects.insert(id.object);
+  return objects;
+}
+
+// Every instance in view, through each variant that walks them: per ray, generic, float64, geometry
+// in storage buffers, and rays past a small loop budget that the host finishes.
+TEST(GpuInstances, EveryPixelAsTheReferenceInEveryVariant) {
+  const Scene scene = instanced_scene();
+  std::vector<RendererOptions> variants(5);
+  variants[1].shader.generic = true;
+  variants[2].shader.precision = Precision::float64;
+  variants[3].shader.storage_geometry = true;
+  variants[4].loop_budget = 40;
+  for (const RendererOptions& options : variants) {
+    SCOPED_TRACE(variant_name(options));
+    const std::set<uint32_t> hit = expect_render_as_reference(scene, options);
+    EXPECT_EQ(hit, (std::set<uint32_t>{0, 1, 2, 3, 4, no_object})) << "every object in view, and sky";
+  }
+  Renderer renderer(device(), scene, variants[4]);
+  renderer.render(scene.camera, scene.width, scene.height, {Aov::depth});
+  EXPECT_GT(renderer.timings().unfinished_rays, 0u) << "the loop budget must leave rays to the host";
+}
+
+// Masks: the coarse mesh's instance has mask 2; a ray mask without it sees through to what lies behind.
+TEST(GpuInstances, InstanceMasks) {
+  const Scene scene = instanced_scene();
+  EXPECT_TRUE(expect_render_as_reference(scene, {}, 0xfd).count(2) == 0) << "the masked instance was hit";
+  EXPECT_TRUE(expect_render_as_reference(scene, {}, 2).count(2) == 1) << "the instance its mask lets through";
+}
+
+// An instance 1e-6 across and one 1e6 across, each placed 1e5 from the origin and mirrored, seen
+// from a camera a few of its sizes away: the ray is taken into its mesh's coordinates from the
+// difference of origin and translation, so each keeps the precision of its own size.
+TEST(GpuInstances, ExtremeScalesFarFromTheOrigin) {
+  for (const double scale : {1e-6, 1e6}) {
+    SCOPED_TRACE(testing::Message() << "scale " << scale);
+    Scene scene;
+    scene.width = 64, scene.height = 48;
+    Mesh ball = make_sphere_mesh(1500);
+    ball.instanced = true;
+    scene.meshes.push_back(ball);
+    const glm::dvec3 at(1e5, -0.5e5, 0.7e5);
+    const glm::dmat3 mirrored_turned = turned_about_y(0.4) * glm::dmat3(glm::dvec3(-scale, 0.0, 0.0),
+                                                                         glm::dvec3(0.0, scale, 0.0),
+                                                                         glm::dvec3(0.0, 0.0, 1.5 * scale));
+    scene.instances = {{0, mirrored_turned, at}, {0, glm::dmat3(0.5 * scale), at + glm::dvec3(1.6 * scale, 0.3 * scale, 0.0)}};
+    scene.camera = {at + glm::dvec3(0.8, 1.2, 4.0) * scale, at + glm::dvec3(0.5 * scale, 0.0, 0.0), glm::dvec3(0.0, 1.0, 0.0), 50.0};
+    check_scene(scene);
+    for (const Precision precision : {Precision::float32, Precision::float64}) {
+      RendererOptions options;
+      options.shader.precision = precision;
+      SCOPED_TRACE(variant_name(options));
+      const std::set<uint32_t> hit = expect_render_as_reference(scene, options);
+      EXPECT_EQ(hit, (std::set<uint32_t>{0, no_object}));
+    }
+  }
+}
+
+// Given rays, each from its own origin and all from one, occlusion queries and counts of crossings:
+// ray by ray as the reference has them.
+TEST(GpuInstances, GivenRaysOcclusionAndCrossings) {
+  const Scene scene = instanced_scene(48, 32);
+  const std::vector<GivenRay> rays = pixel_rays(scene);
+  std::vector<GivenRay> scattered = rays;  // a copy, each ray moved along itself
+  for (size_t k = 0; k < scattered.size(); ++k) {  // each from a point of its own along its pixel ray
+    for (int c = 0; c < 3; ++c) scattered[k][c] += 0.5 * double(k % 5) * scattered[k][3 + c];
+  }
+  Renderer renderer(device(), scene);
+  const ReferenceScene reference(scene);
+  const std::vector<GivenRay>& moved = scattered;
+  for (const std::vector<GivenRay>* given : {&rays, &moved}) {
+    const RayHits hits = renderer.cast_rays(*given);
+    const std::vector<uint8_t> blocked = renderer.occluded(*given);
+    const std::vector<uint32_t> crossings = renderer.count_intersections(*given);
+    if (given == &rays) {  // the pixel rays: as the camera's, within the envelope
+      Frame frame(scene.width, scene.height, {Aov::depth, Aov::normal});
+      frame.depth.assign(hits.t.begin(), hits.t.end());
+      frame.normal.assign(hits.normal.begin(), hits.normal.end());
+      std::vector<ObjectPrimitive> ids(hits.count);
+      for (size_t k = 0; k < hits.count; ++k) ids[k] = {hits.object[k], hits.primitive[k]};
+      const EnvelopeReport report = check_against_reference(scene, frame, 1, &ids);
+      EXPECT_EQ(report.failures, 0u) << report.describe();
+    }
+    size_t occlusion_differs = 0, crossings_differ = 0, instances_hit = 0, instance_differs = 0;
+    ASSERT_EQ(hits.instance.size(), given->size()) << "a scene with instances names the instance each ray hit";
+    for (size_t k = 0; k < given->size(); ++k) {
+      const GivenRay& ray = (*given)[k];
+      const ReferenceHit expected = trace_reference_ray(reference, ray, 0.0, no_hit);
+      const ObjectPrimitive expected_source = reference.source(expected);
+      if (hits.object[k] == expected_source.object && hits.primitive[k] == expected_source.primitive &&
+          hits.instance[k] != expected.instance) {
+        ++instance_differs;
+      }
+      if (bool(blocked[k]) != std::isfinite(hits.t[k])) ++occlusion_differs;
+      if (crossings[k] != count_reference_crossings(reference, ray, 0.0, no_hit)) ++crossings_differ;
+      if (hits.object[k] == 1 || hits.object[k] == 2) ++instances_hit;
+    }
+    EXPECT_EQ(occlusion_differs, 0u);
+    EXPECT_EQ(crossings_differ, 0u);
+    EXPECT_EQ(instance_differs, 0u) << "the same triangle, another instance";
+    EXPECT_GT(instances_hit, given->size() / 20) << "the rays must meet the instances";
+  }
+}
+
+// The instance-id output, and the surface outputs through the instance's transform: where a pixel
+// names the reference's triangle, it names the reference's instance and faces as it does; a
+// mirrored instance turns its winding over (its outside is its back, as the scene flattened would
+// have it), and the shading normal lies on the ray's side.
+TEST(GpuInstances, InstanceIdsAndFrontFacingThroughTheTransform) {
+  const Scene scene = instanced_scene();
+  const AovSet aovs{Aov::depth, Aov::mesh_id, Aov::primitive_id, Aov::instance_id, Aov::front_facing, Aov::shading_normal};
+  Renderer renderer(device(), scene);
+  const Frame frame = renderer.render(scene.camera, scene.width, scene.height, aovs);
+  const ReferenceScene reference(scene);
+  const Frame expected = reference_frame(reference, scene, render_reference_hits(reference, scene.camera, scene.width, scene.height),
+                                         scene.camera, scene.width, scene.height, aovs);
+  size_t compared = 0, instance_differs = 0, facing_differs = 0, on_wrong_side = 0;
+  std::set<std::pair<uint32_t, uint32_t>> instance_fronts;  // (instance, front-facing) seen
+  const CameraBasis basis = make_camera_basis(scene.camera, scene.width, scene.height);
+  for (size_t p = 0; p < frame.pixel_count(); ++p) {
+    if (frame.mesh_id[p] == no_object) continue;
+    const bool placed_mesh = frame.mesh_id[p] == 1 || frame.mesh_id[p] == 2;
+    EXPECT_EQ(frame.instance_id[p] != no_object, placed_mesh) << "pixel " << p;
+    if (frame.mesh_id[p] != expected.mesh_id[p] || frame.primitive_id[p] != expected.primitive_id[p]) continue;
+    ++compared;
+    instance_differs += frame.instance_id[p] != expected.instance_id[p];
+    facing_differs += frame.front_facing[p] != expected.front_facing[p];
+    const uint32_t i = uint32_t(p % scene.width), j = uint32_t(p / scene.width);
+    const glm::dvec3 dir = basis.direction(pixel_uv(i, j, scene.width, scene.height));
+    const glm::dvec3 shading(frame.shading_normal[p], frame.shading_normal[frame.pixel_count() + p],
+                             frame.shading_normal[2 * frame.pixel_count() + p]);
+    on_wrong_side += glm::dot(shading, dir) > 0.0;
+    if (placed_mesh) instance_fronts.insert({frame.instance_id[p], frame.front_facing[p]});
+  }
+  EXPECT_GT(compared, frame.pixel_count() / 4);
+  EXPECT_EQ(instance_differs, 0u);
+  EXPECT_EQ(facing_differs, 0u);
+  EXPECT_EQ(on_wrong_side, 0u) << "shading normals facing away from the ray";
+  // Seen from outside: the turned and sheared balls' fronts, the mirrored one's back.
+  EXPECT_TRUE(instance_fronts.count({0, 1}) && !instance_fronts.count({0, 0}));
+  EXPECT_TRUE(instance_fronts.count({2, 0}) && !instance_fronts.count({2, 1}));
+}
+
+// What does not walk instances yet says so, naming the search, before anything is built.
+TEST(GpuInstances, SearchesWithoutInstancesRefuse) {
+  const Scene scene = instanced_scene(16, 16);
+  for (const PrimitiveSearch search : {PrimitiveSearch::brute_force, PrimitiveSearch::bvh_packet, PrimitiveSearch::ray_query}) {
+    RendererOptions options;
+    options.scene.search = search;
+    if (!search_obstacle(search, device().info(), options.shader).empty()) continue;
+    EXPECT_THROW(Renderer(device(), scene, options), InputError) << traversal_name(search);
+  }
+  Renderer renderer(device(), scene);
+  EXPECT_THROW(renderer.cast_rays(pixel_rays(scene), {}, 4), InputError);
+}
+
+}  // namespace
+}  // namespace vkray
