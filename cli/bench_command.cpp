@@ -9,6 +9,7 @@
 #include "engine/bench/bench_suites.hpp"
 #include "engine/bench/given_rays_bench.hpp"
 #include "engine/bench/host_bench.hpp"
+#include "engine/bench/instances_bench.hpp"
 #include "engine/bench/moving_bench.hpp"
 #include "engine/io/image_io.hpp"
 #include "engine/typed_names.hpp"
@@ -37,6 +38,7 @@ struct BenchOptions {
   std::string json, csv, plot, markdown;
   std::vector<std::string> compare;
   size_t rays = 1 << 20;  // a kind's rays in --suite rays
+  uint32_t instances = 1000;  // --suite instances
 };
 
 // The options that decide what was measured, as a command: the accuracy document names it.
@@ -104,6 +106,28 @@ int run_moving(const BenchOptions& options, const std::vector<BenchScene>& scene
   return 0;
 }
 
+// --suite instances: the suite's models placed --instances times, against the scene flattened,
+// then every transform changed (engine/bench/instances_bench.hpp). The reference checks every 8th row.
+int run_instances(const BenchOptions& options, const std::vector<BenchScene>& scenes) {
+  GpuDevice device(options.device_options.device, options.device_options.transfer_mode());
+  print_cpu_device_note(device.info());
+  std::vector<Scene> models;
+  std::string names;
+  for (const auto& scene : scenes) {
+    if (scene.scene.meshes.empty()) throw InputError(scene.name + ": --suite instances places a mesh; the scene has none");
+    models.push_back(scene.scene);
+    names += (names.empty() ? "" : ", ") + scene.name;
+  }
+  const uint32_t width = scenes.front().scene.width, height = scenes.front().scene.height;
+  std::printf("vkray bench --suite instances on %s\n%s, each scaled to a unit box, placed in turn at %ux%u; medians of %u calls "
+              "after a first; render: GPU ms; errors against the reference on every 8th row\n",
+              device.info().name.c_str(), names.c_str(), width, height, options.frames);
+  std::fflush(stdout);
+  const InstancesRow row = bench_instances(device, models, options.instances, width, height, options.frames, 8);
+  std::fputs(instances_report(row).c_str(), stdout);
+  return 0;
+}
+
 // --suite host: the host's stages alone on a frame made on the host, at --size: no device is opened.
 int run_host_stages(const BenchOptions& options) {
   for (const auto& [value, name] : {std::pair{options.variants, "--variants"}, std::pair{options.markdown, "--markdown"},
@@ -125,10 +149,10 @@ int run_bench(const BenchOptions& options) {
       if (!value.empty()) throw InputError(std::string(name) + ": not for --suite rays, whose rows are kinds of rays, not variants");
     }
   }
-  if (options.suite == moving_suite) {
+  if (options.suite == moving_suite || options.suite == instances_suite) {
     for (const auto& [value, name] : {std::pair{options.variants, "--variants"}, std::pair{options.markdown, "--markdown"},
                                       std::pair{options.plot, "--plot"}, std::pair{options.json, "--json"}, std::pair{options.csv, "--csv"}}) {
-      if (!value.empty()) throw InputError(std::string(name) + ": not for --suite moving, whose rows are a table of models");
+      if (!value.empty()) throw InputError(std::string(name) + ": not for --suite " + options.suite + ", whose rows are a table of models");
     }
   }
   const auto [width, height] = parse_size(options.size);
@@ -158,6 +182,7 @@ int run_bench(const BenchOptions& options) {
   if (scenes.empty()) scenes.push_back({"built-in", load_scene_argument("", width, height)});
   if (options.suite == given_rays_suite) return run_given_rays(options, scenes);
   if (options.suite == moving_suite) return run_moving(options, scenes);
+  if (options.suite == instances_suite) return run_instances(options, scenes);
 
   GpuDevice device(options.device_options.device, options.device_options.transfer_mode());
   print_cpu_device_note(device.info());
@@ -223,6 +248,9 @@ Action add_bench_command(CLI::App& app) {
   measuring.push_back(command->add_option("--rays", options->rays, "Rays of each kind in --suite rays")
                           ->capture_default_str()
                           ->check(CLI::Range(size_t{1}, size_t{1} << 26)));
+  measuring.push_back(command->add_option("--instances", options->instances, "Instances in --suite instances")
+                          ->capture_default_str()
+                          ->check(CLI::Range(1u, 1000000u)));
   measuring.push_back(command->add_flag("--wide", options->wide,
                                         "Print every column (about 160 characters wide; the default fits 100)"));
   measuring.push_back(

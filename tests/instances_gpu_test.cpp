@@ -211,6 +211,46 @@ TEST(GpuInstances, InstanceIdsAndFrontFacingThroughTheTransform) {
   EXPECT_TRUE(instance_fronts.count({2, 0}) && !instance_fronts.count({2, 1}));
 }
 
+// set_transforms: every instance moved at once, twice (the second time far from where the scene was
+// built, one instance mirrored now), renders as the reference of the moved scene; a refused call
+// (an instance out of range, a map not affine or not invertible) changes nothing.
+TEST(GpuInstances, SetTransformsMovesThemWithoutARebuild) {
+  Scene scene = instanced_scene();
+  Renderer renderer(device(), scene);
+  const std::vector<uint32_t> all{0, 1, 2, 3};
+  for (const double shift : {0.4, 3.0}) {
+    SCOPED_TRACE(testing::Message() << "shift " << shift);
+    std::vector<glm::dmat4> transforms;
+    for (const uint32_t k : all) {
+      glm::dmat4 m(turned_about_y(0.5 * k + shift) * (k == 1 ? -0.7 : 0.7));
+      m[3] = glm::dvec4(-1.5 + 1.1 * k, 0.2 * k - 0.4, shift - 2.0, 1.0);
+      transforms.push_back(m);
+      scene.instances[k].linear = glm::dmat3(m);
+      scene.instances[k].translation = glm::dvec3(m[3]);
+    }
+    renderer.set_transforms(all, transforms);
+    EXPECT_GT(renderer.timings().scene_update_ms, 0.0);
+    const Frame frame = renderer.render(scene.camera, scene.width, scene.height, {Aov::depth, Aov::normal, Aov::mesh_id, Aov::primitive_id});
+    const std::vector<ObjectPrimitive> ids = frame_ids(frame);
+    const EnvelopeReport report = check_against_reference(scene, frame, 1, &ids);
+    EXPECT_EQ(report.failures, 0u) << report.describe();
+    std::set<uint32_t> objects(frame.mesh_id.begin(), frame.mesh_id.end());
+    EXPECT_TRUE(objects.count(1) && objects.count(2)) << "the moved instances in view";
+  }
+  const std::vector<Instance> before = renderer.scene().instances;
+  glm::dmat4 not_affine(1.0);
+  not_affine[0][3] = 0.5;
+  EXPECT_THROW(renderer.set_transforms(std::vector<uint32_t>{0}, std::vector<glm::dmat4>{not_affine}), InputError);
+  EXPECT_THROW(renderer.set_transforms(std::vector<uint32_t>{0, 9}, std::vector<glm::dmat4>(2, glm::dmat4(1.0))), InputError);
+  glm::dmat4 flattening(0.0);
+  flattening[3][3] = 1.0;
+  EXPECT_THROW(renderer.set_transforms(std::vector<uint32_t>{2}, std::vector<glm::dmat4>{flattening}), InputError);
+  EXPECT_THROW(renderer.set_transforms(std::vector<uint32_t>{2}, std::vector<glm::dmat4>{}), InputError);
+  for (size_t k = 0; k < before.size(); ++k) {
+    EXPECT_EQ(renderer.scene().instances[k].translation, before[k].translation) << "a refused call moved instance " << k;
+  }
+}
+
 // What does not walk instances yet says so, naming the search, before anything is built.
 TEST(GpuInstances, SearchesWithoutInstancesRefuse) {
   const Scene scene = instanced_scene(16, 16);

@@ -62,6 +62,43 @@ vkray::Mesh unit_triangle() {
 
 const std::string triangle_obj = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
 
+// ---- Instances -------------------------------------------------------------------------------
+
+// A named mesh is placed by instances alone, each with the usual transform (scaled, rotated,
+// translated) and a mask of its own; the others stay where they stand.
+TEST(SceneJson, NamedMeshesArePlacedByInstances) {
+  const Scene scene = parse(with_camera(R"("meshes": [
+      {"positions": [[0, 0, 0], [1, 0, 0], [0, 1, 0]], "triangles": [[0, 1, 2]]},
+      {"name": "leaf", "positions": [[0, 0, 0], [1, 0, 0], [0, 1, 0]], "triangles": [[0, 1, 2]], "mask": 3}],
+    "instances": [{"mesh": "leaf"},
+                  {"mesh": "leaf", "transform": {"scale": [2, 1, 1], "rotate": {"axis": [0, 0, 1], "degrees": 90},
+                                                 "translate": [5, 0, 0]}, "mask": 4}])"));
+  ASSERT_EQ(scene.meshes.size(), 2u);
+  EXPECT_FALSE(scene.meshes[0].instanced);
+  EXPECT_TRUE(scene.meshes[1].instanced);
+  ASSERT_EQ(scene.instances.size(), 2u);
+  EXPECT_EQ(scene.instances[0].mesh, 1u);
+  EXPECT_EQ(scene.instances[0].mask, vkray::every_mask_bit);
+  EXPECT_EQ(scene.instances[1].mask, 4u);
+  // (1, 0, 0) scaled to (2, 0, 0), turned to (0, 2, 0), moved to (5, 2, 0).
+  expect_near(vkray::placed(scene.instances[1], {1.0, 0.0, 0.0}), {5.0, 2.0, 0.0});
+  expect_near(vkray::placed(scene.instances[0], {1.0, 0.0, 0.0}), {1.0, 0.0, 0.0});
+}
+
+TEST(SceneJson, InstancesNameAMeshThatIsNamedOnce) {
+  const std::string leaf = R"({"name": "leaf", "positions": [[0, 0, 0], [1, 0, 0], [0, 1, 0]], "triangles": [[0, 1, 2]]})";
+  expect_error(parse_error(with_camera(R"("meshes": [)" + leaf + R"(], "instances": [{"mesh": "leaves"}])")),
+               "t.json: instances[0].mesh: ", "no mesh is named 'leaves' (named: 'leaf')");
+  expect_error(parse_error(with_camera(R"("meshes": [)" + leaf + ", " + leaf + "]")), "t.json: meshes[1].name: ",
+               "another mesh is named 'leaf'");
+  expect_error(parse_error(with_camera(R"("meshes": [)" + leaf + R"(], "instances": [{"mesh": "leaf", "colour": 1}])")),
+               "t.json: instances[0].colour: ", "unknown key 'colour'");
+  expect_error(parse_error(with_camera(R"("meshes": [)" + leaf + R"(], "instances": [{"mesh": "leaf", "transform": {"scale": 0}}])")),
+               "t.json: instances[0].transform.scale: ", "scale factors must be non-zero");
+  expect_error(parse_error(with_camera(R"("meshes": [)" + leaf + R"(], "instances": [{"mesh": 3}])")),
+               "t.json: instances[0].mesh: ", "expected a string");
+}
+
 // ---- Invalid JSON ----------------------------------------------------------------------------
 
 TEST(SceneJson, InvalidJsonReportsLineAndColumn) {

@@ -1,4 +1,4 @@
-/* vkray's C API, version 3 (VKRAY_API_VERSION): the engine's one outward boundary, libvkray.so. Python's `vkray`
+/* vkray's C API, version 4 (VKRAY_API_VERSION): the engine's one outward boundary, libvkray.so. Python's `vkray`
  * package is written over it (ctypes, any CPython 3.9 or later, any numpy 1.22 to 2.x); C, Rust and
  * Julia callers use it as it is.
  *
@@ -25,7 +25,7 @@
 extern "C" {
 #endif
 
-#define VKRAY_API_VERSION 3
+#define VKRAY_API_VERSION 4  /* 4: instances (vkray_scene_add_instance, vkray_renderer_set_transforms) */
 #define VKRAY_API __attribute__((visibility("default")))
 
 /* mesh_id and primitive_id of a ray that hit nothing. */
@@ -75,6 +75,11 @@ VKRAY_API vkray_status vkray_scene_new(uint32_t width, uint32_t height, vkray_sc
 VKRAY_API vkray_status vkray_scene_add_mesh(vkray_scene* scene, const double* vertices, uint64_t vertex_count,
                                             const void* triangles, int triangles_unsigned, uint64_t triangle_count,
                                             const double* transform);
+/* Places mesh `mesh` (its mesh_id among the meshes added so far), which from then on is drawn only
+ * where instances place it, stored once however many do: by transform, NULL or a 4 x 4 affine
+ * matrix, row-major (last row 0 0 0 1, invertible), with ray mask `mask` (0..255) of its own in
+ * place of the mesh's. Instances are numbered in the order added: the instance_id output's numbers. */
+VKRAY_API vkray_status vkray_scene_add_instance(vkray_scene* scene, uint32_t mesh, const double* transform, uint32_t mask);
 /* count x 4: centre, radius. */
 VKRAY_API vkray_status vkray_scene_add_spheres(vkray_scene* scene, const double* spheres, uint64_t count);
 /* count x 6: a point, the normal. */
@@ -115,6 +120,12 @@ VKRAY_API const char* vkray_renderer_device_name(const vkray_renderer* renderer)
  * unchanged. */
 VKRAY_API vkray_status vkray_renderer_set_vertices(vkray_renderer* renderer, uint32_t mesh, const double* positions,
                                                    uint64_t count);
+/* Instance instances[k] takes transforms[k] (count x 16, each as vkray_scene_add_instance's): the
+ * GPU's top level (its tree over the instances) is built anew where they now stand, the meshes'
+ * trees kept, and the next call renders the moved scene ("scene_update_ms"). A bad instance or
+ * transform: VKRAY_INPUT_ERROR, the scene unchanged. */
+VKRAY_API vkray_status vkray_renderer_set_transforms(vkray_renderer* renderer, const uint32_t* instances,
+                                                     const double* transforms, uint64_t count);
 /* What the last call's time went to, as JSON ({"dispatch_gpu_ms": ..., ...}, milliseconds); the
  * constructor's own (upload, BVH build, pipelines) under "setup". */
 VKRAY_API const char* vkray_renderer_timings(vkray_renderer* renderer);

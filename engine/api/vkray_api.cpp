@@ -17,6 +17,8 @@
 #include "engine/typed_names.hpp"
 #include "engine/unit_vector.hpp"
 
+#include <glm/gtc/type_ptr.hpp>
+#include <glm/matrix.hpp>
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
@@ -112,7 +114,7 @@ const OutputInfo& output_named(const char* name, bool rays) {
   const OutputInfo& output = output_info(*aov);
   if (rays && (output.source == OutputSource::camera && output.aov != Aov::position)) {
     throw InputError(std::string("outputs: '") + name + "' belongs to a camera's image; given rays have t, normal, primitive-id, mesh-id, "
-                     "position, barycentric, front-facing, shading-normal and texcoord");
+                     "instance-id, position, barycentric, front-facing, shading-normal and texcoord");
   }
   if (rays && (output.aov == Aov::uv || output.aov == Aov::depth) && given != "t") {
     throw InputError(std::string("outputs: '") + name + "' belongs to a camera's image; a given ray's distance is 't'");
@@ -268,7 +270,7 @@ class RayOutputs {
   }
 
   void miss(size_t k) const {
-    for (uint32_t layer = 0; layer < hits_; ++layer) hit(k, layer, INFINITY, glm::dvec3(0.0), {no_object, no_object});
+    for (uint32_t layer = 0; layer < hits_; ++layer) hit(k, layer, INFINITY, glm::dvec3(0.0), {no_object, no_object}, no_object);
   }
 
   // The caller's arrays from ray `first` on, for Renderer::cast_rays_in_place: where the outputs
@@ -290,14 +292,14 @@ class RayOutputs {
     return arrays;
   }
 
-  // Hit `layer` of ray k.
-  void hit(size_t k, uint32_t layer, double t, const glm::dvec3& normal, ObjectPrimitive source) const {
+  // Hit `layer` of ray k; `instance`: the instance placing the mesh hit, or no_object.
+  void hit(size_t k, uint32_t layer, double t, const glm::dvec3& normal, ObjectPrimitive source, uint32_t instance) const {
     const bool missed = source.object == no_object;
     const glm::dvec3 origin = vec3_at(call_.rays[k].data(), 0, 6);
     const glm::dvec3 direction =
         missed || !needs_direction_ ? glm::dvec3(0.0) : unit_vector(vec3_at(call_.rays[k].data(), 0, 6, 3));
     SurfaceAt surface;
-    if (surface_ && !missed) surface = surface_at(scene_, source, origin, direction, t);
+    if (surface_ && !missed) surface = surface_at(scene_, source, origin, direction, t, instance);
     const size_t at = k * hits_ + layer;
     for (size_t n = 0; n < asked_.size(); ++n) {
       void* result = results_[n];
@@ -306,6 +308,7 @@ class RayOutputs {
         case Aov::normal: put(result, at, 3, &normal[0], doubles_); break;
         case Aov::mesh_id: static_cast<uint32_t*>(result)[at] = source.object; break;
         case Aov::primitive_id: static_cast<uint32_t*>(result)[at] = source.primitive; break;
+        case Aov::instance_id: static_cast<uint32_t*>(result)[at] = instance; break;
         case Aov::position: {
           const glm::dvec3 p = missed ? glm::dvec3(0.0) : origin + t * direction;
           put(result, at, 3, &p[0], false);
@@ -368,6 +371,14 @@ nlohmann::json timings_json(const RenderTimings& t, bool constructor) {
 }
 
 // An object's mask from the C API's 32-bit argument: 8 bits (see Mask).
+// A 4 x 4 affine matrix given row-major (last row 0 0 0 1) of finite numbers, as glm holds it.
+glm::dmat4 affine_matrix(const double* rows, const std::string& path) {
+  const std::string affine = path + ": expected a 4 x 4 affine matrix of finite numbers (last row 0, 0, 0, 1)";
+  if (!std::all_of(rows, rows + 16, [](double v) { return std::isfinite(v); })) throw InputError(affine);
+  if (rows[12] != 0.0 || rows[13] != 0.0 || rows[14] != 0.0 || rows[15] != 1.0) throw InputError(affine);
+  return glm::transpose(glm::make_mat4(rows));
+}
+
 Mask object_mask_argument(uint32_t mask) {
   if (mask > every_mask_bit) throw InputError("mask: " + std::to_string(mask) + " is no mask of 8 bits (0..255)");
   return static_cast<Mask>(mask);
@@ -520,16 +531,31 @@ vkray_status vkray_scene_add_mesh(vkray_scene* scene, const double* vertices, ui
       mesh.triangles.push_back(triangle);
     }
     if (transform) {
-      const std::string affine = path + ".transform: expected a 4 x 4 affine matrix of finite numbers (last row 0, 0, 0, 1)";
-      if (!std::all_of(transform, transform + 16, [](double v) { return std::isfinite(v); })) throw InputError(affine);
-      if (transform[12] != 0.0 || transform[13] != 0.0 || transform[14] != 0.0 || transform[15] != 1.0) throw InputError(affine);
-      for (glm::dvec3& p : mesh.positions) {
-        p = glm::dvec3(transform[0] * p.x + transform[1] * p.y + transform[2] * p.z + transform[3],
-                       transform[4] * p.x + transform[5] * p.y + transform[6] * p.z + transform[7],
-                       transform[8] * p.x + transform[9] * p.y + transform[10] * p.z + transform[11]);
-      }
+      const glm::dmat4 affine = affine_matrix(transform, path + ".transform");
+      for (glm::dvec3& p : mesh.positions) p = glm::dvec3(affine * glm::dvec4(p, 1.0));
     }
     scene->scene.meshes.push_back(std::move(mesh));
+  });
+}
+
+vkray_status vkray_scene_add_instance(vkray_scene* scene, uint32_t mesh, const double* transform, uint32_t mask) {
+  return guarded([&] {
+    require(scene, "scene");
+    const std::string path = "instances[" + std::to_string(scene->scene.instances.size()) + "]";
+    if (mesh >= scene->scene.meshes.size()) {
+      throw InputError(path + ".mesh: " + std::to_string(mesh) + " is not a mesh_id of the " +
+                       std::to_string(scene->scene.meshes.size()) + " meshes added so far");
+    }
+    Instance instance;
+    instance.mesh = mesh;
+    if (transform) {
+      const glm::dmat4 affine = affine_matrix(transform, path + ".transform");
+      instance.linear = glm::dmat3(affine);
+      instance.translation = glm::dvec3(affine[3]);
+    }
+    instance.mask = object_mask_argument(mask);
+    scene->scene.meshes[mesh].instanced = true;  // drawn only where instances place it
+    scene->scene.instances.push_back(instance);
   });
 }
 
@@ -666,6 +692,29 @@ vkray_status vkray_renderer_set_vertices(vkray_renderer* renderer, uint32_t mesh
   });
 }
 
+vkray_status vkray_renderer_set_transforms(vkray_renderer* renderer, const uint32_t* instances, const double* transforms,
+                                           uint64_t count) {
+  return guarded([&] {
+    require(renderer, "renderer");
+    if (count > 0) require(instances, "instances"), require(transforms, "transforms");
+    std::vector<glm::dmat4> affine(count);
+    for (size_t k = 0; k < count; ++k) affine[k] = affine_matrix(transforms + 16 * k, "transforms[" + std::to_string(k) + "]");
+    const std::span<const uint32_t> moved(instances, static_cast<size_t>(count));
+    const std::lock_guard one_call_at_a_time(renderer->busy);
+    if (renderer->renderer) {
+      renderer->renderer->set_transforms(moved, affine);
+      renderer->scene.instances = renderer->renderer->scene().instances;  // the surface outputs of given rays read it
+      renderer->last_call = renderer->renderer->timings();
+    } else {
+      const auto start = std::chrono::steady_clock::now();
+      set_instance_transforms(renderer->scene, moved, affine);
+      renderer->reference = std::make_unique<ReferenceScene>(renderer->scene, renderer->ray_mask);
+      renderer->reference_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    }
+    renderer->called = true;
+  });
+}
+
 const char* vkray_renderer_timings(vkray_renderer* renderer) {
   if (!renderer) return "{}";
   const std::lock_guard one_call_at_a_time(renderer->busy);
@@ -774,7 +823,8 @@ vkray_status vkray_cast_rays(vkray_renderer* renderer, const double* rays, uint6
               return doubles ? traced.normal64[c * traced.count + k] : double{traced.normal[c * traced.count + k]};
             };
             written.hit(call.given_index(first + k / hits), static_cast<uint32_t>(k % hits), doubles ? traced.t64[k] : traced.t[k],
-                        {normal(0), normal(1), normal(2)}, {traced.object[k], traced.primitive[k]});
+                        {normal(0), normal(1), normal(2)}, {traced.object[k], traced.primitive[k]},
+                        traced.instance.empty() ? no_object : traced.instance[k]);
           }
         });
         return;
@@ -790,7 +840,8 @@ vkray_status vkray_cast_rays(vkray_renderer* renderer, const double* rays, uint6
               hits == 1 ? std::vector<ReferenceHit>{trace_reference_ray(reference, run[k], run_ranges.start(k), run_ranges.end(k))}
                         : first_reference_hits(reference, run[k], run_ranges.start(k), run_ranges.end(k), hits);
           for (uint32_t layer = 0; layer < hits; ++layer) {
-            written.hit(call.given_index(first + k), layer, listed[layer].t, listed[layer].normal, reference.source(listed[layer]));
+            written.hit(call.given_index(first + k), layer, listed[layer].t, listed[layer].normal, reference.source(listed[layer]),
+                        listed[layer].instance);
           }
         }
       });

@@ -137,6 +137,13 @@ std::vector<BenchScene> bench_suite(const std::string& suite, uint32_t width, ui
     for (const char* name : {"stanford-bunny.obj", "stanford-dragon-100k.obj"}) add_model(scenes, name, width, height, models_dir, skipped);
     return scenes;
   }
+  if (suite == instances_suite) {
+    std::vector<BenchScene> scenes;
+    for (const char* name : {"stanford-bunny.obj", "stanford-dragon-100k.obj", "armadillo-50k.obj", "spot.obj", "teapot.obj"}) {
+      add_model(scenes, name, width, height, models_dir, skipped);
+    }
+    return scenes;
+  }
   throw InputError("--suite: unknown suite '" + suite + "' (choose from " + bench_suite_names + ")");
 }
 

@@ -16,7 +16,7 @@ struct BenchScene {
 };
 
 // For help texts and error messages.
-inline constexpr const char* bench_suite_names = "basic, scaling, stiff, accuracy, models, rays, host, moving";
+inline constexpr const char* bench_suite_names = "basic, scaling, stiff, accuracy, models, rays, host, moving, instances";
 // The suite whose rows are given rays (engine/bench/given_rays_bench.hpp), not a camera's variants.
 inline constexpr const char* given_rays_suite = "rays";
 // The suite whose rows are the host's stages on a frame made on the host (engine/bench/host_bench.hpp):
@@ -24,6 +24,8 @@ inline constexpr const char* given_rays_suite = "rays";
 inline constexpr const char* host_suite = "host";
 // The suite whose rows are a deforming mesh's refit against a rebuild (engine/bench/moving_bench.hpp).
 inline constexpr const char* moving_suite = "moving";
+// The suite whose rows are instances against the scene flattened (engine/bench/instances_bench.hpp).
+inline constexpr const char* instances_suite = "instances";
 // The real mesh the accuracy suite adds from the models folder, when it is there.
 inline constexpr const char* accuracy_model = "stanford-bunny.obj";
 
@@ -40,7 +42,9 @@ inline constexpr const char* accuracy_model = "stanford-bunny.obj";
 // - rays: three models of `models_dir` for given rays, framed: the Utah teapot (6k triangles, open
 //   seams), the Stanford bunny (70k) and dragon (100k); each one missing or broken is a line in
 //   `skipped`;
-// - moving: the Stanford bunny and dragon of `models_dir`, framed, for a deforming mesh.
+// - moving: the Stanford bunny and dragon of `models_dir`, framed, for a deforming mesh;
+// - instances: the Stanford bunny, dragon and armadillo and two small models (Spot, the Utah
+//   teapot) of `models_dir`, to be placed many times.
 // Throws InputError for an unknown suite name.
 std::vector<BenchScene> bench_suite(const std::string& suite, uint32_t width, uint32_t height,
                                     const std::filesystem::path& models_dir,

@@ -327,18 +327,58 @@ std::vector<EncodedPrimitive> encode_instanced_mesh(GpuScene& gpu, const Scene& 
   return triangles;
 }
 
-// The instanced meshes' triangles and trees after the world's (their leaves' slots and inner nodes
-// offset to where they land), each instance's record given its mesh's root, and the instances'
-// texels (see VKRAY_TEXELS_PER_INSTANCE_* in gpu_layout.h).
-void lay_out_instanced_meshes(GpuScene& gpu, const Scene& scene,
-                              const std::vector<std::vector<EncodedPrimitive>>& instanced_triangles,
-                              const std::vector<Bvh>& mesh_trees) {
-  const size_t world_slots = gpu.primitives.size();
-  std::vector<uint32_t> root(scene.meshes.size(), 0);
-  uint32_t deepest = 0;
+}  // namespace
+
+// What an instanced scene's world level is built from (GpuScene::instance_level).
+struct InstanceLevel {
+  std::vector<EncodedPrimitive> world;  // the world's own triangles and tree spheres
+  std::vector<Bounds> mesh_box;         // by mesh: an instanced mesh's triangles' box, in its coordinates
+  std::vector<uint32_t> root;           // by mesh: its tree's root node
+  uint32_t deepest_mesh = 0;            // the deepest mesh tree's depth
+  size_t world_slots = 0, world_nodes = 0;
+  double world_radius = 0.0;  // the largest distance from the anchor of a sphere's surface or a world vertex
+  BvhBuildOptions bvh;
+};
+
+namespace {
+
+// An instanced scene: the world's slots and nodes first, as many as its tree over its own
+// primitives and the instances can take (a binary tree of n leaf entries has at most n - 1 inner
+// nodes), then each instanced mesh's triangles and tree (their leaves' slots and inner nodes offset
+// to where they land), then the world's tree itself (place_instances).
+void lay_out_instances(GpuScene& gpu, const Scene& scene, std::vector<EncodedPrimitive> world,
+                       const std::vector<std::vector<EncodedPrimitive>>& instanced_triangles, const BvhBuildOptions& options) {
+  auto level = std::make_shared<InstanceLevel>();
+  level->world = std::move(world);
+  level->bvh = options;
+  level->mesh_box.resize(scene.meshes.size());
+  level->root.assign(scene.meshes.size(), 0);
+  for (uint32_t m = 0; m < scene.meshes.size(); ++m) {
+    for (const auto& triangle : instanced_triangles[m]) {
+      level->mesh_box[m].add(glm::dvec3(triangle.box.lower)), level->mesh_box[m].add(glm::dvec3(triangle.box.upper));
+    }
+  }
+  for (const Sphere& sphere : scene.spheres) {
+    level->world_radius = std::max(level->world_radius, glm::length(sphere.center - gpu.anchor) + sphere.radius);
+  }
+  for (const Mesh& mesh : scene.meshes) {
+    if (mesh.instanced) continue;
+    for (const glm::dvec3& p : mesh.positions) level->world_radius = std::max(level->world_radius, glm::length(p - gpu.anchor));
+  }
+  size_t placing = 0;
+  for (const Instance& instance : scene.instances) placing += level->mesh_box[instance.mesh].empty() ? 0 : 1;
+  level->world_slots = level->world.size() + placing;
+  level->world_nodes = std::max<size_t>(level->world_slots, 2) - 1;
+  const size_t texels = texels_per_normal(gpu.precision);
+  gpu.primitives.resize(level->world_slots);
+  gpu.normal_texels.resize(level->world_slots * texels);
+  gpu.hit_sources.slots.resize(level->world_slots);
+  gpu.bvh_nodes.resize(level->world_nodes);
   for (uint32_t m = 0; m < scene.meshes.size(); ++m) {
     if (instanced_triangles[m].empty()) continue;
-    const Bvh& tree = mesh_trees[m];
+    std::vector<Box> boxes;
+    for (const auto& triangle : instanced_triangles[m]) boxes.push_back({glm::dvec3(triangle.box.lower), glm::dvec3(triangle.box.upper)});
+    const Bvh tree = build_bvh(boxes, options);
     const auto first_slot = static_cast<uint32_t>(gpu.primitives.size());
     const auto first_node = static_cast<uint32_t>(gpu.bvh_nodes.size());
     for (const uint32_t i : tree.primitive_order) {
@@ -354,29 +394,11 @@ void lay_out_instanced_meshes(GpuScene& gpu, const Scene& scene,
       }
       gpu.bvh_nodes.push_back(node);
     }
-    root[m] = first_node;
-    deepest = std::max(deepest, tree.depth);
+    level->root[m] = first_node;
+    level->deepest_mesh = std::max(level->deepest_mesh, tree.depth);
   }
-  gpu.bvh_depth += 3 + deepest;
-  for (size_t slot = 0; slot < world_slots; ++slot) {
-    glm::uvec4& record = gpu.primitives[slot].indices;
-    if ((record.w & VKRAY_PRIMITIVE_KIND_BITS) == VKRAY_PRIMITIVE_INSTANCE) record.y = root[scene.instances[record.x].mesh];
-  }
-  for (const Instance& instance : scene.instances) {
-    const glm::dmat3 to_mesh = glm::inverse(instance.linear);
-    const glm::dvec3 translation = instance.translation - gpu.anchor;
-    if (gpu.precision == Precision::float64) {
-      for (int row = 0; row < 3; ++row) {
-        const gpu::GpuPoint point = encode_point(glm::dvec4(glm::row(to_mesh, row), translation[row]), gpu.precision);
-        gpu.instance_texels.push_back(point.first);
-        gpu.instance_texels.push_back(point.second);
-      }
-      continue;
-    }
-    const gpu::GpuPoint split = encode_point(glm::dvec4(translation, 0.0), gpu.precision);
-    for (int row = 0; row < 3; ++row) gpu.instance_texels.push_back(glm::vec4(glm::vec3(glm::row(to_mesh, row)), split.first[row]));
-    gpu.instance_texels.push_back(split.second);
-  }
+  gpu.instance_level = std::move(level);
+  place_instances(gpu, scene);
 }
 
 }  // namespace
@@ -477,27 +499,10 @@ GpuScene make_gpu_scene(const Scene& scene, const GpuSceneOptions& options, cons
   if (spheres_apart) {
     for (const auto& sphere : scene.spheres) gpu.spheres.push_back({encode(sphere.center - gpu.anchor, sphere.radius)});
   }
-  // Each instance as a primitive of the world's tree, boxed where it places its mesh; its mesh's tree
-  // is laid out after the world's (lay_out_instanced_meshes), which gives its root.
-  std::vector<Bvh> mesh_trees(scene.meshes.size());
-  for (uint32_t m = 0; m < scene.meshes.size(); ++m) {
-    if (instanced_triangles[m].empty()) continue;
-    std::vector<Box> mesh_boxes;
-    for (const auto& triangle : instanced_triangles[m]) {
-      mesh_boxes.push_back({glm::dvec3(triangle.box.lower), glm::dvec3(triangle.box.upper)});
-    }
-    mesh_trees[m] = build_bvh(mesh_boxes, options.bvh);
-  }
-  for (uint32_t k = 0; k < scene.instances.size(); ++k) {
-    const Instance& instance = scene.instances[k];
-    if (instanced_triangles[instance.mesh].empty()) continue;
-    Bounds mesh_box;
-    for (const auto& triangle : instanced_triangles[instance.mesh]) {
-      mesh_box.add(glm::dvec3(triangle.box.lower)), mesh_box.add(glm::dvec3(triangle.box.upper));
-    }
-    const Bounds placed = placed_box(mesh_box, instance);
-    const gpu::GpuPrimitive record{glm::uvec4(k, 0, 0, primitive_word(VKRAY_PRIMITIVE_INSTANCE, instance.mask))};
-    unordered.push_back({record, glm::dvec3(0.0), outward(placed.lower - gpu.anchor, placed.upper - gpu.anchor), {}});
+  if (shape.instances) {
+    lay_out_instances(gpu, scene, std::move(unordered), instanced_triangles, options.bvh);
+    gpu.bvh_build_ms = elapsed_ms(start);
+    return gpu;
   }
   std::vector<Box> boxes;
   boxes.reserve(unordered.size());
@@ -522,11 +527,7 @@ GpuScene make_gpu_scene(const Scene& scene, const GpuSceneOptions& options, cons
   }
   gpu.bvh_nodes = encode_nodes(bvh, [&](uint32_t slot) { return unordered[bvh.primitive_order[slot]].box; });
   gpu.bvh_depth = bvh.depth;
-  if (shape.instances) {
-    lay_out_instanced_meshes(gpu, scene, instanced_triangles, mesh_trees);
-  } else {
-    gpu.tree = bvh;  // what a refit keeps; a scene with instances is built again
-  }
+  gpu.tree = bvh;
   if (options.search == PrimitiveSearch::automatic && gpu.search == PrimitiveSearch::bvh_packet &&
       !packet_walk_fits(bvh.depth)) {
     gpu.search = PrimitiveSearch::bvh_per_ray;
@@ -572,6 +573,68 @@ struct RefitState {
     }
   }
 };
+
+void place_instances(GpuScene& gpu, const Scene& scene) {
+  const InstanceLevel& level = *gpu.instance_level;
+  // Each instance a primitive of the world's tree, boxed where it places its mesh; the radius about
+  // the anchor (GpuScene::radius) grown to the placed boxes' corners.
+  std::vector<EncodedPrimitive> entries = level.world;
+  gpu.radius = level.world_radius;
+  for (uint32_t k = 0; k < scene.instances.size(); ++k) {
+    const Instance& instance = scene.instances[k];
+    const Bounds& mesh_box = level.mesh_box[instance.mesh];
+    if (mesh_box.empty()) continue;
+    const Bounds placed = placed_box(mesh_box, instance);
+    for (int corner = 0; corner < 8; ++corner) {
+      const glm::dvec3 p((corner & 1) ? placed.upper.x : placed.lower.x, (corner & 2) ? placed.upper.y : placed.lower.y,
+                         (corner & 4) ? placed.upper.z : placed.lower.z);
+      gpu.radius = std::max(gpu.radius, glm::length(p - gpu.anchor));
+    }
+    const gpu::GpuPrimitive record{glm::uvec4(k, level.root[instance.mesh], 0, primitive_word(VKRAY_PRIMITIVE_INSTANCE, instance.mask))};
+    entries.push_back({record, glm::dvec3(0.0), outward(placed.lower - gpu.anchor, placed.upper - gpu.anchor), {}});
+  }
+  std::vector<Box> boxes;
+  boxes.reserve(entries.size());
+  for (const auto& entry : entries) boxes.push_back({glm::dvec3(entry.box.lower), glm::dvec3(entry.box.upper)});
+  const Bvh bvh = build_bvh(boxes, level.bvh);
+  const size_t texels = texels_per_normal(gpu.precision);
+  for (size_t slot = 0; slot < entries.size(); ++slot) {
+    const EncodedPrimitive& entry = entries[bvh.primitive_order[slot]];
+    gpu.primitives[slot] = entry.primitive;
+    write_normal(gpu.normal_texels.data() + slot * texels, entry.normal, gpu.precision);
+    gpu.hit_sources.slots[slot] = entry.source;
+  }
+  const std::vector<gpu::GpuBvhNode> nodes = encode_nodes(bvh, [&](uint32_t slot) { return entries[bvh.primitive_order[slot]].box; });
+  std::copy(nodes.begin(), nodes.end(), gpu.bvh_nodes.begin());
+  std::fill(gpu.bvh_nodes.begin() + static_cast<std::ptrdiff_t>(nodes.size()),
+            gpu.bvh_nodes.begin() + static_cast<std::ptrdiff_t>(level.world_nodes), gpu::GpuBvhNode{});
+  // The walk's stack: the world's depth, three entries for an instance entered, the deepest mesh's
+  // (see nearest_primitive_in_tree). Never lowered from one call to the next, and four more than
+  // the first tree needs: a deeper stack specializes the pipeline anew (on lavapipe ~170 ms).
+  const uint32_t stack = bvh.depth + 3 + level.deepest_mesh;
+  gpu.bvh_depth = std::max(gpu.bvh_depth, gpu.instance_texels.empty() ? stack + 4 : stack);
+  gpu.instance_texels.clear();
+  for (const Instance& instance : scene.instances) {
+    const glm::dmat3 to_mesh = glm::inverse(instance.linear);
+    const glm::dvec3 translation = instance.translation - gpu.anchor;
+    if (gpu.precision == Precision::float64) {
+      for (int row = 0; row < 3; ++row) {
+        const gpu::GpuPoint point = encode_point(glm::dvec4(glm::row(to_mesh, row), translation[row]), gpu.precision);
+        gpu.instance_texels.push_back(point.first);
+        gpu.instance_texels.push_back(point.second);
+      }
+      continue;
+    }
+    const gpu::GpuPoint split = encode_point(glm::dvec4(translation, 0.0), gpu.precision);
+    for (int row = 0; row < 3; ++row) gpu.instance_texels.push_back(glm::vec4(glm::vec3(glm::row(to_mesh, row)), split.first[row]));
+    gpu.instance_texels.push_back(split.second);
+  }
+  gpu.rewritten = {};
+  gpu.rewritten.slots = {0, level.world_slots};
+  gpu.rewritten.nodes = {0, level.world_nodes};
+  gpu.rewritten.mesh_alone = true;
+  gpu.rewritten.instances = true;
+}
 
 GpuScene::RefitStateHandle::RefitStateHandle() = default;
 GpuScene::RefitStateHandle::RefitStateHandle(const RefitStateHandle&) {}

@@ -56,13 +56,14 @@ Renderer::Renderer(GpuDevice& device, const Scene& scene, RendererOptions option
       }
     } joiner{early_creation};
     r.scene_options = scene_options;
-    const GpuScene gpu_scene = make_gpu_scene(scene, scene_options, options.shader, extent);
+    GpuScene gpu_scene = make_gpu_scene(scene, scene_options, options.shader, extent);
     r.upload_scene(gpu_scene, scene);
     r.make_placeholders();
     r.placeholder_image = std::make_unique<ImageTarget>(device, 1, 1);
     const double early_ms = join_early();
     r.choose_pipeline(gpu_scene, early_pipeline);
     if (!early_pipeline) r.timings.pipeline_beside_upload_ms = early_ms;  // taken
+    if (gpu_scene.instance_level) r.keep_for_placing(std::move(gpu_scene));
     r.timings.upload_ms = elapsed_ms(start);
   });
 }
@@ -119,6 +120,39 @@ void Renderer::set_vertices(uint32_t mesh, std::span<const glm::dvec3> positions
     r.reset_timings();  // keeps the tree's time (and the structures'), which upload_scene set anew
     r.timings.tree_refitted = gpu_scene.refitted;
     if (gpu_scene.tree) r.moving = std::move(gpu_scene);
+  });
+  r.timings.scene_update_ms = elapsed_ms(start);
+}
+
+void Renderer::Impl::keep_for_placing(GpuScene&& gpu_scene) {
+  mesh_boxes.assign(host_scene.meshes.size(), Bounds{});
+  for (size_t m = 0; m < host_scene.meshes.size(); ++m) {
+    if (!host_scene.meshes[m].instanced) continue;
+    for (const glm::dvec3& p : host_scene.meshes[m].positions) mesh_boxes[m].add(p);
+  }
+  placing = std::move(gpu_scene);
+}
+
+void Renderer::set_transforms(std::span<const uint32_t> instances, std::span<const glm::dmat4> transforms) {
+  Impl& r = *impl_;
+  const auto start = Clock::now();
+  set_instance_transforms(r.host_scene, instances, transforms, r.mesh_boxes.empty() ? nullptr : &r.mesh_boxes);
+  r.reference.reset();  // made again from the moved scene where a ray needs it
+  if (!r.placing) {  // no instanced mesh has a triangle to place: nothing on the device moves
+    r.timings.scene_update_ms = elapsed_ms(start);
+    return;
+  }
+  with_vulkan_errors("moving the instances", [&] {
+    r.context.check_usable();
+    const auto build_start = Clock::now();
+    place_instances(*r.placing, r.host_scene);
+    r.write_refitted(*r.placing);
+    r.hit_sources = r.placing->hit_sources;  // the world's slots in their new order
+    r.hit_source_table.reset();
+    std::optional<RaycastPipeline> none;
+    r.choose_pipeline(*r.placing, none);  // the same unless the world's tree outgrew its stack
+    r.reset_timings();
+    r.timings.bvh_build_ms = elapsed_ms(build_start);
   });
   r.timings.scene_update_ms = elapsed_ms(start);
 }

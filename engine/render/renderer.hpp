@@ -9,6 +9,8 @@
 #include "engine/scene/scene.hpp"
 #include "engine/vulkan/shader_variant.hpp"
 
+#include <glm/mat4x4.hpp>
+
 #include <array>
 #include <memory>
 #include <span>
@@ -232,6 +234,14 @@ class Renderer {
   void set_vertices(uint32_t mesh, std::span<const glm::dvec3> positions);
 
   // The scene as the renderer holds it (with the vertices set_vertices moved).
+  // New placements for some of the scene's instances (Scene::instances): instance instances[k]
+  // takes transforms[k], an affine map of its mesh's positions (its last row 0 0 0 1). The world's
+  // tree is built again over the instances where they now stand, the meshes' trees kept, and the
+  // next call renders the moved scene. Throws InputError, changing nothing, for an instance out of
+  // range, or a transform not affine, not finite, not invertible, or placing its mesh's box beyond
+  // 1e15; RenderTimings::scene_update_ms is the call's time.
+  void set_transforms(std::span<const uint32_t> instances, std::span<const glm::dmat4> transforms);
+
   const Scene& scene() const;
 
   // Timings of the last render (upload_ms and bvh_build_ms are the constructor's).

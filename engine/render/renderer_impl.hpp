@@ -107,6 +107,10 @@ struct Renderer::Impl {
   // After a first set_vertices of a tree's scene: its arrays on the host, which the next ones refit
   // in place (refit_in_place) and write into the same buffers. None for a scene that never moves.
   std::optional<GpuScene> moving;
+  // A scene with instances: its arrays on the host, whose world level set_transforms builds again
+  // (place_instances), and each instanced mesh's box, which bounds where a transform places it.
+  std::optional<GpuScene> placing;
+  std::vector<Bounds> mesh_boxes;
   glm::dvec3 anchor{0.0};
   double scene_radius = 0.0;  // GpuScene::radius
   glm::uvec4 counts{0};  // RayGenParams.counts, the ray mask in them
@@ -146,6 +150,8 @@ struct Renderer::Impl {
   std::map<std::pair<HitQuery, uint32_t>, double> given_ms_per_ray;
 
   Precision precision() const { return options.shader.precision; }
+  // renderer.cpp: keeps a scene with instances for set_transforms.
+  void keep_for_placing(GpuScene&& gpu_scene);
 
   // scene_upload.cpp: the scene's geometry (and the ray-query traversal's structures) on the device,
   // replacing what was there (set_vertices); `scene` is what gpu_scene was made from.

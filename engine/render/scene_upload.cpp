@@ -107,6 +107,7 @@ void Renderer::Impl::write_refitted(const GpuScene& gpu_scene) {
   write(vertices, gpu_scene.vertices, rewritten.vertices);
   write(normals, gpu_scene.normal_texels, rewritten.slots, texels_per_normal(gpu_scene.precision));
   write(bvh_nodes, gpu_scene.bvh_nodes, rewritten.nodes);
+  if (rewritten.instances) write(instances, gpu_scene.instance_texels);
   if (!rewritten.mesh_alone) write(spheres, gpu_scene.spheres);
   if (planes && !rewritten.mesh_alone) {  // their offsets from the anchor (the heights above the camera are set per render)
     gpu_planes = gpu_scene.planes;

@@ -142,19 +142,62 @@ void check_scene(Scene& scene) {
       throw InputError(path + ".mesh: " + std::to_string(instance.mesh) + " is not an instanced mesh of the scene's " +
                        std::to_string(scene.meshes.size()));
     }
-    for (int column = 0; column < 3; ++column) check_coordinates(instance.linear[column], path + ".transform");
-    check_coordinates(instance.translation, path + ".transform");
-    // Invertible: a ray is taken into the mesh's coordinates by the inverse (a zero determinant, or
-    // one that underflows, flattens the mesh into a plane or less).
-    const double determinant = glm::determinant(instance.linear);
-    if (!(std::abs(determinant) >= std::numeric_limits<double>::min()) || !std::isfinite(determinant)) {
-      throw InputError(path + ".transform: cannot be inverted (its determinant is " + std::to_string(determinant) + ")");
-    }
+    check_transform(instance, Bounds{}, path);
     const Mesh& mesh = scene.meshes[instance.mesh];
     for (size_t v = 0; v < mesh.positions.size(); ++v) {
       check_coordinates(placed(instance, mesh.positions[v]), path + ": the mesh's " + item("positions", v) + " placed");
     }
   }
+}
+
+void check_transform(const Instance& instance, const Bounds& mesh_box, const std::string& path) {
+  for (int column = 0; column < 3; ++column) check_coordinates(instance.linear[column], path + ".transform");
+  check_coordinates(instance.translation, path + ".transform");
+  // Invertible: a ray is taken into the mesh's coordinates by the inverse (a zero determinant, or
+  // one that underflows, flattens the mesh into a plane or less).
+  const double determinant = glm::determinant(instance.linear);
+  if (!(std::abs(determinant) >= std::numeric_limits<double>::min()) || !std::isfinite(determinant)) {
+    throw InputError(path + ".transform: cannot be inverted (its determinant is " + std::to_string(determinant) + ")");
+  }
+  if (mesh_box.empty()) return;
+  for (int corner = 0; corner < 8; ++corner) {
+    const glm::dvec3 p((corner & 1) ? mesh_box.upper.x : mesh_box.lower.x, (corner & 2) ? mesh_box.upper.y : mesh_box.lower.y,
+                       (corner & 4) ? mesh_box.upper.z : mesh_box.lower.z);
+    check_coordinates(placed(instance, p), path + ".transform: the mesh's box placed");
+  }
+}
+
+void set_instance_transforms(Scene& scene, std::span<const uint32_t> instances, std::span<const glm::dmat4> transforms,
+                             const std::vector<Bounds>* mesh_boxes) {
+  if (instances.size() != transforms.size()) {
+    throw InputError("set_transforms: " + std::to_string(instances.size()) + " instances but " +
+                     std::to_string(transforms.size()) + " transforms");
+  }
+  std::vector<Instance> placed_instances = scene.instances;
+  std::vector<Bounds> found_boxes;
+  for (size_t k = 0; k < instances.size(); ++k) {
+    const std::string path = "transforms[" + std::to_string(k) + "]";
+    if (instances[k] >= placed_instances.size()) {
+      throw InputError("instances[" + std::to_string(k) + "]: " + std::to_string(instances[k]) +
+                       " is not an instance of the scene's " + std::to_string(placed_instances.size()));
+    }
+    const glm::dmat4& m = transforms[k];
+    if (m[0][3] != 0.0 || m[1][3] != 0.0 || m[2][3] != 0.0 || m[3][3] != 1.0) {
+      throw InputError(path + ": not an affine map (its last row is not 0 0 0 1)");
+    }
+    Instance& instance = placed_instances[instances[k]];
+    instance.linear = glm::dmat3(m);
+    instance.translation = glm::dvec3(m[3]);
+    if (!mesh_boxes && found_boxes.empty()) {
+      found_boxes.resize(scene.meshes.size());
+      for (size_t mesh = 0; mesh < scene.meshes.size(); ++mesh) {
+        if (!scene.meshes[mesh].instanced) continue;
+        for (const glm::dvec3& p : scene.meshes[mesh].positions) found_boxes[mesh].add(p);
+      }
+    }
+    check_transform(instance, (mesh_boxes ? *mesh_boxes : found_boxes)[instance.mesh], path);
+  }
+  scene.instances = std::move(placed_instances);
 }
 
 const char* given_ray_fault(const GivenRay& ray) {

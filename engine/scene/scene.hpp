@@ -7,6 +7,7 @@
 
 #include <glm/common.hpp>
 #include <glm/mat3x3.hpp>
+#include <glm/mat4x4.hpp>
 #include <glm/vec3.hpp>
 
 #include <array>
@@ -179,6 +180,18 @@ struct Bounds {
 // placed ray is, to the rounding of taking the ray there (in double, a few units in the last
 // place): the margin, ten thousand times more, keeps a walk of the world's boxes from culling it.
 Bounds placed_box(const Bounds& mesh_box, const Instance& instance);
+
+// Throws InputError naming `path` where `instance`'s transform is not finite or cannot be inverted,
+// or places a corner of `mesh_box` (its mesh's box; none where empty) beyond max_coordinate: the
+// placed corners bound every placed position.
+void check_transform(const Instance& instance, const Bounds& mesh_box, const std::string& path);
+
+// Instance instances[k] of `scene` placed by transforms[k], an affine map of its mesh's positions
+// (last row 0 0 0 1). Every one is checked first (check_transform, against its mesh's box, from
+// `mesh_boxes` by mesh where given, else found here), so a refused call changes nothing: an
+// InputError names the entry.
+void set_instance_transforms(Scene& scene, std::span<const uint32_t> instances, std::span<const glm::dmat4> transforms,
+                             const std::vector<Bounds>* mesh_boxes = nullptr);
 
 // The box of the finite primitives: every sphere and vertex where it is drawn, an instanced mesh's
 // where each instance places it (planes are infinite).

@@ -14,6 +14,7 @@
 #include <fstream>
 #include <initializer_list>
 #include <limits>
+#include <map>
 #include <numbers>
 #include <set>
 #include <sstream>
@@ -287,10 +288,20 @@ Plane parse_plane(const Node& node) {
   return plane;
 }
 
-void apply_transform(const Node& node, Mesh& mesh) {
+// A transform object: positions scaled, then rotated, then translated.
+struct ParsedTransform {
+  glm::dvec3 scale{1.0};
+  glm::dquat rotation{1.0, 0.0, 0.0, 0.0};
+  glm::dvec3 translation{0.0};
+  glm::dmat3 linear() const {
+    return glm::mat3_cast(rotation) * glm::dmat3(glm::dvec3(scale.x, 0.0, 0.0), glm::dvec3(0.0, scale.y, 0.0), glm::dvec3(0.0, 0.0, scale.z));
+  }
+};
+
+ParsedTransform parse_transform(const Node& node) {
   node.expect_object({"scale", "rotate", "translate"});
   glm::dvec3 scale(1.0);
-  if (node.has("scale")) {
+  if (node.has("scale")) {  // (non-zero: a transform is invertible, as an instance's must be)
     const Node value = node.at("scale");
     scale = value.json().is_array() ? value.vec3() : glm::dvec3(value.number());
     if (scale.x == 0.0 || scale.y == 0.0 || scale.z == 0.0) value.fail("scale factors must be non-zero");
@@ -303,15 +314,20 @@ void apply_transform(const Node& node, Mesh& mesh) {
     rotation = glm::angleAxis(rotate.at("degrees").number() * std::numbers::pi / 180.0, axis);
   }
   const glm::dvec3 translation = node.has("translate") ? node.at("translate").vec3() : glm::dvec3(0.0);
-  for (auto& position : mesh.positions) position = rotation * (scale * position) + translation;
+  return {scale, rotation, translation};
+}
+
+void apply_transform(const Node& node, Mesh& mesh) {
+  const ParsedTransform transform = parse_transform(node);
+  for (auto& position : mesh.positions) position = transform.rotation * (transform.scale * position) + transform.translation;
   // Normals through the inverse transpose of rotation times scale: rotation divided by the scale.
-  for (auto& normal : mesh.normals) normal = rotation * (normal / scale);
+  for (auto& normal : mesh.normals) normal = transform.rotation * (normal / transform.scale);
 }
 
 // A mesh entry's meshes: its own positions and triangles, or those of the model file it names (a
 // glTF's nodes give several), each through the entry's transform.
 std::vector<Mesh> parse_meshes(const Node& node, const std::filesystem::path& base_dir, const ModelFileLoader& load_model) {
-  node.expect_object({"positions", "triangles", "model", "obj", "transform", "mask"});
+  node.expect_object({"positions", "triangles", "model", "obj", "transform", "mask", "name"});
   std::vector<Mesh> meshes;
   if (node.has("model") || node.has("obj")) {
     if (node.has("model") && node.has("obj")) node.fail("give 'model' ('obj' is its older name), not both");
@@ -341,7 +357,11 @@ std::vector<Mesh> parse_meshes(const Node& node, const std::filesystem::path& ba
     if (mesh.triangles.empty()) node.at("triangles").fail("a mesh needs at least one triangle");
     mesh.source = node.where();
   }
+  if (node.has("name") && meshes.size() != 1) {
+    node.at("name").fail("a named mesh is placed by instances as one mesh; the model gives " + std::to_string(meshes.size()));
+  }
   for (Mesh& mesh : meshes) {
+    mesh.instanced = node.has("name");  // drawn only where instances place it
     if (node.has("mask")) mesh.mask = node.at("mask").mask();
     if (node.has("transform")) apply_transform(node.at("transform"), mesh);
     for (size_t i = 0; i < mesh.positions.size(); ++i) {
@@ -472,7 +492,7 @@ Scene parse_scene(std::string_view json_text, const std::string& name, const std
                   const ModelFileLoader& load_model) {
   const Json root = parse_document(json_text, name);
   const Node top(root, "", name);
-  top.expect_object({"camera", "image", "spheres", "planes", "meshes"});
+  top.expect_object({"camera", "image", "spheres", "planes", "meshes", "instances"});
   Scene scene;
   scene.camera = parse_camera(top.at("camera"));
   if (top.has("image")) parse_image(top.at("image"), scene);
@@ -482,9 +502,37 @@ Scene parse_scene(std::string_view json_text, const std::string& name, const std
   if (top.has("planes")) {
     for (const Node& plane : top.at("planes").elements()) scene.planes.push_back(parse_plane(plane));
   }
+  std::map<std::string, uint32_t> named;  // a named entry's mesh
   if (top.has("meshes")) {
     for (const Node& entry : top.at("meshes").elements()) {
       for (Mesh& mesh : parse_meshes(entry, base_dir, load_model)) scene.meshes.push_back(std::move(mesh));
+      if (!entry.has("name")) continue;
+      const Node mesh_name = entry.at("name");
+      if (!named.emplace(mesh_name.string(), static_cast<uint32_t>(scene.meshes.size() - 1)).second) {
+        mesh_name.fail("another mesh is named '" + printable(mesh_name.string()) + "'");
+      }
+    }
+  }
+  if (top.has("instances")) {
+    for (const Node& entry : top.at("instances").elements()) {
+      entry.expect_object({"mesh", "transform", "mask"});
+      const Node placed_name = entry.at("mesh");
+      const auto found = named.find(placed_name.string());
+      if (found == named.end()) {
+        std::string names;
+        for (const auto& [known, mesh] : named) names += (names.empty() ? "'" : ", '") + printable(known) + "'";
+        placed_name.fail("no mesh is named '" + printable(placed_name.string()) + "' (" +
+                         (names.empty() ? "none is named" : "named: " + names) + ")");
+      }
+      Instance instance;
+      instance.mesh = found->second;
+      if (entry.has("transform")) {
+        const ParsedTransform transform = parse_transform(entry.at("transform"));
+        instance.linear = transform.linear();
+        instance.translation = transform.translation;
+      }
+      if (entry.has("mask")) instance.mask = entry.at("mask").mask();
+      scene.instances.push_back(instance);
     }
   }
   return scene;

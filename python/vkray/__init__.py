@@ -130,6 +130,19 @@ def _mask(value: Any, what: str, least: int = 1) -> int:
     return int(value)
 
 
+def _matrices(value: Any, what: str) -> np.ndarray:
+    """4 x 4 matrices (one, or N x 4 x 4) as float64 rows, C order: N x 16."""
+    try:
+        array = np.asarray(value, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise ValueError(f"{what}: expected 4 x 4 matrices of numbers") from None
+    if array.shape == (4, 4):
+        array = array[np.newaxis]
+    if array.ndim != 3 or array.shape[1:] != (4, 4):
+        raise ValueError(f"{what}: expected a 4 x 4 matrix or N x 4 x 4, got shape {array.shape}")
+    return np.ascontiguousarray(array.reshape(-1, 16))
+
+
 def _size(value: Optional[int], what: str) -> int:
     """A side in pixels, 0 for the default."""
     if value is None:
@@ -145,11 +158,15 @@ class Scene:
     P x 6 (point, normal); camera in the scene file's form ({'from': [0, 1, 5], 'to': [0, 0, 0],
     'fovy': 40}, degrees), or None to frame the geometry; width and height in pixels. masks: ray masks
     (0..255) by mesh_id, {mesh_id: mask} or one for every mesh, sphere and plane in that order: a call's
-    rays (mask=) hit only what shares a bit with theirs; every bit (255) where none is given."""
+    rays (mask=) hit only what shares a bit with theirs; every bit (255) where none is given.
+    instances: a list of dicts {'mesh' (a mesh_id), 'transform' (4 x 4 affine, optional), 'mask'
+    (optional)}, numbered in order (instance_id): a mesh they name is stored once and drawn only where
+    they place it (Renderer.set_transforms moves them)."""
 
     def __init__(self, vertices: Any = None, triangles: Any = None, *, meshes: Optional[Iterable[Mapping[str, Any]]] = None,
                  spheres: Any = None, planes: Any = None, camera: Optional[Mapping[str, Any]] = None,
-                 width: int = 800, height: int = 600, masks: Union[None, Mapping[int, int], Sequence[int]] = None):
+                 width: int = 800, height: int = 600, masks: Union[None, Mapping[int, int], Sequence[int]] = None,
+                 instances: Optional[Iterable[Mapping[str, Any]]] = None):
         handle = ctypes.c_void_p()
         _check(_native.lib.vkray_scene_new(int(width), int(height), ctypes.byref(handle)))
         self._handle = handle
@@ -182,6 +199,19 @@ class Scene:
                 if isinstance(object_id, bool) or not isinstance(object_id, (int, np.integer)) or not 0 <= object_id < 2**32:
                     raise ValueError(f"masks: expected mesh_ids as keys, got {object_id!r}")
                 _check(_native.lib.vkray_scene_set_mask(self._handle, int(object_id), _mask(mask, f"masks[{object_id}]", 0)))
+        for k, instance in enumerate(instances or []):
+            path = f"instances[{k}]"
+            if not isinstance(instance, Mapping) or "mesh" not in instance:
+                raise ValueError(f"{path}: expected a dict with mesh, and transform and mask where wanted")
+            for key in instance:
+                if key not in ("mesh", "transform", "mask"):
+                    raise ValueError(f"{path}: unknown key '{key}' (known: mesh, transform, mask)")
+            mesh = instance["mesh"]
+            if isinstance(mesh, bool) or not isinstance(mesh, (int, np.integer)) or not 0 <= mesh < 2**32:
+                raise ValueError(f"{path}.mesh: expected a mesh_id, got {mesh!r}")
+            transform = _matrices(instance["transform"], f"{path}.transform")[0] if "transform" in instance else None
+            mask = _mask(instance.get("mask", 255), f"{path}.mask", 0)
+            _check(_native.lib.vkray_scene_add_instance(self._handle, int(mesh), None if transform is None else _pointer(transform), mask))
         if camera is not None:
             _check(_native.lib.vkray_scene_set_camera(self._handle, _camera_json(camera)))
         _check(_native.lib.vkray_scene_finish(self._handle))
@@ -324,7 +354,7 @@ def _render_help() -> str:
 
 
 #: cast_rays' outputs besides the distance: what each ray gives, by key.
-RAY_OUTPUTS = ("t", "normal", "primitive_id", "mesh_id", "position", "barycentric", "front_facing", "shading_normal", "texcoord")
+RAY_OUTPUTS = ("t", "normal", "primitive_id", "mesh_id", "instance_id", "position", "barycentric", "front_facing", "shading_normal", "texcoord")
 
 
 class _Caster:
@@ -478,6 +508,22 @@ class _Caster:
             raise ValueError(f"mesh: expected a mesh_id (0 for the first mesh), got {mesh!r}")
         moved = _rows(positions, "positions", 3)
         _check(_native.lib.vkray_renderer_set_vertices(self._handle, int(mesh), _pointer(moved), len(moved)))
+
+    def set_transforms(self, instances: Any, transforms: Any) -> None:
+        """Moves instances: instances[k] (an instance_id, in the order the Scene's instances were given)
+        takes transforms[k], a 4 x 4 affine matrix (last row 0 0 0 1); transforms is N x 4 x 4. The
+        top level (the tree over the instances) is built anew where they now stand, the meshes' trees
+        kept; the next call renders the moved scene (timings: 'scene_update_ms'). ValueError for a bad
+        instance or transform, the scene unchanged."""
+        ids = np.ascontiguousarray(np.atleast_1d(np.asarray(instances)))
+        if ids.dtype.kind not in "iu" or ids.ndim != 1 or (ids.size and (ids.min() < 0 or ids.max() >= 2**32)):
+            raise ValueError("instances: expected a list of instance_ids")
+        ids = np.ascontiguousarray(ids, dtype=np.uint32)
+        matrices = _matrices(transforms, "transforms")
+        if len(matrices) != len(ids):
+            raise ValueError(f"set_transforms: {len(ids)} instances but {len(matrices)} transforms")
+        _check(_native.lib.vkray_renderer_set_transforms(self._handle, ids.ctypes.data_as(ctypes.POINTER(ctypes.c_uint32)),
+                                                          _pointer(matrices), len(ids)))
 
     @property
     def timings(self) -> Dict[str, Any]:

@@ -6,7 +6,7 @@ the relocatable bundle's lib/ two folders up. ctypes releases the GIL for every 
 import ctypes
 import pathlib
 
-API_VERSION = 3  # VKRAY_API_VERSION of the header this file declares
+API_VERSION = 4  # VKRAY_API_VERSION of the header this file declares
 
 
 def _find_library():
@@ -47,6 +47,7 @@ _signatures = {
                                   ctypes.POINTER(_scene)]),
     "vkray_scene_new": (Status, [ctypes.c_uint32, ctypes.c_uint32, ctypes.POINTER(_scene)]),
     "vkray_scene_add_mesh": (Status, [_scene, _doubles, ctypes.c_uint64, ctypes.c_void_p, ctypes.c_int, ctypes.c_uint64, _doubles]),
+    "vkray_scene_add_instance": (Status, [_scene, ctypes.c_uint32, _doubles, ctypes.c_uint32]),
     "vkray_scene_add_spheres": (Status, [_scene, _doubles, ctypes.c_uint64]),
     "vkray_scene_add_planes": (Status, [_scene, _doubles, ctypes.c_uint64]),
     "vkray_scene_set_mask": (Status, [_scene, ctypes.c_uint32, ctypes.c_uint32]),
@@ -59,6 +60,7 @@ _signatures = {
     "vkray_renderer_doubles": (ctypes.c_int, [_renderer]),
     "vkray_renderer_device_name": (ctypes.c_char_p, [_renderer]),
     "vkray_renderer_set_vertices": (Status, [_renderer, ctypes.c_uint32, _doubles, ctypes.c_uint64]),
+    "vkray_renderer_set_transforms": (Status, [_renderer, ctypes.POINTER(ctypes.c_uint32), _doubles, ctypes.c_uint64]),
     "vkray_renderer_timings": (ctypes.c_char_p, [_renderer]),
     "vkray_renderer_free": (None, [_renderer]),
     "vkray_render": (Status, [_renderer, ctypes.c_char_p, ctypes.c_uint32, ctypes.c_uint32, ctypes.c_uint32, ctypes.c_uint32,
