@@ -255,7 +255,7 @@ TEST(SceneJson, UnknownNestedKeySuggestsNearestName) {
 
 TEST(SceneJson, UnknownKeyFarFromAllNamesListsThem) {
   expect_error(parse_error(with_camera(R"("materials": [])")), "t.json: materials: ",
-               "unknown key 'materials' (expected one of: camera, image, spheres, planes, meshes)");
+               "unknown key 'materials' (expected one of: camera, image, spheres, planes, meshes, instances)");
 }
 
 TEST(SceneJson, UnknownKeyWithNewlineKeepsMessageOnOneLine) {

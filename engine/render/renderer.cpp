@@ -119,7 +119,13 @@ void Renderer::set_vertices(uint32_t mesh, std::span<const glm::dvec3> positions
     r.choose_pipeline(gpu_scene, none);
     r.reset_timings();  // keeps the tree's time (and the structures'), which upload_scene set anew
     r.timings.tree_refitted = gpu_scene.refitted;
-    if (gpu_scene.tree) r.moving = std::move(gpu_scene);
+    // What a later call moves: the instances of the scene as it now is, or its tree.
+    r.placing.reset();
+    if (gpu_scene.instance_level) {
+      r.keep_for_placing(std::move(gpu_scene));
+    } else if (gpu_scene.tree) {
+      r.moving = std::move(gpu_scene);
+    }
   });
   r.timings.scene_update_ms = elapsed_ms(start);
 }
@@ -148,7 +154,11 @@ void Renderer::set_transforms(std::span<const uint32_t> instances, std::span<con
     place_instances(*r.placing, r.host_scene);
     r.write_refitted(*r.placing);
     r.hit_sources = r.placing->hit_sources;  // the world's slots in their new order
-    r.hit_source_table.reset();
+    if (r.hit_source_table) {  // rewritten in place: bound descriptor sets name this buffer
+      const GpuScene::ItemRange& slots = r.placing->rewritten.slots;
+      write_buffer(r.context, *r.hit_source_table, r.hit_sources.slots.data() + slots.first,
+                   (slots.end - slots.first) * sizeof(ObjectPrimitive), slots.first * sizeof(ObjectPrimitive));
+    }
     std::optional<RaycastPipeline> none;
     r.choose_pipeline(*r.placing, none);  // the same unless the world's tree outgrew its stack
     r.reset_timings();
