@@ -1,6 +1,7 @@
 #include "engine/bench/instances_bench.hpp"
 
 #include "engine/render/gpu_scene.hpp"
+#include "engine/bench/render_times.hpp"
 #include "engine/render/renderer.hpp"
 
 #include <glm/geometric.hpp>
@@ -43,15 +44,6 @@ void place(Instance& instance, const glm::dmat4& m) {
   instance.translation = glm::dvec3(m[3]);
 }
 
-// GPU ms of `frames` renders after a first, and the last frame.
-TimeStats render_times(Renderer& renderer, const Scene& scene, uint32_t frames, Frame& last) {
-  std::vector<double> times;
-  for (uint32_t n = 0; n <= frames; ++n) {
-    last = renderer.render(scene.camera, scene.width, scene.height, {Aov::depth, Aov::normal});
-    if (n > 0) times.push_back(renderer.timings().dispatch_gpu_ms);
-  }
-  return time_stats(times);
-}
 
 }  // namespace
 

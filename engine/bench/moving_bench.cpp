@@ -1,5 +1,6 @@
 #include "engine/bench/moving_bench.hpp"
 
+#include "engine/bench/render_times.hpp"
 #include "engine/render/renderer.hpp"
 
 #include <glm/geometric.hpp>
@@ -21,15 +22,6 @@ std::vector<glm::dvec3> moved_vertices(const Mesh& mesh, std::mt19937_64& random
   return positions;
 }
 
-// The GPU times of `frames` renders after a first, and the last frame.
-TimeStats render_times(Renderer& renderer, const Scene& scene, uint32_t frames, Frame& last) {
-  std::vector<double> times;
-  for (uint32_t n = 0; n <= frames; ++n) {
-    last = renderer.render(scene.camera, scene.width, scene.height, {Aov::depth, Aov::normal});
-    if (n > 0) times.push_back(renderer.timings().dispatch_gpu_ms);
-  }
-  return time_stats(times);
-}
 
 }  // namespace
 
