@@ -26,9 +26,9 @@ glm::dmat3 turned_about_y(double radians) {
 // An ordinary mesh, a sphere and a ground plane, with a fine closed mesh (meshes[1]) and a coarse one
 // (meshes[2]) placed four times: turned, sheared and unevenly scaled, mirrored by a negative scale,
 // and the coarse one masked 2.
-Scene instanced_scene(uint32_t width = 96, uint32_t height = 64) {
+Scene instanced_scene(uint32_t image_width = 96, uint32_t image_height = 64) {
   Scene scene;
-  scene.width = width, scene.height = height;
+  scene.width = image_width, scene.height = image_height;
   scene.meshes.push_back(make_sphere_mesh(300, glm::dvec3(-2.5, 0.5, 0.0), 0.7));
   Mesh ball = make_sphere_mesh(1500);
   ball.instanced = true;
