@@ -11,6 +11,7 @@
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 
+#include <chrono>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -130,7 +131,10 @@ TEST_F(ReadmeExamplesTest, EveryVkrayCommandRuns) {
     SCOPED_TRACE(command);
     const fs::path log = dir_ / "log.txt";
     const std::string shell = "cd '" + repo.string() + "' && timeout 600 " + command + " >'" + log.string() + "' 2>&1 </dev/null";
+    const auto started = std::chrono::steady_clock::now();
     const int status = std::system(shell.c_str());
+    // Each command's time in the log: what to shrink first when the suite grows slow.
+    std::printf("%.1f s: %s\n", std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count(), command.c_str());
     EXPECT_TRUE(status != -1 && WIFEXITED(status) && WEXITSTATUS(status) == 0)
         << "README command failed: " << line << "\nran as: " << command << "\n" << read_text(log);
     ++ran;
