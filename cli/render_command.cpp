@@ -173,26 +173,27 @@ int run_render_views(const RenderOptions& options, const AovSet& aovs) {
   batch.output_settings = output_settings(options, aovs);
   batch.aovs = aovs;
   batch.overwrite = options.views.overwrite;
-  if (options.views.views_file) batch.cameras = batch_cameras(options.views, Camera{});
+  if (options.views.views_file) batch.views = batch_views(options.views, Camera{});
   auto opening = std::async(std::launch::async, [&options] {
     return std::make_unique<GpuDevice>(options.device_options.device, options.device_options.transfer_mode());
   });
   Scene scene = load_scene_argument(options.scene_path, options.width, options.height, options.view);
   if (options.camera) apply_camera_option(*options.camera, scene.camera);
-  if (!options.views.views_file) batch.cameras = batch_cameras(options.views, scene.camera);
-  for (size_t k = 0; k < batch.cameras.size(); ++k) {
-    check_camera_reach(batch.cameras[k], scene.width, scene.height, "view " + std::to_string(k) + "'s camera");
+  if (!options.views.views_file) batch.views = batch_views(options.views, scene.camera);
+  for (size_t k = 0; k < batch.views.size(); ++k) {
+    check_camera_reach(batch.views[k].camera, scene.width, scene.height, "view " + std::to_string(k) + "'s camera");
   }
+  check_view_poses(batch.views, scene);
   batch.width = scene.width;
   batch.height = scene.height;
   batch.scene = geometry_hash(scene);
   batch.mask = static_cast<Mask>(options.mask);
   print_mask_note(scene, options.mask);
   if (aovs.has(Aov::mesh_id)) batch.objects = object_names(scene);
-  if (batch.cameras.size() > 1 && (!batch.exr.has_index() || (batch.png && !batch.png->has_index()))) {
+  if (batch.views.size() > 1 && (!batch.exr.has_index() || (batch.png && !batch.png->has_index()))) {
     throw InputError(std::string(batch.exr.has_index() ? "--preview" : "-o") + ": '" +
                      (batch.exr.has_index() ? batch.png->text() : batch.exr.text()) + "' has no {index}, so the " +
-                     std::to_string(batch.cameras.size()) + " views would overwrite one file (as out/view-{index:05}.exr)");
+                     std::to_string(batch.views.size()) + " views would overwrite one file (as out/view-{index:05}.exr)");
   }
   check_view_names(batch);
   // The tests' fault: the device lost before view k renders (tests/views/test_many_views.py).
@@ -211,7 +212,7 @@ int run_render_views(const RenderOptions& options, const AovSet& aovs) {
   ViewsProgress progress;
   const ViewBatchSummary summary = render_views(renderer, batch, std::ref(progress));
   std::printf("vkray: %u views written, %u complete already (shard %u of %u, %zu views in all), to %s on %s; manifest %s\n",
-              summary.rendered, summary.skipped, batch.shard.index, batch.shard.count, batch.cameras.size(),
+              summary.rendered, summary.skipped, batch.shard.index, batch.shard.count, batch.views.size(),
               batch.exr.text().c_str(), device->info().name.c_str(), batch.manifest.c_str());
   if (summary.beyond_png16_samples > 0) {
     print_png16_note(summary.beyond_png16_samples, summary.beyond_png16_views, batch.output_settings.depth_step);

@@ -40,8 +40,9 @@ Shard checked_shard(uint32_t index, uint32_t count, const std::string& from) {
 
 void add_views_options(CLI::App* command, ViewsOptions& options) {
   CLI::Option* views = command->add_option("--views", options.views_file,
-                                           "Render many views: a JSON array of cameras in the scene file's form, or "
-                                           "JSON Lines, one camera a line; -o then holds {index} or {index:05}");
+                                           "Render many views: a JSON array of cameras in the scene file's form, each "
+                                           "may place instances (\"instances\"), or JSON Lines, one a line; -o then "
+                                           "holds {index} or {index:05}");
   CLI::Option* orbit = command->add_option("--orbit", options.orbit,
                                            "Render N views turned about the camera's up axis through its target")
                            ->check(CLI::Range(1u, 10'000'000u));
@@ -64,7 +65,7 @@ void add_views_options(CLI::App* command, ViewsOptions& options) {
                     "Many views: render every view, also those whose files exist (and start the manifest afresh)");
 }
 
-std::vector<Camera> batch_cameras(const ViewsOptions& options, const Camera& start) {
+std::vector<View> batch_views(const ViewsOptions& options, const Camera& start) {
   if (options.views_file) return load_views(*options.views_file);
   if (options.orbit) return orbit_views(start, *options.orbit);
   return sphere_views(start, *options.sphere);

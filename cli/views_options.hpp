@@ -26,8 +26,8 @@ struct ViewsOptions {
 // Registers --views, --orbit, --sphere, --manifest, --shard, --shard-count and --overwrite.
 void add_views_options(CLI::App* command, ViewsOptions& options);
 
-// The cameras the options ask for; `start` is the scene's (or the framed) camera. Throws InputError.
-std::vector<Camera> batch_cameras(const ViewsOptions& options, const Camera& start);
+// The views the options ask for; `start` is the scene's (or the framed) camera. Throws InputError.
+std::vector<View> batch_views(const ViewsOptions& options, const Camera& start);
 
 // --shard I/N, or auto: I and N from Slurm's array variables (SLURM_ARRAY_TASK_ID less
 // SLURM_ARRAY_TASK_MIN, over SLURM_ARRAY_TASK_STEP; SLURM_ARRAY_TASK_COUNT tasks) or from

@@ -1606,6 +1606,72 @@ TEST_F(CliTest, ALinkAmongLaterViewsIsRefusedBeforeAnyViewRenders) {
   EXPECT_TRUE(fs::is_symlink(dir_ / "out" / "v-2.exr"));
 }
 
+// Many views, each placing instances of its own (a dataset's object poses per frame): each view's
+// image is the image of the scene file placing them so, bit for bit; a view that places nothing has
+// the scene's placements back, whatever the view before it placed; the manifest records the poses,
+// and a resumed run whose views place them otherwise is refused.
+TEST_F(CliTest, EachViewPlacesItsInstancesAsASceneFileWould) {
+  const std::string meshes = R"("camera": {"from": [0, 1, 4], "to": [0, 0, 0], "fovy": 45},
+                                "meshes": [{"name": "wedge", "positions": [[-0.5, 0, -0.5], [0.5, 0, -0.5], [0, 0.8, 0], [0, 0, 0.6]],
+                                           "triangles": [[0, 1, 2], [0, 3, 1], [1, 3, 2], [2, 3, 0]]}],
+                                "planes": [{"point": [0, -0.5, 0], "normal": [0, 1, 0]}])";
+  const std::string left = R"({"mesh": "wedge", "transform": {"translate": [-0.8, 0, 0]}})";
+  const std::string right = R"({"mesh": "wedge", "transform": {"translate": [0.8, 0, 0], "scale": 0.7}})";
+  const std::string moved = R"({"translate": [0.5, 0.3, 0.4], "scale": [-1, 1.2, 1], "rotate": {"axis": [0, 1, 0], "degrees": 35}})";
+  write("scene.json", "{" + meshes + R"(, "instances": [)" + left + ", " + right + "]}");
+  const std::string cameras[] = {R"("from": [0, 1.5, 4], "to": [0, 0, 0], "fovy": 45)", R"("from": [1, 2, 3.5], "to": [0, 0.2, 0], "fovy": 50)",
+                                 R"("from": [-1, 1, 4], "to": [0, 0, 0], "fovy": 40)"};
+  write("views.jsonl", "{" + cameras[0] + "}\n{" + cameras[1] + R"(, "instances": [{"instance": 1, "transform": )" + moved + "}]}\n{" +
+                           cameras[2] + "}\n");
+  const std::vector<std::string> size = {"--width", "48", "--height", "32", "--aov", "depth,normal,instance-id"};
+  std::vector<std::string> args = {"render", "scene.json", "--views", "views.jsonl", "-o", "out/v-{index}.exr"};
+  args.insert(args.end(), size.begin(), size.end());
+  const RunResult views = vkray(args);
+  ASSERT_EQ(views.exit_code, 0) << views.err;
+  // The same views one by one, from scene files placing the instances as each view does.
+  const std::string right_moved = R"({"mesh": "wedge", "transform": )" + moved + "}";
+  for (int k = 0; k < 3; ++k) {
+    SCOPED_TRACE("view " + std::to_string(k));
+    write("scene-" + std::to_string(k) + ".json", "{" + meshes + R"(, "instances": [)" + left + ", " + (k == 1 ? right_moved : right) + "]}");
+    std::vector<std::string> single = {"render", "scene-" + std::to_string(k) + ".json", "--camera", "{" + cameras[k] + "}",
+                                       "-o", "out/single-" + std::to_string(k) + ".exr", "--no-preview"};
+    single.insert(single.end(), size.begin(), size.end());
+    const RunResult run = vkray(single);
+    ASSERT_EQ(run.exit_code, 0) << run.err;
+    Image of_views, alone;
+    read_image(path("out/v-" + std::to_string(k) + ".exr"), of_views);
+    read_image(path("out/single-" + std::to_string(k) + ".exr"), alone);
+    ASSERT_EQ(of_views.channel_names, alone.channel_names);
+    for (const auto& [name, values] : alone.channels) {
+      const std::vector<float>& posed = of_views.channels.at(name);
+      size_t differing = 0;
+      for (size_t p = 0; p < values.size(); ++p) differing += std::memcmp(&values[p], &posed[p], sizeof(float)) != 0;
+      EXPECT_EQ(differing, 0u) << name;
+    }
+  }
+  Image moved_view;  // the moved instance in sight, so that the comparison above compares it
+  read_image(path("out/v-1.exr"), moved_view);
+  EXPECT_GT(std::ranges::count(moved_view.channels.at("instance_id"), 1.0f), 20);
+
+  const std::string manifest = read_text(path("out/manifest.jsonl"));
+  ASSERT_EQ(count_lines(manifest), 3u) << manifest;
+  EXPECT_NE(manifest.find(R"("instances":[{"instance":1,"transform":[[)"), std::string::npos) << manifest;
+  EXPECT_EQ(manifest.find(R"("instances")"), manifest.rfind(R"("instances")")) << "only view 1 places an instance";
+
+  write("views.jsonl", "{" + cameras[0] + "}\n{" + cameras[1] + "}\n{" + cameras[2] + "}\n");
+  args = {"render", "scene.json", "--views", "views.jsonl", "-o", "out/v-{index}.exr"};
+  args.insert(args.end(), size.begin(), size.end());
+  const RunResult resumed = vkray(args);  // refused once the manifest is read, after the device's note
+  EXPECT_EQ(resumed.exit_code, 2) << resumed.err;
+  EXPECT_NE(resumed.err.find("out/manifest.jsonl: view 1 was rendered with other settings (the instances placed)"), std::string::npos)
+      << resumed.err;
+
+  write("views.jsonl", "{" + cameras[0] + "}\n{" + cameras[1] + R"(, "instances": [{"instance": 2, "transform": {}}]})" "\n");
+  args = {"render", "scene.json", "--views", "views.jsonl", "-o", "refused/v-{index}.exr"};
+  expect_error(vkray(args), 2, {"views.jsonl:2: instances[0].instance: 2 is not an instance of the scene's 2 (0..1)"});
+  EXPECT_FALSE(fs::exists(path("refused")));
+}
+
 // A mirrored world_to_camera is exactly orthogonal: the message says it mirrors, with no "off by
 // 0.000000"; a scaled one says by how much, in two digits.
 TEST_F(CliTest, AMatrixThatIsNoRotationIsToldWithoutNoise) {

@@ -43,11 +43,12 @@ TEST(Views, JsonArrayAndJsonLines) {
   const std::string byte_order_mark = "\xEF\xBB\xBF";
   for (const std::string& text : {"[" + a + ",\n" + b + "]", a + "\n\n" + b + "\n", "\n  [\n" + a + "," + b + "\n]  \n",
                                   byte_order_mark + "[\n" + a + ",\n" + b + "\n]", byte_order_mark + a + "\n" + b}) {
-    const std::vector<Camera> views = parse_views(text, "views");
+    const std::vector<View> views = parse_views(text, "views");
     ASSERT_EQ(views.size(), 2u) << text;
-    EXPECT_EQ(views[0].from, glm::dvec3(1, 2, 3));
-    EXPECT_EQ(views[1].up, glm::dvec3(0, 0, 1));
-    EXPECT_EQ(views[1].fovy_degrees, 60.0);
+    EXPECT_EQ(views[0].camera.from, glm::dvec3(1, 2, 3));
+    EXPECT_EQ(views[1].camera.up, glm::dvec3(0, 0, 1));
+    EXPECT_EQ(views[1].camera.fovy_degrees, 60.0);
+    EXPECT_TRUE(views[0].poses.empty() && views[1].poses.empty());
   }
 }
 
@@ -83,17 +84,17 @@ TEST(Views, OrbitKeepsDistanceHeightAndFirstView) {
   start.to = {1, 1, 1};
   start.up = {0, 2, 0};
   start.fovy_degrees = 33;
-  const std::vector<Camera> views = orbit_views(start, 8);
+  const std::vector<View> views = orbit_views(start, 8);
   ASSERT_EQ(views.size(), 8u);
-  EXPECT_EQ(views[0].from, start.from);
-  for (const Camera& view : views) {
+  EXPECT_EQ(views[0].camera.from, start.from);
+  for (const auto& [view, poses, source] : views) {
     EXPECT_NEAR(glm::length(view.from - view.to), glm::length(start.from - start.to), 1e-12);
     EXPECT_NEAR(view.from.y, start.from.y, 1e-12);
     EXPECT_EQ(view.to, start.to);
     EXPECT_EQ(view.fovy_degrees, 33.0);
   }
   // Half way round: the opposite side.
-  EXPECT_NEAR(glm::length((views[4].from - start.to) + (start.from - start.to) * glm::dvec3(1, 0, 1) -
+  EXPECT_NEAR(glm::length((views[4].camera.from - start.to) + (start.from - start.to) * glm::dvec3(1, 0, 1) -
                           glm::dvec3(0, start.from.y - start.to.y, 0)),
               0.0, 1e-12);
 }
@@ -102,11 +103,54 @@ TEST(Views, SphereViewsFromAStraightDownCamera) {
   Camera start;  // looking along up: the lattice needs a side of its own
   start.from = {0, 5, 0};
   start.to = {0, 0, 0};
-  const std::vector<Camera> views = sphere_views(start, 7);
-  for (const Camera& view : views) {
+  const std::vector<View> views = sphere_views(start, 7);
+  for (const auto& [view, poses, source] : views) {
     EXPECT_NEAR(glm::length(view.from), 5.0, 1e-12);
     EXPECT_TRUE(std::isfinite(make_camera_basis(view, 8, 8).right.x));
   }
+}
+
+// A view places instances by the scene file's transform objects; what it places is checked against
+// the scene before any view renders, each error naming the view's line and entry.
+TEST(Views, AViewPlacesInstancesAndEachErrorNamesItsLine) {
+  const std::string camera = R"("from": [0, 1, 5], "to": [0, 0, 0], "fovy": 40)";
+  const std::string text = "{" + camera + "}\n{" + camera + R"(, "instances": [{"instance": 1, "transform": {"scale": 2, "translate": [1, 2, 3]}}, )"
+                           R"({"instance": 0, "transform": {"rotate": {"axis": [0, 1, 0], "degrees": 90}}}]})" "\n";
+  const std::vector<View> views = parse_views(text, "v.jsonl");
+  ASSERT_EQ(views.size(), 2u);
+  EXPECT_TRUE(views[0].poses.empty());
+  ASSERT_EQ(views[1].poses.instances, (std::vector<uint32_t>{1, 0}));
+  EXPECT_EQ(views[1].source, "v.jsonl:2");
+  const glm::dmat4& scaled = views[1].poses.transforms[0];
+  EXPECT_EQ(scaled, glm::dmat4(glm::dvec4(2, 0, 0, 0), glm::dvec4(0, 2, 0, 0), glm::dvec4(0, 0, 2, 0), glm::dvec4(1, 2, 3, 1)));
+  const glm::dvec4 turned_x = views[1].poses.transforms[1] * glm::dvec4(1, 0, 0, 1);  // +x turned 90 degrees about +y: -z
+  EXPECT_NEAR(glm::length(glm::dvec3(turned_x) - glm::dvec3(0, 0, -1)), 0.0, 1e-15);
+
+  Scene scene;
+  Mesh mesh;
+  mesh.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+  mesh.triangles = {{0, 1, 2}};
+  mesh.instanced = true;
+  scene.meshes.push_back(mesh);
+  scene.instances = {Instance{}, Instance{}};
+  check_view_poses(views, scene);
+  const auto view_of = [&](const std::string& instances) {
+    return parse_views("{" + camera + ", \"instances\": " + instances + "}", "v.jsonl");
+  };
+  expect_error(error_of([&] { check_view_poses(view_of(R"([{"instance": 2, "transform": {}}])"), scene); }),
+               "v.jsonl:1: instances[0].instance: ", "2 is not an instance of the scene's 2 (0..1)");
+  expect_error(error_of([&] { check_view_poses(view_of(R"([{"instance": 1, "transform": {}}, {"instance": 1, "transform": {}}])"), scene); }),
+               "v.jsonl:1: instances[1].instance: ", "placed twice");
+  expect_error(error_of([&] { check_view_poses(view_of(R"([{"instance": 0, "transform": {"translate": [1e16, 0, 0]}}])"), scene); }),
+               "v.jsonl:1: instances[0].transform", "within 1e15");
+  expect_error(error_of([&] { parse_views("{" + camera + R"(, "instances": [{"instance": 0}]})", "v.jsonl"); }), "v.jsonl:1: instances[0]: ",
+               "missing required key 'transform'");
+  expect_error(error_of([&] { parse_views("{" + camera + R"(, "instances": [{"instance": 0, "transform": {"scale": 0}}]})", "v.jsonl"); }),
+               "v.jsonl:1: instances[0].transform.scale: ", "non-zero");
+  expect_error(error_of([&] { parse_views("{" + camera + R"(, "instances": [{"instance": -1, "transform": {}}]})", "v.jsonl"); }),
+               "v.jsonl:1: instances[0].instance: ", "out of range");
+  scene.instances.clear();
+  expect_error(error_of([&] { check_view_poses(views, scene); }), "v.jsonl:2: instances[0].instance: ", "(it places none)");
 }
 
 // Frame::bytes is what allocate() gives, for every output the table has, in float and in double.
@@ -221,6 +265,24 @@ TEST_F(ManifestTest, ACutOffLastLineIsDroppedAndWritingGoesOn) {
   ManifestWriter fresh(path, true);
   EXPECT_FALSE(fresh.recorded(0));
   EXPECT_EQ(read(path), "");
+}
+
+// A view's placed instances are recorded as 4 rows of 4 (the dataset's object poses), and a record
+// with other poses, or none, is a change a resumed run refuses.
+TEST_F(ManifestTest, PlacedInstancesAreRecordedAndTheirChangeCounts) {
+  ViewRecord posed = record(0, dir_);
+  posed.poses.instances = {3};
+  glm::dmat4 transform(2.0);
+  transform[3] = glm::dvec4(5.0, 6.0, 7.0, 1.0);
+  posed.poses.transforms = {transform};
+  const std::string line = manifest_line(posed, dir_);
+  EXPECT_NE(line.find(R"("instances":[{"instance":3,"transform":[[2.0,0.0,0.0,5.0],[0.0,2.0,0.0,6.0],[0.0,0.0,2.0,7.0],[0.0,0.0,0.0,1.0]]}])"),
+            std::string::npos) << line;
+  EXPECT_EQ(manifest_line_index(line), 0u);
+  EXPECT_EQ(record_changes(line, line), "");
+  EXPECT_EQ(record_changes(line, manifest_line(record(0, dir_), dir_)), "the instances placed");
+  posed.poses.transforms[0][3].x = 5.5;
+  EXPECT_EQ(record_changes(line, manifest_line(posed, dir_)), "the instances placed");
 }
 
 // The default many-view run: `manifest.jsonl` and `view-00000.exr`, names without a folder.

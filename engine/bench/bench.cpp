@@ -97,7 +97,7 @@ BenchRow run_views_variant(GpuDevice& device, const Scene& scene, const BenchVar
   const ScratchFolder scratch("vkray-bench-views-");
   const std::filesystem::path& folder = scratch.path();
   ViewBatch batch;
-  batch.cameras = orbit_views(scene.camera, variant.orbit_views);
+  batch.views = orbit_views(scene.camera, variant.orbit_views);
   batch.width = scene.width;
   batch.height = scene.height;
   batch.aovs = aovs;

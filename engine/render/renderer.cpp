@@ -131,11 +131,7 @@ void Renderer::set_vertices(uint32_t mesh, std::span<const glm::dvec3> positions
 }
 
 void Renderer::Impl::keep_for_placing(GpuScene&& gpu_scene) {
-  mesh_boxes.assign(host_scene.meshes.size(), Bounds{});
-  for (size_t m = 0; m < host_scene.meshes.size(); ++m) {
-    if (!host_scene.meshes[m].instanced) continue;
-    for (const glm::dvec3& p : host_scene.meshes[m].positions) mesh_boxes[m].add(p);
-  }
+  mesh_boxes = instanced_mesh_boxes(host_scene);
   placing = std::move(gpu_scene);
 }
 

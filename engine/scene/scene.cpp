@@ -167,6 +167,15 @@ void check_transform(const Instance& instance, const Bounds& mesh_box, const std
   }
 }
 
+std::vector<Bounds> instanced_mesh_boxes(const Scene& scene) {
+  std::vector<Bounds> boxes(scene.meshes.size());
+  for (size_t mesh = 0; mesh < scene.meshes.size(); ++mesh) {
+    if (!scene.meshes[mesh].instanced) continue;
+    for (const glm::dvec3& p : scene.meshes[mesh].positions) boxes[mesh].add(p);
+  }
+  return boxes;
+}
+
 void set_instance_transforms(Scene& scene, std::span<const uint32_t> instances, std::span<const glm::dmat4> transforms,
                              const std::vector<Bounds>* mesh_boxes) {
   if (instances.size() != transforms.size()) {
@@ -188,13 +197,7 @@ void set_instance_transforms(Scene& scene, std::span<const uint32_t> instances, 
     Instance& instance = placed_instances[instances[k]];
     instance.linear = glm::dmat3(m);
     instance.translation = glm::dvec3(m[3]);
-    if (!mesh_boxes && found_boxes.empty()) {
-      found_boxes.resize(scene.meshes.size());
-      for (size_t mesh = 0; mesh < scene.meshes.size(); ++mesh) {
-        if (!scene.meshes[mesh].instanced) continue;
-        for (const glm::dvec3& p : scene.meshes[mesh].positions) found_boxes[mesh].add(p);
-      }
-    }
+    if (!mesh_boxes && found_boxes.empty()) found_boxes = instanced_mesh_boxes(scene);
     check_transform(instance, (mesh_boxes ? *mesh_boxes : found_boxes)[instance.mesh], path);
   }
   scene.instances = std::move(placed_instances);

@@ -186,9 +186,21 @@ Bounds placed_box(const Bounds& mesh_box, const Instance& instance);
 // placed corners bound every placed position.
 void check_transform(const Instance& instance, const Bounds& mesh_box, const std::string& path);
 
+// Instances placed anew: instances[k] of a scene by transforms[k], an affine map of its mesh's
+// positions (last row 0 0 0 1). A view of many may carry its own (a views file's "instances").
+struct InstancePoses {
+  std::vector<uint32_t> instances;
+  std::vector<glm::dmat4> transforms;
+  bool empty() const { return instances.empty(); }
+};
+
+// The box of each mesh's positions, by mesh, where it is instanced (an empty box elsewhere): what
+// check_transform holds an instance's placement to.
+std::vector<Bounds> instanced_mesh_boxes(const Scene& scene);
+
 // Instance instances[k] of `scene` placed by transforms[k], an affine map of its mesh's positions
 // (last row 0 0 0 1). Every one is checked first (check_transform, against its mesh's box, from
-// `mesh_boxes` by mesh where given, else found here), so a refused call changes nothing: an
+// `mesh_boxes` (instanced_mesh_boxes) where given, else found here), so a refused call changes nothing: an
 // InputError names the entry.
 void set_instance_transforms(Scene& scene, std::span<const uint32_t> instances, std::span<const glm::dmat4> transforms,
                              const std::vector<Bounds>* mesh_boxes = nullptr);

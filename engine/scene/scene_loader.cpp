@@ -543,8 +543,20 @@ Camera parse_camera_override(std::string_view json_text, const std::string& name
   return parse_camera(Node(root, "", name), &base);
 }
 
-Camera parse_camera_object(std::string_view json_text, const std::string& name) {
-  const Json root = parse_document(json_text, name);
+Camera parse_camera_object(std::string_view json_text, const std::string& name, InstancePoses* poses) {
+  Json root = parse_document(json_text, name);
+  if (!poses || !root.is_object() || !root.contains("instances")) return parse_camera(Node(root, "", name));
+  const Json placed = std::move(root["instances"]);
+  root.erase("instances");
+  for (const Node& entry : Node(placed, "instances", name).elements()) {
+    entry.expect_object({"instance", "transform"});
+    // The range is the scene's, checked where the scene is known (check_view_poses).
+    poses->instances.push_back(entry.at("instance").index(uint64_t{std::numeric_limits<uint32_t>::max()}, "instance"));
+    const ParsedTransform transform = parse_transform(entry.at("transform"));
+    glm::dmat4 matrix(transform.linear());
+    matrix[3] = glm::dvec4(transform.translation, 1.0);
+    poses->transforms.push_back(matrix);
+  }
   return parse_camera(Node(root, "", name));
 }
 

@@ -47,8 +47,10 @@ Scene parse_scene(std::string_view json_text, const std::string& name, const std
 Camera parse_camera_override(std::string_view json_text, const std::string& name, const Camera& base);
 
 // A whole camera object in the scene-file form ("from" and "to" required), as a views file holds
-// them. `name` stands for the source in messages ("views.jsonl:57"). Throws InputError.
-Camera parse_camera_object(std::string_view json_text, const std::string& name);
+// them. `name` stands for the source in messages ("views.jsonl:57"). With `poses`, the object may
+// also hold "instances": [{"instance": k, "transform": {the scene file's transform object}}, ...],
+// instances placed for this view alone, added to `poses`. Throws InputError.
+Camera parse_camera_object(std::string_view json_text, const std::string& name, InstancePoses* poses = nullptr);
 
 // The built-in scene: a camera, a sphere, a ground plane, a handcrafted triangle mesh and
 // a mesh that goes through the OBJ loader (from an OBJ text compiled into the binary).

@@ -104,6 +104,12 @@ std::string manifest_line(const ViewRecord& record, const std::filesystem::path&
   if (record.mask) line["mask"] = *record.mask;
   const nlohmann::ordered_json camera = camera_description(record.camera, record.width, record.height);
   for (auto key = camera.begin(); key != camera.end(); ++key) line[key.key()] = key.value();
+  for (size_t k = 0; k < record.poses.instances.size(); ++k) {
+    const glm::dmat4& m = record.poses.transforms[k];  // columns; written as rows, as world_to_camera
+    nlohmann::ordered_json rows = nlohmann::ordered_json::array();
+    for (int row = 0; row < 4; ++row) rows.push_back({m[0][row], m[1][row], m[2][row], m[3][row]});
+    line["instances"].push_back({{"instance", record.poses.instances[k]}, {"transform", std::move(rows)}});
+  }
   return line.dump();
 }
 
@@ -210,6 +216,9 @@ std::string record_changes(const std::string& recorded, const std::string& now) 
     const std::string now_value = after.contains(key) ? shown(after, {key}) : default_value;
     if (then != now_value) changes += (changes.empty() ? "" : "; ") + std::string(key) + ": " + then + " then, " + now_value + " now";
   }
+  // The instances the view placed: none where the key is left out.
+  const auto poses = [](const nlohmann::json& record) { return record.contains("instances") ? record["instances"].dump() : ""; };
+  if (poses(before) != poses(after)) changes += (changes.empty() ? "" : "; ") + std::string("the instances placed");
   // The kind of files: one EXR, or one file an output (--format), by the extension of the first.
   const auto format = [](const nlohmann::json& record) {
     const bool files = record.contains("files") && record["files"].is_object() && !record["files"].empty() &&

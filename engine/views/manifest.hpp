@@ -15,6 +15,7 @@
 
 #include "engine/io/array_files.hpp"
 #include "engine/scene/camera.hpp"
+#include "engine/scene/scene.hpp"
 #include "engine/views/manifest_record.hpp"
 
 #include <cstdint>
@@ -44,6 +45,9 @@ struct ViewRecord {
   std::optional<double> depth_step;  // --depth-step, with png16 files
   // The rays' mask (--mask), where not every bit: a resumed run with another would mix two scenes.
   std::optional<uint32_t> mask;
+  // The instances the view placed anew (a views file's "instances"), where it placed any: the
+  // record's "instances", [{"instance": k, "transform": 4 rows of 4}], the dataset's object poses.
+  InstancePoses poses;
 };
 
 // One line, without its newline; file names relative to `folder`.
@@ -91,9 +95,9 @@ class ManifestWriter {
 
 // What differs between a view's record from an earlier run and the record this run would write:
 // "" where they agree, else each change ("the size: 64x48 then, 128x96 now"). The size, the outputs,
-// the scene, the camera and how values are stored (half, miss, depth_step) count; the file names do
-// not (the same pattern gives the same ones). A size, outputs, scene or camera key an older vkray did
-// not write is not compared.
+// the scene, the camera, the instances placed and how values are stored (half, miss, depth_step)
+// count; the file names do not (the same pattern gives the same ones). A size, outputs, scene or
+// camera key an older vkray did not write is not compared.
 std::string record_changes(const std::string& recorded, const std::string& now);
 
 // The parts' records in index order, each index once (identical copies of a record merge; two

@@ -124,11 +124,12 @@ bool to_be_rendered(const ViewBatch& batch, uint32_t index, const std::map<uint3
 ViewRecord record_of(const ViewBatch& batch, uint32_t index) {
   ViewRecord record;
   record.index = index;
-  record.views = static_cast<uint32_t>(batch.cameras.size());
+  record.views = static_cast<uint32_t>(batch.views.size());
   record.exr = batch.exr.path(index);
   if (batch.output_settings.format != FileFormat::exr) record.files = output_files(record.exr, batch.aovs, batch.output_settings.format);
   if (batch.png) record.png = batch.png->path(index);
-  record.camera = batch.cameras[index];
+  record.camera = batch.views[index].camera;
+  record.poses = batch.views[index].poses;
   record.width = batch.width;
   record.height = batch.height;
   record.outputs = batch.aovs.names();
@@ -140,6 +141,32 @@ ViewRecord record_of(const ViewBatch& batch, uint32_t index) {
   if (!(std::isinf(stored.miss) && stored.miss > 0)) record.miss = stored.miss;
   if (stored.format == FileFormat::png16) record.depth_step = stored.depth_step;
   return record;
+}
+
+// Every instance some view places, each with the scene's own transform: what a view that does not
+// place one of them puts back, so that a view's image never depends on the views before it (a shard,
+// a resumed run).
+InstancePoses every_placed_instance(const ViewBatch& batch, const Scene& scene) {
+  std::set<uint32_t> placed;
+  for (const View& view : batch.views) placed.insert(view.poses.instances.begin(), view.poses.instances.end());
+  InstancePoses poses;
+  for (uint32_t id : placed) {
+    glm::dmat4 transform(scene.instances[id].linear);
+    transform[3] = glm::dvec4(scene.instances[id].translation, 1.0);
+    poses.instances.push_back(id);
+    poses.transforms.push_back(transform);
+  }
+  return poses;
+}
+
+// The transforms of `placing.instances` for `view`: its own where it places one, else the scene's.
+std::vector<glm::dmat4> poses_of(const View& view, const InstancePoses& placing) {
+  std::vector<glm::dmat4> transforms = placing.transforms;
+  for (size_t k = 0; k < view.poses.instances.size(); ++k) {
+    const auto slot = std::lower_bound(placing.instances.begin(), placing.instances.end(), view.poses.instances[k]);
+    transforms[static_cast<size_t>(slot - placing.instances.begin())] = view.poses.transforms[k];
+  }
+  return transforms;
 }
 
 // Every folder the batch writes into exists and takes new files, before any view is rendered.
@@ -170,7 +197,7 @@ void check_view_names(const ViewBatch& batch) {
     throw InputError(file.string() + ": " + one + " and " + other +
                      " would write this one file: give each view names of its own (-o, --preview, --manifest)");
   };
-  const uint32_t views = static_cast<uint32_t>(batch.cameras.size());
+  const uint32_t views = static_cast<uint32_t>(batch.views.size());
   if (views == 0) return;
   std::vector<std::pair<const OutputPattern*, std::string>> patterns = {{&batch.exr, "EXR"}};
   if (batch.png) patterns.emplace_back(&*batch.png, "preview");
@@ -209,16 +236,17 @@ void check_view_names(const ViewBatch& batch) {
 
 ViewBatchSummary render_views(Renderer& renderer, const ViewBatch& batch,
                               const std::function<void(const ViewBatchProgress&)>& progress) {
-  if (batch.cameras.size() > 1 && (!batch.exr.has_index() || (batch.png && !batch.png->has_index()))) {
+  if (batch.views.size() > 1 && (!batch.exr.has_index() || (batch.png && !batch.png->has_index()))) {
     throw InputError("many views need the view's index in every output name, as in out/view-{index:05}.exr; '" +
                      (batch.exr.has_index() ? batch.png->text() : batch.exr.text()) + "' would write them all to one file");
   }
   ViewBatchSummary summary;
   std::vector<uint32_t> shard_views;
-  for (uint32_t index = 0; index < batch.cameras.size(); ++index) {
+  for (uint32_t index = 0; index < batch.views.size(); ++index) {
     if (batch.shard.holds(index)) shard_views.push_back(index);
   }
   check_view_names(batch);
+  check_view_poses(batch.views, renderer.scene());
   renderer.set_ray_mask(batch.mask);
   prepare_folders(batch, shard_views);
   ManifestWriter manifest(batch.manifest, batch.overwrite);
@@ -282,12 +310,14 @@ ViewBatchSummary render_views(Renderer& renderer, const ViewBatch& batch,
   // queue closes, the writers finish the views before it, and only then is the failure passed on.
   // (Left open, the writers would wait in pop() for ever, and joining them would hang the process.)
   std::optional<std::pair<uint32_t, std::string>> render_failure;  // the view, and why
+  const InstancePoses placing = every_placed_instance(batch, renderer.scene());
   for (uint32_t index : to_render) {
     const auto render_start = Clock::now();
     Frame frame;
     try {
       if (batch.before_render) batch.before_render(index);
-      frame = renderer.render(batch.cameras[index], batch.width, batch.height, batch.aovs);
+      if (!placing.empty()) renderer.set_transforms(placing.instances, poses_of(batch.views[index], placing));
+      frame = renderer.render(batch.views[index].camera, batch.width, batch.height, batch.aovs);
     } catch (const std::exception& error) {
       render_failure.emplace(index, error.what());
       break;

@@ -8,6 +8,7 @@
 #include "engine/io/image_io.hpp"
 #include "engine/render/renderer.hpp"
 #include "engine/views/output_pattern.hpp"
+#include "engine/views/view_list.hpp"
 
 #include <cstdint>
 #include <filesystem>
@@ -27,7 +28,7 @@ struct Shard {
 };
 
 struct ViewBatch {
-  std::vector<Camera> cameras;  // view k is cameras[k]
+  std::vector<View> views;  // view k is views[k]: its camera, and instances placed for it alone
   uint32_t width = 0, height = 0;
   AovSet aovs;
   OutputPattern exr{"view-{index}.exr", "-o"};
@@ -78,10 +79,12 @@ unsigned writer_threads(unsigned host_threads, uint64_t frame_bytes, uint64_t ho
 void check_view_names(const ViewBatch& batch);
 
 // Creates the output folders, checks that they take files, then renders and writes the shard's
-// views that are not complete. `progress` is called after each view is written, on a writer
-// thread. Throws std::runtime_error for a file that cannot be written (after the views before it
-// are written and recorded), InputError for a batch without an index in its output pattern or
-// whose names give two views, or a view and the manifest, one file.
+// views that are not complete, each with the instances it places moved there (set_transforms; the
+// others where the renderer's scene had them when called). `progress` is called after each view is
+// written, on a writer thread. Throws std::runtime_error for a file that cannot be written (after
+// the views before it are written and recorded), InputError for a batch without an index in its
+// output pattern or whose names give two views, or a view and the manifest, one file, or whose
+// views place instances wrongly (check_view_poses).
 ViewBatchSummary render_views(Renderer& renderer, const ViewBatch& batch,
                               const std::function<void(const ViewBatchProgress&)>& progress = {});
 

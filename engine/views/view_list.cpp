@@ -59,18 +59,26 @@ std::vector<Element> array_elements(std::string_view text) {
 // be JSON Lines, whose lines are read and checked one at a time. 1 GiB holds millions of cameras.
 constexpr uintmax_t max_views_array_bytes = uintmax_t{1} << 30;
 
-// One line of a JSON Lines views file: a camera, or nothing where it is blank.
-void add_json_line_view(const TextLine& line, const std::string& name, std::vector<Camera>& views) {
+// The view object at `source` ("views.jsonl:57"), which it keeps where it places instances.
+View parse_view(std::string_view text, std::string source) {
+  View view;
+  view.camera = parse_camera_object(text, source, &view.poses);
+  if (!view.poses.empty()) view.source = std::move(source);
+  return view;
+}
+
+// One line of a JSON Lines views file: a view, or nothing where it is blank.
+void add_json_line_view(const TextLine& line, const std::string& name, std::vector<View>& views) {
   if (line.text.find_first_not_of(" \t\r") == std::string_view::npos) return;
   try {
     refuse_invalid_json(line.text, name, line.number);
   } catch (const InputError& error) {
     throw InputError(std::string(error.what()) + " (JSON Lines: one camera object a line, or a JSON array of them)");
   }
-  views.push_back(parse_camera_object(line.text, name + ":" + std::to_string(line.number)));
+  views.push_back(parse_view(line.text, name + ":" + std::to_string(line.number)));
 }
 
-std::vector<Camera> with_a_camera(std::vector<Camera> views, const std::string& name) {
+std::vector<View> with_a_camera(std::vector<View> views, const std::string& name) {
   if (views.empty()) throw InputError(name + ": no cameras (a JSON array of camera objects, or one a line)");
   return views;
 }
@@ -100,26 +108,25 @@ glm::dvec3 rotated(const glm::dvec3& direction, const glm::dvec3& axis, double a
 
 }  // namespace
 
-std::vector<Camera> parse_views(std::string_view text, const std::string& name) {
+std::vector<View> parse_views(std::string_view text, const std::string& name) {
   text = without_byte_order_mark(text);
   const size_t first = text.find_first_not_of(" \t\r\n");
   if (first == std::string_view::npos || text[first] != '[') {
-    std::vector<Camera> views;
+    std::vector<View> views;
     for_each_line(text, name, [&](const TextLine& line) { add_json_line_view(line, name, views); });
     return with_a_camera(std::move(views), name);
   }
   refuse_invalid_json(text, name);
-  std::vector<Camera> views;
+  std::vector<View> views;
   for (const Element& element : array_elements(text)) {
-    views.push_back(parse_camera_object(text.substr(element.begin, element.end - element.begin),
-                                        name + ":" + std::to_string(element.line)));
+    views.push_back(parse_view(text.substr(element.begin, element.end - element.begin), name + ":" + std::to_string(element.line)));
   }
   return with_a_camera(std::move(views), name);
 }
 
-std::vector<Camera> load_views(const std::filesystem::path& path) {
+std::vector<View> load_views(const std::filesystem::path& path) {
   if (!starts_a_json_array(path)) {
-    std::vector<Camera> views;
+    std::vector<View> views;
     for_each_file_line(path, "views file", [&](const TextLine& line) { add_json_line_view(line, path.string(), views); });
     return with_a_camera(std::move(views), path.string());
   }
@@ -131,17 +138,41 @@ std::vector<Camera> load_views(const std::filesystem::path& path) {
   return parse_views(read_input_file(path, "views file"), path.string());
 }
 
-std::vector<Camera> orbit_views(const Camera& start, uint32_t count) {
+void check_view_poses(const std::vector<View>& views, const Scene& scene) {
+  std::vector<Bounds> mesh_boxes;  // found once a view places an instance
+  std::vector<bool> placed(scene.instances.size());
+  for (const View& view : views) {
+    for (size_t k = 0; k < view.poses.instances.size(); ++k) {
+      const std::string entry = view.source + ": instances[" + std::to_string(k) + "]";
+      const uint32_t id = view.poses.instances[k];
+      if (id >= scene.instances.size()) {
+        const size_t count = scene.instances.size();
+        throw InputError(entry + ".instance: " + std::to_string(id) + " is not an instance of the scene's " + std::to_string(count) +
+                         (count == 0 ? " (it places none)" : " (0.." + std::to_string(count - 1) + ")"));
+      }
+      if (placed[id]) throw InputError(entry + ".instance: instance " + std::to_string(id) + " is placed twice in this view");
+      placed[id] = true;
+      if (mesh_boxes.empty()) mesh_boxes = instanced_mesh_boxes(scene);
+      Instance instance = scene.instances[id];
+      instance.linear = glm::dmat3(view.poses.transforms[k]);
+      instance.translation = glm::dvec3(view.poses.transforms[k][3]);
+      check_transform(instance, mesh_boxes[instance.mesh], entry);
+    }
+    for (uint32_t id : view.poses.instances) placed[id] = false;
+  }
+}
+
+std::vector<View> orbit_views(const Camera& start, uint32_t count) {
   const glm::dvec3 axis = glm::normalize(start.up);
-  std::vector<Camera> views(count, start);
+  std::vector<View> views(count, View{start, {}, {}});
   for (uint32_t k = 0; k < count; ++k) {
     const double angle = 2.0 * std::numbers::pi * k / count;
-    views[k].from = start.to + rotated(start.from - start.to, axis, angle);
+    views[k].camera.from = start.to + rotated(start.from - start.to, axis, angle);
   }
   return views;
 }
 
-std::vector<Camera> sphere_views(const Camera& start, uint32_t count) {
+std::vector<View> sphere_views(const Camera& start, uint32_t count) {
   const glm::dvec3 pole = glm::normalize(start.up);
   const glm::dvec3 offset = start.from - start.to;
   const double distance = glm::length(offset);
@@ -151,13 +182,13 @@ std::vector<Camera> sphere_views(const Camera& start, uint32_t count) {
   side = glm::normalize(side - pole * glm::dot(pole, side));
   const glm::dvec3 across = glm::cross(pole, side);
   const double golden_angle = std::numbers::pi * (3.0 - std::sqrt(5.0));
-  std::vector<Camera> views(count, start);
+  std::vector<View> views(count, View{start, {}, {}});
   for (uint32_t k = 0; k < count; ++k) {
     const double height = 1.0 - (2.0 * k + 1.0) / count;  // cos of the angle from the pole
     const double ring = std::sqrt(std::max(0.0, 1.0 - height * height));
     const double longitude = golden_angle * k;
     const glm::dvec3 direction = ring * (std::cos(longitude) * side + std::sin(longitude) * across) + height * pole;
-    views[k].from = start.to + distance * direction;
+    views[k].camera.from = start.to + distance * direction;
   }
   return views;
 }
