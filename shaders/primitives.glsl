@@ -82,11 +82,17 @@ uint crossings = 0u;
 // constants alone once unrolled, so the list stays in registers.
 real first_t[VKRAY_HITS_MAX];
 uint first_id[VKRAY_HITS_MAX];
+// INSTANCES: the instance placing each listed hit (VKRAY_NO_INSTANCE for the world's own), and the
+// one whose mesh the walk is in now, which the walk sets as it enters and leaves an instance and
+// each hit it lists takes. Ties at one t and slot are then ordered by instance.
+uint first_instance[VKRAY_HITS_MAX];
+uint listing_instance = VKRAY_NO_INSTANCE;
 
 void clear_first_hits(real t_max) {
   [[unroll]] for (uint k = 0; k < VKRAY_HITS_MAX; ++k) {
     first_t[k] = t_max;
     first_id[k] = VKRAY_HIT_NONE;
+    if (INSTANCES) first_instance[k] = VKRAY_NO_INSTANCE;
   }
 }
 
@@ -96,9 +102,11 @@ real list_first_hit(real t, uint id) {
   [[unroll]] for (int k = VKRAY_HITS_MAX - 1; k >= 0; --k) {
     if (uint(k) >= HITS || placed) continue;
     int before = max(k - 1, 0);
-    bool shift = k > 0 && (first_t[before] > t || (first_t[before] == t && first_id[before] > id));
+    bool later_id = first_id[before] > id || (INSTANCES && first_id[before] == id && first_instance[before] > listing_instance);
+    bool shift = k > 0 && (first_t[before] > t || (first_t[before] == t && later_id));
     first_t[k] = shift ? first_t[before] : t;
     first_id[k] = shift ? first_id[before] : id;
+    if (INSTANCES) first_instance[k] = shift ? first_instance[before] : listing_instance;
     placed = !shift;
   }
   return first_t[HITS - 1u];
@@ -475,6 +483,7 @@ PrimitiveHit nearest_primitive_in_tree(RayFrame frame, Origin origin, real3 dir,
           }
           PUSH_ENTRY(instance_marker)
           instance = record.x;
+          listing_instance = instance;
           ray_in_mesh(fetch_placement(instance), origin, dir, walk_origin, walk_dir);
           walk_frame = make_ray_frame(walk_dir);
           walk_inv_dir = safe_inverse(walk_dir);
@@ -505,6 +514,7 @@ PrimitiveHit nearest_primitive_in_tree(RayFrame frame, Origin origin, real3 dir,
         walk_box_origin = box_origin;
         walk_box_margin = box_margin;
         instance = VKRAY_NO_INSTANCE;
+        listing_instance = VKRAY_NO_INSTANCE;
         pop = true;
       }
     } else if ((current & VKRAY_BVH_LEAF_BIT) != 0) {

@@ -37,8 +37,11 @@ const bool CALLER_ARRAYS = RAY_INPUT_KIND == VKRAY_RAY_INPUT_CALLER_DIRECTIONS;
 // Whether rays are cast at all: a camera's for depth or normal (uv alone needs none), given rays
 // always (an occlusion query or a count of crossings writes its hits alone).
 const bool CASTS_RAYS = WRITE_DEPTH || WRITE_NORMAL || RAY_INPUT;
-// Beside what each ray hit, the instance placing it (VKRAY_BINDING_INSTANCE_HITS).
-const bool WRITE_INSTANCE_HITS = INSTANCES && !COUNT_CROSSINGS && (WRITE_HIT || RAY_INPUT);
+// Beside what each ray hit, the instance placing it (VKRAY_BINDING_INSTANCE_HITS). The || is named
+// first: inside the && chain glslang made the whole expression code at its first use, not a
+// specialization constant, and spirv-val refused its second use (not dominated).
+const bool HIT_IDS_WRITTEN = WRITE_HIT || RAY_INPUT;
+const bool WRITE_INSTANCE_HITS = INSTANCES && !COUNT_CROSSINGS && HIT_IDS_WRITTEN;
 
 layout(push_constant) uniform PushConstants { RayGenParams params; };
 
@@ -128,8 +131,9 @@ PrimitiveHit nearest_primitive(Origin origin, real3 dir, real t_max, uvec4 count
 }
 
 
-// The normal, facing the ray, of a hit in the list of first hits (FIRST_HITS; not yet unit length).
-real3 first_hit_normal(uint id, Origin origin, real3 dir) {
+// The normal, facing the ray, of a hit in the list of first hits (FIRST_HITS; not yet unit length),
+// placed by `instance` where that is one.
+real3 first_hit_normal(uint id, uint instance, Origin origin, real3 dir) {
   if (id == VKRAY_HIT_NONE) return real3(0.0);
   bool far = (id & VKRAY_HIT_FAR_ROOT) != 0u;
   uint index = id & VKRAY_HIT_INDEX_MASK & ~VKRAY_HIT_FAR_ROOT;
@@ -148,6 +152,7 @@ real3 first_hit_normal(uint id, Origin origin, real3 dir) {
                            far_normal);
     return far ? far_normal : normal;
   }
+  if (INSTANCES && instance != VKRAY_NO_INSTANCE) return instance_normal(id, instance, dir);
   return primitive_normal(id, origin, dir);
 }
 
@@ -389,8 +394,10 @@ void main() {
         bool listed = id != VKRAY_HIT_NONE;
         hit_out[k * plane_size + out_index] = listed ? id & ~VKRAY_HIT_FAR_ROOT : VKRAY_HIT_NONE;
         depth_out[k * plane_size + out_index] = listed ? first_t[k] : uintBitsToFloat(0x7f800000u);
-        real3 unit_normal = listed ? normalize(first_hit_normal(id, origin, dirs[r])) : real3(0.0);
+        uint instance = INSTANCES ? first_instance[k] : VKRAY_NO_INSTANCE;
+        real3 unit_normal = listed ? normalize(first_hit_normal(id, instance, origin, dirs[r])) : real3(0.0);
         for (uint c = 0; c < 3; ++c) normal_out[(3 * k + c) * plane_size + out_index] = unit_normal[c];
+        if (WRITE_INSTANCE_HITS) instance_hit_out[k * plane_size + out_index] = instance;
       }
       continue;
     }

@@ -251,6 +251,65 @@ TEST(GpuInstances, SetTransformsMovesThemWithoutARebuild) {
   }
 }
 
+// The first four hits of rays through each instance, aimed a little off its centre from around it,
+// and of what lies beyond: the reference's objects, triangles and instances in the same order, each
+// distance and normal within the bounds of FirstHits.InOrderAsTheReference (a head-on hit's distance
+// within 8 eps (t + 16), a normal within 32 eps) grown by the placing instance's kappa, the factor
+// its transform puts on float32's errors (placement_condition), and twice for hits up to 60 degrees
+// from head-on through the sheared instance.
+TEST(GpuInstances, FirstHitsInOrderAsTheReference) {
+  constexpr double eps = 0x1p-24;
+  constexpr uint32_t count = 4;
+  const Scene scene = instanced_scene(16, 16);
+  std::vector<GivenRay> rays;
+  for (const Instance& instance : scene.instances) {
+    for (int k = 0; k < 24; ++k) {
+      // Off every axis and plane of the mesh (a ray in its equator's plane would meet edges there,
+      // which one triangle or the other claims by the rounding of the ray's frame).
+      const double around = 0.2618 * k + 0.05 * instance.mesh + 0.0123, up = 0.3 * std::sin(1.7 * k) + 0.0271;
+      const glm::dvec3 away(std::cos(around) * std::cos(up), std::sin(up), std::sin(around) * std::cos(up));
+      const glm::dvec3 from = instance.translation + 6.0 * away;
+      const glm::dvec3 aim = instance.translation + 0.0137 * glm::dvec3(1 + k % 5, 1 + k % 3, 1 + k % 7);
+      const glm::dvec3 dir = glm::normalize(aim - from);
+      rays.push_back({from.x, from.y, from.z, dir.x, dir.y, dir.z});
+    }
+  }
+  Renderer renderer(device(), scene);
+  const ReferenceScene reference(scene);
+  const RayHits hits = renderer.cast_rays(rays, {}, count);
+  ASSERT_EQ(hits.count, rays.size() * count);
+  ASSERT_EQ(hits.instance.size(), hits.count) << "a scene with instances names the instance of each hit";
+  size_t wrong_ids = 0, wrong_t = 0, wrong_normals = 0, instance_hits = 0;
+  std::string first;
+  for (size_t k = 0; k < rays.size(); ++k) {
+    const std::vector<ReferenceHit> expected = first_reference_hits(reference, rays[k], 0.0, no_hit, count);
+    for (uint32_t layer = 0; layer < count; ++layer) {
+      const size_t at = k * count + layer;
+      const ReferenceHit& want = expected[layer];
+      const ObjectPrimitive source = reference.source(want);
+      const bool ids_differ = hits.object[at] != source.object || hits.primitive[at] != source.primitive ||
+                              hits.instance[at] != (want.kind == PrimitiveKind::none ? no_object : want.instance);
+      const double kappa = placement_condition(scene, want);
+      const double t = hits.t[at];
+      const bool t_differs =
+          want.kind == PrimitiveKind::none ? !std::isinf(t) : !(std::abs(t - want.t) <= 2 * kappa * 8 * eps * (want.t + 16.0));
+      const glm::dvec3 normal(hits.normal[at], hits.normal[hits.count + at], hits.normal[2 * hits.count + at]);
+      const bool normal_differs =
+          want.kind == PrimitiveKind::none ? normal != glm::dvec3(0.0) : !(angle_between(normal, want.normal) <= 2 * kappa * 32 * eps);
+      wrong_ids += ids_differ, wrong_t += t_differs, wrong_normals += normal_differs;
+      instance_hits += hits.instance[at] != no_object;
+      if ((ids_differ || t_differs || normal_differs) && first.empty()) {
+        first = "ray " + std::to_string(k) + " hit " + std::to_string(layer) + ": t " + std::to_string(t) + " (reference " +
+                std::to_string(want.t) + "), object " + std::to_string(hits.object[at]) + " (" + std::to_string(source.object) +
+                "), instance " + std::to_string(hits.instance[at]) + " (" + std::to_string(want.instance) + ")";
+      }
+    }
+  }
+  EXPECT_EQ(wrong_ids + wrong_t + wrong_normals, 0u)
+      << wrong_ids << " ids, " << wrong_t << " distances, " << wrong_normals << " normals; first: " << first;
+  EXPECT_GE(instance_hits, 2 * rays.size()) << "each ray goes in and out of the instance it aims at";
+}
+
 // What does not walk instances yet says so, naming the search, before anything is built.
 TEST(GpuInstances, SearchesWithoutInstancesRefuse) {
   const Scene scene = instanced_scene(16, 16);
@@ -260,8 +319,6 @@ TEST(GpuInstances, SearchesWithoutInstancesRefuse) {
     if (!search_obstacle(search, device().info(), options.shader).empty()) continue;
     EXPECT_THROW(Renderer(device(), scene, options), InputError) << traversal_name(search);
   }
-  Renderer renderer(device(), scene);
-  EXPECT_THROW(renderer.cast_rays(pixel_rays(scene), {}, 4), InputError);
 }
 
 }  // namespace

@@ -77,14 +77,6 @@ double row_sum_norm(const glm::dmat3& m) {
   return norm;
 }
 
-// kappa = |L| |A| (row-sum norms) of the instance placing `hit`'s triangle (see primitive_reach), 1
-// for none.
-double placement_condition(const Scene& scene, const ReferenceHit& hit) {
-  if (hit.kind != PrimitiveKind::triangle || hit.instance == no_object) return 1.0;
-  const glm::dmat3& linear = scene.instances[hit.instance].linear;
-  return row_sum_norm(linear) * row_sum_norm(glm::inverse(linear));
-}
-
 // The distance from the camera of the farthest point that defines `hit`'s primitive (E above).
 // `triangle_reach` holds it for every triangle of the world's, numbered as the reference numbers them.
 // A triangle an instance places is hit in its mesh's coordinates: the ray goes there in float32 as
@@ -156,6 +148,12 @@ struct PixelSamples {
 };
 
 }  // namespace
+
+double placement_condition(const Scene& scene, const ReferenceHit& hit) {
+  if (hit.kind != PrimitiveKind::triangle || hit.instance == no_object) return 1.0;
+  const glm::dmat3& linear = scene.instances[hit.instance].linear;
+  return row_sum_norm(linear) * row_sum_norm(glm::inverse(linear));
+}
 
 std::string EnvelopeReport::describe() const {
   std::string text = std::to_string(failures) + " of " + std::to_string(pixels) + " pixels outside the error envelope (" +

@@ -4,6 +4,7 @@
 #pragma once
 
 #include "engine/reference/compare.hpp"
+#include "engine/reference/reference.hpp"
 #include "engine/frame.hpp"
 #include "engine/scene/scene.hpp"
 
@@ -20,6 +21,11 @@ struct EnvelopeReport {
   FrameError stats;                         // plain GPU-vs-reference figures (centre ray only)
   std::string describe() const;
 };
+
+// kappa = |L| |A| (row-sum norms) of the instance placing `hit`'s triangle, 1 for none: what an
+// instance's transform multiplies float32's errors by, in distance and in normal (envelope.cpp,
+// primitive_reach).
+double placement_condition(const Scene& scene, const ReferenceHit& hit);
 
 // Renders the reference for `scene` at the frame's size and checks every pixel of `frame`, or
 // those of every row_step-th row (for images too large to trace five times on the CPU).

@@ -180,7 +180,7 @@ void Renderer::Impl::cast_given(const GivenRays& given, RaycastMode mode, uint32
               first_reference_hits(*reference, rays[k], ranges.start(k), ranges.end(k), given.hits);
           for (size_t layer = 0; layer < given.hits; ++layer) {
             const ReferenceHit& hit = first_hits[layer];
-            hits.store(k * given.hits + layer, hit.t, hit.normal, reference->source(hit));
+            hits.store(k * given.hits + layer, hit.t, hit.normal, reference->source(hit), hit.instance);
           }
           return;
         }
@@ -198,8 +198,6 @@ RayHits Renderer::Impl::cast_rays(const GivenRays& given) {
   if (given.hits < 1 || given.hits > VKRAY_HITS_MAX) {
     throw InputError("hits: " + std::to_string(given.hits) + " is not between 1 and " + std::to_string(VKRAY_HITS_MAX));
   }
-  // A list of first hits names slots alone, not the instance placing each (the reference can).
-  if (given.hits > 1 && instances.has_value()) throw InputError("hits: the device lists first hits in scenes without instances alone, yet");
   RayHits hits;
   hits.hits_per_ray = given.hits;
   if (given.query == HitQuery::count) {

@@ -68,6 +68,23 @@ def test_instances_as_the_reference_and_moved(scene):
     assert image.shape == (48, 96) and set(np.unique(image)) == {0, 1, 2, vkray.NO_HIT}
 
 
+def test_first_hits_name_each_hit_s_instance(scene):
+    """hits=4 along rays through the placed cubes (in and out of each): per hit, the Reference's mesh,
+    primitive and instance where both hit the same primitive, t to float32."""
+    outputs = ("t", "mesh_id", "primitive_id", "instance_id")
+    rays = grid_rays().reshape(-1, 6)
+    rays[:, 3:] = [0.3, 0.1, -1.0]  # askew: through the cubes' sides too
+    got = vkray.Renderer(scene).cast_rays(rays, outputs=outputs, hits=4)
+    want = vkray.Reference(scene).cast_rays(rays, outputs=outputs, hits=4)
+    assert got["instance_id"].shape == (len(rays), 4)
+    same = (got["mesh_id"] == want["mesh_id"]) & (got["primitive_id"] == want["primitive_id"])
+    assert same.mean() > 0.97
+    assert np.array_equal(got["instance_id"][same], want["instance_id"][same])
+    hit = same & np.isfinite(want["t"])
+    assert np.allclose(got["t"][hit], want["t"][hit], rtol=1e-5)
+    assert (got["instance_id"][:, 1] != vkray.NO_HIT).sum() > 50, "second hits inside the instances"
+
+
 def test_bad_instances_and_transforms_are_refused(scene):
     cube = {"vertices": CUBE_CORNERS, "triangles": CUBE_FACES}
     with pytest.raises(ValueError, match=r"instances\[0\]\.mesh: 3 is not a mesh_id"):
