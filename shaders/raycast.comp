@@ -37,9 +37,10 @@ const bool CALLER_ARRAYS = RAY_INPUT_KIND == VKRAY_RAY_INPUT_CALLER_DIRECTIONS;
 // Whether rays are cast at all: a camera's for depth or normal (uv alone needs none), given rays
 // always (an occlusion query or a count of crossings writes its hits alone).
 const bool CASTS_RAYS = WRITE_DEPTH || WRITE_NORMAL || RAY_INPUT;
-// Beside what each ray hit, the instance placing it (VKRAY_BINDING_INSTANCE_HITS). The || is named
-// first: inside the && chain glslang made the whole expression code at its first use, not a
-// specialization constant, and spirv-val refused its second use (not dominated).
+// Whether each ray's hit is written (VKRAY_BINDING_HITS), and beside it the instance placing it
+// (VKRAY_BINDING_INSTANCE_HITS). The || has a name of its own: inside the && chain glslang made the
+// whole expression code at its first use, not a specialization constant, and spirv-val refused its
+// second use (not dominated).
 const bool HIT_IDS_WRITTEN = WRITE_HIT || RAY_INPUT;
 const bool WRITE_INSTANCE_HITS = INSTANCES && !COUNT_CROSSINGS && HIT_IDS_WRITTEN;
 
@@ -415,7 +416,7 @@ void main() {
       if ((written & VKRAY_CALLER_WRITE_PRIMITIVE_ID) != 0u) primitive_id_out[k] = ids.y;
       continue;
     }
-    if (RAY_INPUT || WRITE_HIT) hit_out[out_index] = COUNT_CROSSINGS ? crossings : hit_id[r];
+    if (HIT_IDS_WRITTEN) hit_out[out_index] = COUNT_CROSSINGS ? crossings : hit_id[r];
     if (WRITE_INSTANCE_HITS) instance_hit_out[out_index] = hit_instance[r];
     if (WRITE_DEPTH) depth_out[out_index] = t_best[r];
     if (WRITE_NORMAL) {
