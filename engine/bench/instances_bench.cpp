@@ -39,11 +39,6 @@ glm::dmat4 random_placement(std::mt19937_64& random, size_t cell, size_t side) {
   return m;
 }
 
-void place(Instance& instance, const glm::dmat4& m) {
-  instance.linear = glm::dmat3(m);
-  instance.translation = glm::dvec3(m[3]);
-}
-
 
 }  // namespace
 
@@ -63,7 +58,7 @@ InstancesRow bench_instances(GpuDevice& device, const std::vector<Scene>& models
   for (uint32_t k = 0; k < count; ++k) {
     Instance instance;
     instance.mesh = k % static_cast<uint32_t>(scene.meshes.size());
-    place(instance, random_placement(random, k, side));
+    place_by(instance, random_placement(random, k, side));
     scene.instances.push_back(instance);
   }
   const double extent = 1.2 * double(side);

@@ -195,8 +195,7 @@ void set_instance_transforms(Scene& scene, std::span<const uint32_t> instances, 
       throw InputError(path + ": not an affine map (its last row is not 0 0 0 1)");
     }
     Instance& instance = placed_instances[instances[k]];
-    instance.linear = glm::dmat3(m);
-    instance.translation = glm::dvec3(m[3]);
+    place_by(instance, m);
     if (!mesh_boxes && found_boxes.empty()) found_boxes = instanced_mesh_boxes(scene);
     check_transform(instance, (mesh_boxes ? *mesh_boxes : found_boxes)[instance.mesh], path);
   }

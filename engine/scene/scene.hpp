@@ -88,6 +88,18 @@ struct Instance {
   Mask mask = every_mask_bit;
 };
 
+// The affine 4x4 of a placement (columns; the last row 0 0 0 1), and the placement a 4x4's upper
+// three rows give: the form set_transforms, views files and the manifest hold transforms in.
+inline glm::dmat4 affine_matrix(const glm::dmat3& linear, const glm::dvec3& translation) {
+  glm::dmat4 matrix(linear);
+  matrix[3] = glm::dvec4(translation, 1.0);
+  return matrix;
+}
+inline void place_by(Instance& instance, const glm::dmat4& matrix) {
+  instance.linear = glm::dmat3(matrix);
+  instance.translation = glm::dvec3(matrix[3]);
+}
+
 // Where `instance` places the mesh position `position`.
 inline glm::dvec3 placed(const Instance& instance, const glm::dvec3& position) {
   return instance.linear * position + instance.translation;

@@ -553,9 +553,7 @@ Camera parse_camera_object(std::string_view json_text, const std::string& name, 
     // The range is the scene's, checked where the scene is known (check_view_poses).
     poses->instances.push_back(entry.at("instance").index(uint64_t{std::numeric_limits<uint32_t>::max()}, "instance"));
     const ParsedTransform transform = parse_transform(entry.at("transform"));
-    glm::dmat4 matrix(transform.linear());
-    matrix[3] = glm::dvec4(transform.translation, 1.0);
-    poses->transforms.push_back(matrix);
+    poses->transforms.push_back(affine_matrix(transform.linear(), transform.translation));
   }
   return parse_camera(Node(root, "", name));
 }

@@ -151,10 +151,8 @@ InstancePoses every_placed_instance(const ViewBatch& batch, const Scene& scene) 
   for (const View& view : batch.views) placed.insert(view.poses.instances.begin(), view.poses.instances.end());
   InstancePoses poses;
   for (uint32_t id : placed) {
-    glm::dmat4 transform(scene.instances[id].linear);
-    transform[3] = glm::dvec4(scene.instances[id].translation, 1.0);
     poses.instances.push_back(id);
-    poses.transforms.push_back(transform);
+    poses.transforms.push_back(affine_matrix(scene.instances[id].linear, scene.instances[id].translation));
   }
   return poses;
 }

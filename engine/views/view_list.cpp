@@ -154,8 +154,7 @@ void check_view_poses(const std::vector<View>& views, const Scene& scene) {
       placed[id] = true;
       if (mesh_boxes.empty()) mesh_boxes = instanced_mesh_boxes(scene);
       Instance instance = scene.instances[id];
-      instance.linear = glm::dmat3(view.poses.transforms[k]);
-      instance.translation = glm::dvec3(view.poses.transforms[k][3]);
+      place_by(instance, view.poses.transforms[k]);
       check_transform(instance, mesh_boxes[instance.mesh], entry);
     }
     for (uint32_t id : view.poses.instances) placed[id] = false;
