@@ -1,5 +1,6 @@
 /* vkray.h from C (a C compiler, no C++): the built-in scene loaded and rendered, rays cast from its
- * camera through the image's centre, a bad call answered with a status and a message. Exits 0 when
+ * camera through the image's centre, masks, first hits and counts, instances moved and a mesh's
+ * vertices moved, a bad call answered with a status and a message. Exits 0 when
  * every check holds, else prints the first that failed. */
 #include "engine/api/vkray.h"
 
@@ -77,6 +78,40 @@ int main(void) {
   CHECK(vkray_count_intersections(masked, down_z, 1, NULL, ends_between, 0, 255, crossings) == VKRAY_OK && crossings[0] == 1);
   vkray_renderer_free(masked);
   vkray_scene_free(layered);
+
+  /* Instances: the near triangle stored once, placed at z = 0 and at z = -1; the first moved to
+   * z = -2 (the second, 6 away, is then the nearest), then the mesh's vertices raised by 0.5, which
+   * moves both. A mesh or instance that does not exist is refused. */
+  vkray_scene* placed = NULL;
+  const double identity[16] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
+  const double lowered[16] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, -1, 0, 0, 0, 1};
+  const double sunk[16] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, -2, 0, 0, 0, 1};
+  CHECK(vkray_scene_new(8, 8, &placed) == VKRAY_OK);
+  CHECK(vkray_scene_add_mesh(placed, near_far[0], 3, corners, 0, 1, NULL) == VKRAY_OK);
+  CHECK(vkray_scene_add_instance(placed, 0, identity, 255) == VKRAY_OK && vkray_scene_add_instance(placed, 0, lowered, 255) == VKRAY_OK);
+  CHECK(vkray_scene_add_instance(placed, 1, identity, 255) == VKRAY_INPUT_ERROR);
+  CHECK(vkray_scene_finish(placed) == VKRAY_OK);
+  vkray_renderer* moving = NULL;
+  CHECK(vkray_renderer_new(placed, NULL, "float", "auto", &moving) == VKRAY_OK);
+  uint32_t instance[1];
+  const char* placed_outputs[] = {"t", "instance-id"};
+  void* placed_hits[] = {t, instance};
+  CHECK(vkray_cast_rays(moving, down_z, 1, NULL, NULL, 0, 255, 1, 2, placed_outputs, placed_hits) == VKRAY_OK);
+  CHECK(instance[0] == 0 && fabsf(t[0] - 5.0f) < 1e-5f);
+  const uint32_t first_instance = 0, no_instance = 2;
+  CHECK(vkray_renderer_set_transforms(moving, &first_instance, sunk, 1) == VKRAY_OK);
+  CHECK(strstr(vkray_renderer_timings(moving), "\"scene_update_ms\"") != NULL && vkray_renderer_device_name(moving)[0] != '\0');
+  CHECK(vkray_renderer_set_transforms(moving, &no_instance, sunk, 1) == VKRAY_INPUT_ERROR);
+  CHECK(vkray_cast_rays(moving, down_z, 1, NULL, NULL, 0, 255, 1, 2, placed_outputs, placed_hits) == VKRAY_OK);
+  CHECK(instance[0] == 1 && fabsf(t[0] - 6.0f) < 1e-5f);
+  double raised[9];
+  for (int k = 0; k < 9; ++k) raised[k] = near_far[0][k] + (k % 3 == 2 ? 0.5 : 0.0);
+  CHECK(vkray_renderer_set_vertices(moving, 0, raised, 3) == VKRAY_OK);
+  CHECK(vkray_renderer_set_vertices(moving, 1, raised, 3) == VKRAY_INPUT_ERROR);
+  CHECK(vkray_cast_rays(moving, down_z, 1, NULL, NULL, 0, 255, 1, 2, placed_outputs, placed_hits) == VKRAY_OK);
+  CHECK(instance[0] == 1 && fabsf(t[0] - 5.5f) < 1e-5f);
+  vkray_renderer_free(moving);
+  vkray_scene_free(placed);
 
   CHECK(vkray_scene_load("/nonexistent/scene.json", 0, 0, NULL, NULL, &scene) == VKRAY_INPUT_ERROR && scene == NULL);
   CHECK(strstr(vkray_last_error(), "/nonexistent/scene.json") != NULL);
