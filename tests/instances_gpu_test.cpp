@@ -225,8 +225,7 @@ TEST(GpuInstances, SetTransformsMovesThemWithoutARebuild) {
       glm::dmat4 m(turned_about_y(0.5 * k + shift) * (k == 1 ? -0.7 : 0.7));
       m[3] = glm::dvec4(-1.5 + 1.1 * k, 0.2 * k - 0.4, shift - 2.0, 1.0);
       transforms.push_back(m);
-      scene.instances[k].linear = glm::dmat3(m);
-      scene.instances[k].translation = glm::dvec3(m[3]);
+      place_by(scene.instances[k], m);
     }
     renderer.set_transforms(all, transforms);
     EXPECT_GT(renderer.timings().scene_update_ms, 0.0);

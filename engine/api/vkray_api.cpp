@@ -548,11 +548,7 @@ vkray_status vkray_scene_add_instance(vkray_scene* scene, uint32_t mesh, const d
     }
     Instance instance;
     instance.mesh = mesh;
-    if (transform) {
-      const glm::dmat4 affine = affine_matrix(transform, path + ".transform");
-      instance.linear = glm::dmat3(affine);
-      instance.translation = glm::dvec3(affine[3]);
-    }
+    if (transform) place_by(instance, affine_matrix(transform, path + ".transform"));
     instance.mask = object_mask_argument(mask);
     scene->scene.meshes[mesh].instanced = true;  // drawn only where instances place it
     scene->scene.instances.push_back(instance);
