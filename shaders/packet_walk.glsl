@@ -16,6 +16,11 @@
 //   and its rays one by one only where that leaves them in (rays_hit_boxes, packet_misses_triangle).
 // On the bunny at 1920x1080 this took 36 ms against 149 for per-ray walks (Mesa 25.0.7), where
 // one ray a lane took 82 ms, two 49 and four 43.
+// Instances (INSTANCES): a leaf's instances come after its other entries (place_instances). The
+// packet enters the first the call's mask lets through, its rays taken into the mesh's coordinates
+// (ray_in_mesh): they share one origin there too, so the walk and its tests are the world's. What
+// remains of the leaf goes on the stack, under instance_marker, whose pop takes the world's rays
+// back, as in the per-ray walk (nearest_primitive_in_tree).
 // Compiled into the modules with VKRAY_DOUBLE_EDGES (CPU devices with shaderFloat64): the
 // triangle test below takes its edge planes in double.
 #ifndef VKRAY_PACKET_WALK_GLSL
@@ -72,6 +77,8 @@ struct PacketPrimitive {
 PacketPrimitive prepare_packet_primitive(uint slot, Origin origin) {
   PacketPrimitive primitive;
   uvec4 record = FETCH(primitives, int(slot));
+  // An instance's record holds no vertex indices; the walk enters it instead of testing it.
+  if (INSTANCES && (record.w & VKRAY_PRIMITIVE_KIND_BITS) == VKRAY_PRIMITIVE_INSTANCE) record = uvec4(0u);
   primitive.sphere = TREE_SPHERES && (!TREE_TRIANGLES || (record.w & VKRAY_PRIMITIVE_KIND_BITS) == VKRAY_PRIMITIVE_SPHERE);
   primitive.center_radius = TREE_SPHERES ? fetch_point(vertices, int(record.x)) : Point(vec4(0.0), vec4(0.0));
   if (TREE_TRIANGLES) {
@@ -139,55 +146,78 @@ bool packet_misses_triangle(PacketPrimitive triangle, DirectionBox dirs) {
   return negative && positive;
 }
 
-// One of a leaf's primitives against the invocation's rays: where it is nearer than a ray's
-// nearest hit so far, it becomes that ray's.
-void test_packet_primitive(PacketPrimitive primitive, uint slot, Origin origin, vec3 dirs[VKRAY_PACKET_ROWS],
+// One of a leaf's primitives, placed by `instance` (INSTANCES), against the invocation's rays:
+// where it is nearer than a ray's nearest hit so far, it becomes that ray's.
+void test_packet_primitive(PacketPrimitive primitive, uint slot, uint instance, Origin origin, vec3 dirs[VKRAY_PACKET_ROWS],
                            dvec3 double_dirs[VKRAY_PACKET_ROWS], inout float t_max[VKRAY_PACKET_ROWS],
-                           inout uint slots[VKRAY_PACKET_ROWS]) {
+                           inout uint slots[VKRAY_PACKET_ROWS], inout uint instances[VKRAY_PACKET_ROWS]) {
   if (TREE_SPHERES && (!TREE_TRIANGLES || primitive.sphere)) {
     [[unroll]] for (uint r = 0; r < VKRAY_PACKET_ROWS; ++r) {
       vec3 normal;
       float t = intersect_sphere_point(primitive.center_radius, origin, dirs[r], t_max[r], normal);
-      if (t < t_max[r]) t_max[r] = t, slots[r] = slot;
+      if (t < t_max[r]) t_max[r] = t, slots[r] = slot, instances[r] = instance;
     }
   } else {
     [[unroll]] for (uint r = 0; r < VKRAY_PACKET_ROWS; ++r) {
       float t = packet_triangle_t(primitive, double_dirs[r], t_max[r]);
-      if (t < t_max[r]) t_max[r] = t, slots[r] = slot;
+      if (t < t_max[r]) t_max[r] = t, slots[r] = slot, instances[r] = instance;
     }
   }
 }
 
-// The nearest hit of each of the invocation's rays, all from the camera `origin`, each searched up
-// to its t_max (0 for rays past the image's edge: they never steer the walk).
-void nearest_primitives_packet(Origin origin, vec3 dirs[VKRAY_PACKET_ROWS], inout float t_max[VKRAY_PACKET_ROWS],
-                               out uint slots[VKRAY_PACKET_ROWS], out bool unfinished) {
+// The rays as the walk tests them, all from `origin` (the world's, or an instance's mesh's): each
+// one's inverse direction and its direction in double; for tests of the packet as a whole, the
+// box of its directions (culling a leaf's triangles, packet_misses_triangle) and of their inverses
+// (the interval test of a node's boxes, rays_hit_boxes). Rays past the image's edge count too: they
+// only widen the bounds.
+struct PacketRays {
+  Origin origin;
+  vec3 dirs[VKRAY_PACKET_ROWS];
   vec3 inv_dirs[VKRAY_PACKET_ROWS];
   dvec3 double_dirs[VKRAY_PACKET_ROWS];
+  vec3 box_margin;
+  DirectionBox dir_box;
+  vec3 inv_lo, inv_hi;
+};
+
+PacketRays packet_rays(Origin origin, vec3 dirs[VKRAY_PACKET_ROWS]) {
+  PacketRays rays;
+  rays.origin = origin;
+  rays.dirs = dirs;
   [[unroll]] for (uint r = 0; r < VKRAY_PACKET_ROWS; ++r) {
-    inv_dirs[r] = safe_inverse(dirs[r]);
-    double_dirs[r] = dvec3(dirs[r]);
-    slots[r] = no_primitive;
+    rays.inv_dirs[r] = safe_inverse(dirs[r]);
+    rays.double_dirs[r] = dvec3(dirs[r]);
   }
-  vec3 box_margin = abs(origin.lo);
-  // The packet as a whole, for tests of all its rays at once: the box of its directions (culling a
-  // leaf's triangles, packet_misses_triangle), of their inverses, and its rays' largest t_max (the
-  // interval test of a node's boxes, rays_hit_boxes). Rays past the image's edge count too: they
-  // only widen the bounds.
-  vec3 dir_lo = dirs[0], dir_hi = dirs[0], inv_lo = inv_dirs[0], inv_hi = inv_dirs[0];
-  float row_t_max = t_max[0];
+  rays.box_margin = abs(origin.lo);
+  vec3 dir_lo = dirs[0], dir_hi = dirs[0], inv_lo = rays.inv_dirs[0], inv_hi = rays.inv_dirs[0];
   [[unroll]] for (uint r = 1; r < VKRAY_PACKET_ROWS; ++r) {
     dir_lo = min(dir_lo, dirs[r]);
     dir_hi = max(dir_hi, dirs[r]);
-    inv_lo = min(inv_lo, inv_dirs[r]);
-    inv_hi = max(inv_hi, inv_dirs[r]);
-    row_t_max = max(row_t_max, t_max[r]);
+    inv_lo = min(inv_lo, rays.inv_dirs[r]);
+    inv_hi = max(inv_hi, rays.inv_dirs[r]);
   }
   dir_lo = packet_min(dir_lo);
   dir_hi = packet_max(dir_hi);
-  DirectionBox packet_dirs = DirectionBox(dvec3(dir_lo), dvec3(dir_hi), dvec3(max(abs(dir_lo), abs(dir_hi))));
-  inv_lo = packet_min(inv_lo);
-  inv_hi = packet_max(inv_hi);
+  rays.dir_box = DirectionBox(dvec3(dir_lo), dvec3(dir_hi), dvec3(max(abs(dir_lo), abs(dir_hi))));
+  rays.inv_lo = packet_min(inv_lo);
+  rays.inv_hi = packet_max(inv_hi);
+  return rays;
+}
+
+// The nearest hit of each of the invocation's rays, all from the camera `origin`, each searched up
+// to its t_max (0 for rays past the image's edge: they never steer the walk), and the instance
+// placing it (INSTANCES; else VKRAY_NO_INSTANCE).
+void nearest_primitives_packet(Origin origin, vec3 dirs[VKRAY_PACKET_ROWS], inout float t_max[VKRAY_PACKET_ROWS],
+                               out uint slots[VKRAY_PACKET_ROWS], out uint instances[VKRAY_PACKET_ROWS], out bool unfinished) {
+  PacketRays walk = packet_rays(origin, dirs);
+  uint instance = VKRAY_NO_INSTANCE;  // the one whose mesh the walk is in
+  float row_t_max = t_max[0];
+  [[unroll]] for (uint r = 0; r < VKRAY_PACKET_ROWS; ++r) {
+    slots[r] = no_primitive;
+    instances[r] = VKRAY_NO_INSTANCE;
+    row_t_max = max(row_t_max, t_max[r]);
+  }
+  // The rays' largest t_max, for the interval test of a node's boxes.
   float packet_t_max = packet_max(row_t_max);
   uint lane = gl_SubgroupInvocationID;
   unfinished = false;
@@ -203,19 +233,24 @@ void nearest_primitives_packet(Origin origin, vec3 dirs[VKRAY_PACKET_ROWS], inou
     }
     ++iterations;
     bool pop;
-    if ((current & VKRAY_BVH_LEAF_BIT) != 0) {
+    if (INSTANCES && current == instance_marker) {  // the mesh's last leaf is done: the world's rays again
+      walk = packet_rays(origin, dirs);
+      instance = VKRAY_NO_INSTANCE;
+      pop = true;
+    } else if ((current & VKRAY_BVH_LEAF_BIT) != 0) {
       uint first = (current & ~VKRAY_BVH_LEAF_BIT) >> VKRAY_BVH_LEAF_COUNT_BITS;
       uint count = (current & ((1u << VKRAY_BVH_LEAF_COUNT_BITS) - 1u)) + 1u;
       // Lanes past the leaf's end prepare its last primitive again: every lane has work, none reads
       // past the buffer.
       uint mine_slot = first + min(lane, count - 1u);
-      PacketPrimitive mine = prepare_packet_primitive(mine_slot, origin);
+      PacketPrimitive mine = prepare_packet_primitive(mine_slot, walk.origin);
+      bool mine_instance = INSTANCES && (FETCH(primitives, int(mine_slot)).w & VKRAY_PRIMITIVE_KIND_BITS) == VKRAY_PRIMITIVE_INSTANCE;
       // A primitive the call's mask hides is missed by every ray, as one the packet misses.
-      bool mine_missed = (TREE_TRIANGLES && !mine.sphere && packet_misses_triangle(mine, packet_dirs)) ||
+      bool mine_missed = mine_instance || (TREE_TRIANGLES && !mine.sphere && packet_misses_triangle(mine, walk.dir_box)) ||
                          !slot_visible(mine_slot);
       // One line a slot, since a broadcast's lane must be a constant.
 #define VKRAY_TEST_LEAF_SLOT(k) \
-  if (count > k && !subgroupBroadcast(mine_missed, k)) test_packet_primitive(VKRAY_BROADCAST_PRIMITIVE(mine, k), first + k, origin, dirs, double_dirs, t_max, slots)
+  if (count > k && !subgroupBroadcast(mine_missed, k)) test_packet_primitive(VKRAY_BROADCAST_PRIMITIVE(mine, k), first + k, instance, walk.origin, walk.dirs, walk.double_dirs, t_max, slots, instances)
       VKRAY_TEST_LEAF_SLOT(0u);
       VKRAY_TEST_LEAF_SLOT(1u);
       VKRAY_TEST_LEAF_SLOT(2u);
@@ -237,6 +272,27 @@ void nearest_primitives_packet(Origin origin, vec3 dirs[VKRAY_PACKET_ROWS], inou
       packet_t_max = packet_max(row_t_max);
       if (ANY_HIT && packet_t_max == 0.0) break;
       pop = true;
+      // The leaf's first instance the mask lets through, entered; the rest of the leaf (instances
+      // alone) under the marker.
+      uint entering = INSTANCES ? packet_or(mine_instance && lane < count && slot_visible(mine_slot) ? 1u << lane : 0u) : 0u;
+      if (entering != 0u) {
+        uint k = findLSB(entering);
+        if (k + 1u < count) {
+          push_registers(stack, VKRAY_BVH_LEAF_BIT | ((first + k + 1u) << VKRAY_BVH_LEAF_COUNT_BITS) | (count - k - 2u));
+          ++stack_size;
+        }
+        push_registers(stack, instance_marker);
+        ++stack_size;
+        uvec4 record = FETCH(primitives, int(first + k));
+        instance = record.x;
+        Placement placement = fetch_placement(instance);
+        Origin mesh_origin;
+        vec3 mesh_dirs[VKRAY_PACKET_ROWS];
+        [[unroll]] for (uint r = 0; r < VKRAY_PACKET_ROWS; ++r) ray_in_mesh(placement, origin, dirs[r], mesh_origin, mesh_dirs[r]);
+        walk = packet_rays(mesh_origin, mesh_dirs);
+        current = record.y;
+        pop = false;
+      }
     } else {
       // Lane k fetches the node's texel k & 3 (GpuBvhNode): bounds x, y, z, then the children.
       vec4 texel = FETCH(bvh_bounds, 4 * int(current) + int(lane & 3u));
@@ -253,8 +309,8 @@ void nearest_primitives_packet(Origin origin, vec3 dirs[VKRAY_PACKET_ROWS], inou
       // go first, the likeliest to meet a box that meets the packet at all: room.json at
       // 1920x1080 took 45.7-51.7 ms with them first, 46.2-52.5 in order (three runs each).
       vec2 packet_enter;
-      bvec2 maybe = rays_hit_boxes(bounds_x, bounds_y, bounds_z, origin.hi, box_margin, inv_lo, inv_hi, packet_t_max,
-                                   packet_enter);
+      bvec2 maybe = rays_hit_boxes(bounds_x, bounds_y, bounds_z, walk.origin.hi, walk.box_margin, walk.inv_lo, walk.inv_hi,
+                                   packet_t_max, packet_enter);
       const float never = 3.0e38;
       vec2 enter = vec2(never);
       bool first_hit = false, second_hit = false;
@@ -266,7 +322,8 @@ void nearest_primitives_packet(Origin origin, vec3 dirs[VKRAY_PACKET_ROWS], inou
           const uint row_order[8] = uint[8](3u, 4u, 0u, 7u, 1u, 6u, 2u, 5u);
           uint r = row_order[k];
           vec2 ray_enter;
-          bvec2 hits = ray_hits_boxes(bounds_x, bounds_y, bounds_z, origin.hi, box_margin, inv_dirs[r], t_max[r], ray_enter);
+          bvec2 hits = ray_hits_boxes(bounds_x, bounds_y, bounds_z, walk.origin.hi, walk.box_margin, walk.inv_dirs[r], t_max[r],
+                                      ray_enter);
           enter = select_min(enter, mix(vec2(never), ray_enter, hits));
           uint either = packet_or((hits.x ? 1u : 0u) | (hits.y ? 2u : 0u));
           first_hit = first_hit || (either & 1u) != 0u;

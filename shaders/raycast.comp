@@ -345,11 +345,16 @@ void main() {
       t_max[r] = hits[r].t;
     }
     uint slots[VKRAY_PACKET_ROWS];
+    uint instances[VKRAY_PACKET_ROWS];
     bool packet_unfinished;
-    nearest_primitives_packet(origin, dirs, t_max, slots, packet_unfinished);
+    nearest_primitives_packet(origin, dirs, t_max, slots, instances, packet_unfinished);
     for (uint r = 0; r < RAYS; ++r) {
       // The normal is read for the winner alone.
-      if (slots[r] != no_primitive) hits[r] = PrimitiveHit(t_max[r], primitive_normal(slots[r], origin, dirs[r]), false, slots[r], VKRAY_NO_INSTANCE);
+      if (slots[r] != no_primitive) {
+        real3 winner_normal = INSTANCES && instances[r] != VKRAY_NO_INSTANCE ? instance_normal(slots[r], instances[r], dirs[r])
+                                                                            : primitive_normal(slots[r], origin, dirs[r]);
+        hits[r] = PrimitiveHit(t_max[r], winner_normal, false, slots[r], instances[r]);
+      }
       hits[r].unfinished = packet_unfinished;
     }
   }

@@ -1,7 +1,7 @@
 // Instances on the device: a mesh stored once and placed by transforms is traced by taking each ray
 // into the mesh's coordinates (shaders/primitives.glsl), and every pixel and given ray agrees with
 // the fp64 reference within the error envelope, ids included: rotated, sheared, mirrored, masked,
-// at extreme scales far from the origin, in every shader variant that walks them.
+// at extreme scales far from the origin, in every walk and shader variant that traces them.
 #include "engine/reference/reference.hpp"
 #include "engine/render/gpu_scene.hpp"
 #include "engine/scene/mesh_generators.hpp"
@@ -72,30 +72,52 @@ std::set<uint32_t> expect_render_as_reference(const Scene& scene, const Renderer
   return objects;
 }
 
-// Every instance in view, through each variant that walks them: per ray, generic, float64, geometry
-// in storage buffers, and rays past a small loop budget that the host finishes.
+// Options for each tree walk that traces instances on this device, with `base`'s shader.
+std::vector<RendererOptions> every_walk(const RendererOptions& base = {}) {
+  std::vector<RendererOptions> walks;
+  for (const PrimitiveSearch search : {PrimitiveSearch::bvh_per_ray, PrimitiveSearch::bvh_packet}) {
+    RendererOptions options = base;
+    options.scene.search = search;
+    if (search_obstacle(search, device().info(), options.shader).empty()) walks.push_back(options);
+  }
+  return walks;
+}
+
+// Every instance in view, through each walk and variant that traces them: per ray and in packets,
+// generic, float64, geometry in storage buffers, and rays past a small loop budget that the host
+// finishes.
 TEST(GpuInstances, EveryPixelAsTheReferenceInEveryVariant) {
   const Scene scene = instanced_scene();
-  std::vector<RendererOptions> variants(5);
-  variants[1].shader.generic = true;
-  variants[2].shader.precision = Precision::float64;
-  variants[3].shader.storage_geometry = true;
-  variants[4].loop_budget = 40;
+  RendererOptions budgeted;
+  budgeted.loop_budget = 40;
+  std::vector<RendererOptions> variants = every_walk();
+  const std::vector<RendererOptions> budgeted_walks = every_walk(budgeted);
+  variants.insert(variants.end(), budgeted_walks.begin(), budgeted_walks.end());
+  variants.resize(variants.size() + 3);
+  variants[variants.size() - 3].shader.generic = true;
+  variants[variants.size() - 2].shader.precision = Precision::float64;
+  variants[variants.size() - 1].shader.storage_geometry = true;
   for (const RendererOptions& options : variants) {
     SCOPED_TRACE(variant_name(options));
     const std::set<uint32_t> hit = expect_render_as_reference(scene, options);
     EXPECT_EQ(hit, (std::set<uint32_t>{0, 1, 2, 3, 4, no_object})) << "every object in view, and sky";
   }
-  Renderer renderer(device(), scene, variants[4]);
-  renderer.render(scene.camera, scene.width, scene.height, {Aov::depth});
-  EXPECT_GT(renderer.timings().unfinished_rays, 0u) << "the loop budget must leave rays to the host";
+  for (const RendererOptions& options : budgeted_walks) {
+    Renderer renderer(device(), scene, options);
+    EXPECT_EQ(renderer.scene_stats().search, options.scene.search) << variant_name(options);
+    renderer.render(scene.camera, scene.width, scene.height, {Aov::depth});
+    EXPECT_GT(renderer.timings().unfinished_rays, 0u) << variant_name(options) << ": the loop budget must leave rays to the host";
+  }
 }
 
 // Masks: the coarse mesh's instance has mask 2; a ray mask without it sees through to what lies behind.
 TEST(GpuInstances, InstanceMasks) {
   const Scene scene = instanced_scene();
-  EXPECT_TRUE(expect_render_as_reference(scene, {}, 0xfd).count(2) == 0) << "the masked instance was hit";
-  EXPECT_TRUE(expect_render_as_reference(scene, {}, 2).count(2) == 1) << "the instance its mask lets through";
+  for (const RendererOptions& options : every_walk()) {
+    SCOPED_TRACE(variant_name(options));
+    EXPECT_TRUE(expect_render_as_reference(scene, options, 0xfd).count(2) == 0) << "the masked instance was hit";
+    EXPECT_TRUE(expect_render_as_reference(scene, options, 2).count(2) == 1) << "the instance its mask lets through";
+  }
 }
 
 // An instance 1e-6 across and one 1e6 across, each placed 1e5 from the origin and mirrored, seen
@@ -116,9 +138,11 @@ TEST(GpuInstances, ExtremeScalesFarFromTheOrigin) {
     scene.instances = {{0, mirrored_turned, at}, {0, glm::dmat3(0.5 * scale), at + glm::dvec3(1.6 * scale, 0.3 * scale, 0.0)}};
     scene.camera = {at + glm::dvec3(0.8, 1.2, 4.0) * scale, at + glm::dvec3(0.5 * scale, 0.0, 0.0), glm::dvec3(0.0, 1.0, 0.0), 50.0};
     check_scene(scene);
-    for (const Precision precision : {Precision::float32, Precision::float64}) {
-      RendererOptions options;
-      options.shader.precision = precision;
+    RendererOptions float64;
+    float64.shader.precision = Precision::float64;
+    std::vector<RendererOptions> variants = every_walk();
+    variants.push_back(float64);
+    for (const RendererOptions& options : variants) {
       SCOPED_TRACE(variant_name(options));
       const std::set<uint32_t> hit = expect_render_as_reference(scene, options);
       EXPECT_EQ(hit, (std::set<uint32_t>{0, no_object}));
@@ -211,42 +235,45 @@ TEST(GpuInstances, InstanceIdsAndFrontFacingThroughTheTransform) {
   EXPECT_TRUE(instance_fronts.count({2, 0}) && !instance_fronts.count({2, 1}));
 }
 
-// set_transforms: every instance moved at once, twice (the second time far from where the scene was
-// built, one instance mirrored now), renders as the reference of the moved scene; a refused call
-// (an instance out of range, a map not affine or not invertible) changes nothing.
+// set_transforms, in each walk: every instance moved at once, twice (the second time far from where
+// the scene was built, one instance mirrored now), renders as the reference of the moved scene; a
+// refused call (an instance out of range, a map not affine or not invertible) changes nothing.
 TEST(GpuInstances, SetTransformsMovesThemWithoutARebuild) {
-  Scene scene = instanced_scene();
-  Renderer renderer(device(), scene);
-  const std::vector<uint32_t> all{0, 1, 2, 3};
-  for (const double shift : {0.4, 3.0}) {
-    SCOPED_TRACE(testing::Message() << "shift " << shift);
-    std::vector<glm::dmat4> transforms;
-    for (const uint32_t k : all) {
-      glm::dmat4 m(turned_about_y(0.5 * k + shift) * (k == 1 ? -0.7 : 0.7));
-      m[3] = glm::dvec4(-1.5 + 1.1 * k, 0.2 * k - 0.4, shift - 2.0, 1.0);
-      transforms.push_back(m);
-      place_by(scene.instances[k], m);
+  for (const RendererOptions& options : every_walk()) {
+    SCOPED_TRACE(variant_name(options));
+    Scene scene = instanced_scene();
+    Renderer renderer(device(), scene, options);
+    const std::vector<uint32_t> all{0, 1, 2, 3};
+    for (const double shift : {0.4, 3.0}) {
+      SCOPED_TRACE(testing::Message() << "shift " << shift);
+      std::vector<glm::dmat4> transforms;
+      for (const uint32_t k : all) {
+        glm::dmat4 m(turned_about_y(0.5 * k + shift) * (k == 1 ? -0.7 : 0.7));
+        m[3] = glm::dvec4(-1.5 + 1.1 * k, 0.2 * k - 0.4, shift - 2.0, 1.0);
+        transforms.push_back(m);
+        place_by(scene.instances[k], m);
+      }
+      renderer.set_transforms(all, transforms);
+      EXPECT_GT(renderer.timings().scene_update_ms, 0.0);
+      const Frame frame = renderer.render(scene.camera, scene.width, scene.height, {Aov::depth, Aov::normal, Aov::mesh_id, Aov::primitive_id});
+      const std::vector<ObjectPrimitive> ids = frame_ids(frame);
+      const EnvelopeReport report = check_against_reference(scene, frame, 1, &ids);
+      EXPECT_EQ(report.failures, 0u) << report.describe();
+      std::set<uint32_t> objects(frame.mesh_id.begin(), frame.mesh_id.end());
+      EXPECT_TRUE(objects.count(1) && objects.count(2)) << "the moved instances in view";
     }
-    renderer.set_transforms(all, transforms);
-    EXPECT_GT(renderer.timings().scene_update_ms, 0.0);
-    const Frame frame = renderer.render(scene.camera, scene.width, scene.height, {Aov::depth, Aov::normal, Aov::mesh_id, Aov::primitive_id});
-    const std::vector<ObjectPrimitive> ids = frame_ids(frame);
-    const EnvelopeReport report = check_against_reference(scene, frame, 1, &ids);
-    EXPECT_EQ(report.failures, 0u) << report.describe();
-    std::set<uint32_t> objects(frame.mesh_id.begin(), frame.mesh_id.end());
-    EXPECT_TRUE(objects.count(1) && objects.count(2)) << "the moved instances in view";
-  }
-  const std::vector<Instance> before = renderer.scene().instances;
-  glm::dmat4 not_affine(1.0);
-  not_affine[0][3] = 0.5;
-  EXPECT_THROW(renderer.set_transforms(std::vector<uint32_t>{0}, std::vector<glm::dmat4>{not_affine}), InputError);
-  EXPECT_THROW(renderer.set_transforms(std::vector<uint32_t>{0, 9}, std::vector<glm::dmat4>(2, glm::dmat4(1.0))), InputError);
-  glm::dmat4 flattening(0.0);
-  flattening[3][3] = 1.0;
-  EXPECT_THROW(renderer.set_transforms(std::vector<uint32_t>{2}, std::vector<glm::dmat4>{flattening}), InputError);
-  EXPECT_THROW(renderer.set_transforms(std::vector<uint32_t>{2}, std::vector<glm::dmat4>{}), InputError);
-  for (size_t k = 0; k < before.size(); ++k) {
-    EXPECT_EQ(renderer.scene().instances[k].translation, before[k].translation) << "a refused call moved instance " << k;
+    const std::vector<Instance> before = renderer.scene().instances;
+    glm::dmat4 not_affine(1.0);
+    not_affine[0][3] = 0.5;
+    EXPECT_THROW(renderer.set_transforms(std::vector<uint32_t>{0}, std::vector<glm::dmat4>{not_affine}), InputError);
+    EXPECT_THROW(renderer.set_transforms(std::vector<uint32_t>{0, 9}, std::vector<glm::dmat4>(2, glm::dmat4(1.0))), InputError);
+    glm::dmat4 flattening(0.0);
+    flattening[3][3] = 1.0;
+    EXPECT_THROW(renderer.set_transforms(std::vector<uint32_t>{2}, std::vector<glm::dmat4>{flattening}), InputError);
+    EXPECT_THROW(renderer.set_transforms(std::vector<uint32_t>{2}, std::vector<glm::dmat4>{}), InputError);
+    for (size_t k = 0; k < before.size(); ++k) {
+      EXPECT_EQ(renderer.scene().instances[k].translation, before[k].translation) << "a refused call moved instance " << k;
+    }
   }
 }
 
@@ -312,7 +339,7 @@ TEST(GpuInstances, FirstHitsInOrderAsTheReference) {
 // What does not walk instances yet says so, naming the search, before anything is built.
 TEST(GpuInstances, SearchesWithoutInstancesRefuse) {
   const Scene scene = instanced_scene(16, 16);
-  for (const PrimitiveSearch search : {PrimitiveSearch::brute_force, PrimitiveSearch::bvh_packet, PrimitiveSearch::ray_query}) {
+  for (const PrimitiveSearch search : {PrimitiveSearch::brute_force, PrimitiveSearch::ray_query}) {
     RendererOptions options;
     options.scene.search = search;
     if (!search_obstacle(search, device().info(), options.shader).empty()) continue;

@@ -148,6 +148,14 @@ void Renderer::set_transforms(std::span<const uint32_t> instances, std::span<con
     r.context.check_usable();
     const auto build_start = Clock::now();
     place_instances(*r.placing, r.host_scene);
+    if (r.placing->search == PrimitiveSearch::bvh_packet && !packet_walk_fits(r.placing->bvh_depth)) {
+      // The world's new tree outgrew the packet walk's stack: the per-ray walk traces the scene as
+      // it now stands, whose stack grows with the tree.
+      r.placing->search = PrimitiveSearch::bvh_per_ray;
+      r.stats.search = r.placing->search;
+      r.stats.loop_budget = tree_loop_budget(r.placing->shape(), r.context.info, r.options.loop_budget);
+      r.counts = run_time_counts(*r.placing, r.ray_mask);
+    }
     r.write_refitted(*r.placing);
     r.hit_sources = r.placing->hit_sources;  // the world's slots in their new order
     if (r.hit_source_table) {  // rewritten in place: bound descriptor sets name this buffer
