@@ -6,6 +6,9 @@
 // default's error contract, except at edges, where the device's own tests decide what is
 // proposed (see below). A triangle the device's test misses is never proposed: docs/accuracy.md
 // measures how often that changes a pixel.
+// Instances (INSTANCES) are the device's own: the top level places an instanced mesh's structure by
+// the instance's transform (rounded to float32), and vkray tests a candidate in the mesh's
+// coordinates (ray_in_mesh), as its tree walks do.
 // Compiled into the modules with VKRAY_RAY_QUERY (SPIR-V 1.4 and up, Vulkan 1.2).
 #ifndef VKRAY_RAY_QUERY_WALK_GLSL
 #define VKRAY_RAY_QUERY_WALK_GLSL
@@ -36,6 +39,32 @@ uint candidate_slot(rayQueryEXT query) {
          uint(rayQueryGetIntersectionPrimitiveIndexEXT(query, false));
 }
 
+// The scene's instance placing the candidate, or VKRAY_NO_INSTANCE: the device instance's shader
+// binding table record offset carries it plus one (StructureInput::Placement).
+uint candidate_instance(rayQueryEXT query) {
+  if (!INSTANCES) return VKRAY_NO_INSTANCE;
+  uint offset = rayQueryGetIntersectionInstanceShaderBindingTableRecordOffsetEXT(query, false);
+  return offset == 0u ? VKRAY_NO_INSTANCE : offset - 1u;
+}
+
+// vkray's own test of the candidate in `slot`, placed by `instance`, against the world's ray (its
+// frame, origin and direction): in the instance's mesh's coordinates where it is one. The hit it
+// takes carries the instance, and so does each hit it lists (listing_instance).
+void test_candidate(RayFrame frame, Origin origin, vec3 dir, uint slot, uint instance, inout SlotHit hit) {
+  if (!INSTANCES || instance == VKRAY_NO_INSTANCE) {
+    listing_instance = VKRAY_NO_INSTANCE;
+    test_primitive(frame, origin, dir, slot, hit);
+    return;
+  }
+  Origin mesh_origin;
+  vec3 mesh_dir;
+  ray_in_mesh(fetch_placement(instance), origin, dir, mesh_origin, mesh_dir);
+  listing_instance = instance;
+  float before = hit.t;
+  test_primitive(make_ray_frame(mesh_dir), mesh_origin, mesh_dir, slot, hit);
+  if (hit.t != before) hit.instance = instance;
+}
+
 PrimitiveHit nearest_primitive_ray_query(RayFrame frame, Origin origin, vec3 dir, float t_max) {
   SlotHit hit = SlotHit(t_max, no_primitive, VKRAY_NO_INSTANCE);
   bool unfinished = false;
@@ -49,12 +78,13 @@ PrimitiveHit nearest_primitive_ray_query(RayFrame frame, Origin origin, vec3 dir
   uint iterations = 0;
   while (next_candidate(query, iterations, unfinished)) {
     const uint slot = candidate_slot(query);
+    const uint instance = candidate_instance(query);
     const float before = hit.t;
     // vkray's own test of the candidate, against the whole ray: "it misses" and "it hits, but not
     // nearer" must not look alike, or with crossing or coplanar triangles the device's float32
     // ordering would bring its distance and another triangle's normal.
     SlotHit own = SlotHit(t_max, no_primitive, VKRAY_NO_INSTANCE);
-    test_primitive(frame, origin, dir, slot, own);
+    test_candidate(frame, origin, dir, slot, instance, own);
     // Counting crossings or listing the first hits commits nothing, so the device proposes every
     // candidate along the range; test_primitive counted or listed this one where vkray's test takes
     // it. What the device never proposes (a triangle its own test misses at an edge) is not: a ray
@@ -69,7 +99,7 @@ PrimitiveHit nearest_primitive_ray_query(RayFrame frame, Origin origin, vec3 dir
       // proposal is taken at the device's distance, one rounding away from the shared edge's
       // point; a pixel there lies on the boundary the error envelope allows either side of.
       const float device_t = rayQueryGetIntersectionTEXT(query, false);
-      if (device_t < hit.t) hit = SlotHit(device_t, slot, VKRAY_NO_INSTANCE);
+      if (device_t < hit.t) hit = SlotHit(device_t, slot, instance);
     }
     if (hit.t < before) {
       // Committing it lets the device cull what lies beyond: at its own distance for a triangle,
@@ -97,10 +127,16 @@ PrimitiveHit nearest_primitive_ray_query(RayFrame frame, Origin origin, vec3 dir
     const float start = max(hit.t - window, 0.0);
     rayQueryInitializeEXT(query, top_structure, gl_RayFlagsNoneEXT, ray_mask, origin.hi + origin.lo + start * dir,
                           0.0, dir, min(hit.t + window, 3.4e38) - start);
-    while (next_candidate(query, iterations, unfinished)) test_primitive(frame, origin, dir, candidate_slot(query), hit);
+    while (next_candidate(query, iterations, unfinished)) {
+      test_candidate(frame, origin, dir, candidate_slot(query), candidate_instance(query), hit);
+    }
   }
-  PrimitiveHit result = PrimitiveHit(hit.t, vec3(0.0), unfinished, hit.slot, VKRAY_NO_INSTANCE);
-  if (hit.slot != no_primitive && !FIRST_HITS) result.normal = primitive_normal(hit.slot, origin, dir);
+  listing_instance = VKRAY_NO_INSTANCE;
+  PrimitiveHit result = PrimitiveHit(hit.t, vec3(0.0), unfinished, hit.slot, hit.instance);
+  if (hit.slot != no_primitive && !FIRST_HITS) {
+    result.normal = INSTANCES && hit.instance != VKRAY_NO_INSTANCE ? instance_normal(hit.slot, hit.instance, dir)
+                                                                   : primitive_normal(hit.slot, origin, dir);
+  }
   return result;
 }
 

@@ -223,8 +223,8 @@ std::vector<size_t> morton_order(const std::vector<glm::dvec3>& centres) {
   return order;
 }
 
-// The slots for ray queries (GpuScene::structure_meshes): the triangles by mesh, each mesh's in
-// Morton order of their boxes' centres; then the spheres not tested apart, in Morton order too,
+// The slots for ray queries (GpuScene::structure_meshes): the triangles by mesh (an instanced
+// mesh's in its own coordinates), each mesh's in Morton order of their boxes' centres; then the spheres not tested apart, in Morton order too,
 // with their boxes. lavapipe builds a structure by halving its input in order: ordered input makes
 // it a Morton-code tree (the bunny at 1920x1080: 0.30 s a frame, 40 s in the OBJ's order).
 void lay_out_for_ray_queries(GpuScene& gpu, const Scene& scene, std::vector<EncodedPrimitive> triangles,
@@ -235,7 +235,9 @@ void lay_out_for_ray_queries(GpuScene& gpu, const Scene& scene, std::vector<Enco
     while (end < triangles.size() && triangles[end].source.object == triangles[begin].source.object) ++end;
     std::vector<glm::dvec3> centres;
     for (size_t k = begin; k < end; ++k) centres.push_back(centre(triangles[k].box));
-    gpu.structure_meshes.push_back({static_cast<uint32_t>(gpu.primitives.size()), static_cast<uint32_t>(end - begin)});
+    const uint32_t mesh = triangles[begin].source.object;
+    gpu.structure_meshes.push_back({static_cast<uint32_t>(gpu.primitives.size()), static_cast<uint32_t>(end - begin), mesh,
+                                    scene.meshes[mesh].instanced});
     for (size_t k : morton_order(centres)) {
       const EncodedPrimitive& triangle = triangles[begin + k];
       gpu.primitives.push_back(triangle.primitive);
@@ -277,17 +279,17 @@ GpuSceneShape shape_for_counts(size_t triangles, size_t spheres, size_t planes, 
   // (Instances of meshes without a triangle of non-zero area place nothing.)
   shape.instances = instances > 0 && triangles > 0;
   if (shape.instances) {
-    // Instances are walked into by the tree walks alone, per ray and in packets
-    // (nearest_primitive_in_tree, nearest_primitives_packet). Per ray unless asked: a packet
-    // enters an instance whole wherever one of its rays does. On lavapipe at 1920x1080, a thousand
-    // instances of five models, each a few dozen pixels across, took 475 ms a frame per ray against
-    // 920 in packets; five of them filling the frame 835 against 208 (`vkray bench SCENE
-    // --variants per-ray,packet`).
+    // Instances are walked into per ray, in packets (nearest_primitive_in_tree,
+    // nearest_primitives_packet) and by the device's ray queries (its own instances:
+    // acceleration_structures.hpp). Per ray unless asked: a packet enters an instance whole
+    // wherever one of its rays does. On lavapipe at 1920x1080, a thousand instances of five models,
+    // each a few dozen pixels across, took 475 ms a frame per ray against 920 in packets; five of
+    // them filling the frame 835 against 208 (`vkray bench SCENE --variants per-ray,packet`).
     const PrimitiveSearch requested = options.search;
-    if (requested == PrimitiveSearch::brute_force || requested == PrimitiveSearch::ray_query) {
-      throw InputError(std::string("instances: the ") + search_info(requested).name + " search cannot trace them yet; " +
-                       search_info(PrimitiveSearch::bvh_per_ray).name + " and " +
-                       search_info(PrimitiveSearch::bvh_packet).name + " can");
+    if (requested == PrimitiveSearch::brute_force) {
+      throw InputError(std::string("instances: the ") + search_info(requested).name + " search cannot trace them; " +
+                       search_info(PrimitiveSearch::bvh_per_ray).name + ", " + search_info(PrimitiveSearch::bvh_packet).name +
+                       " and " + search_info(PrimitiveSearch::ray_query).name + " can");
     }
     shape.search = requested == PrimitiveSearch::automatic ? PrimitiveSearch::bvh_per_ray : requested;
     shape.spheres_apart = keeps_spheres_apart(triangles, spheres) ? static_cast<uint32_t>(spheres) : 0;
@@ -349,15 +351,11 @@ struct InstanceLevel {
 
 namespace {
 
-// An instanced scene: the world's slots and nodes first, as many as its tree over its own
-// primitives and the instances can take (a binary tree of n leaf entries has at most n - 1 inner
-// nodes), then each instanced mesh's triangles and tree (their leaves' slots and inner nodes offset
-// to where they land), then the world's tree itself (place_instances).
-void lay_out_instances(GpuScene& gpu, const Scene& scene, std::vector<EncodedPrimitive> world,
-                       const std::vector<std::vector<EncodedPrimitive>>& instanced_triangles, const BvhBuildOptions& options) {
+// What place_instances needs of every layout: the instanced meshes' boxes and the radius of the
+// world's own primitives about the anchor.
+std::shared_ptr<InstanceLevel> make_instance_level(const GpuScene& gpu, const Scene& scene,
+                                                   const std::vector<std::vector<EncodedPrimitive>>& instanced_triangles) {
   auto level = std::make_shared<InstanceLevel>();
-  level->world = std::move(world);
-  level->bvh = options;
   level->mesh_box.resize(scene.meshes.size());
   level->root.assign(scene.meshes.size(), 0);
   for (uint32_t m = 0; m < scene.meshes.size(); ++m) {
@@ -372,6 +370,18 @@ void lay_out_instances(GpuScene& gpu, const Scene& scene, std::vector<EncodedPri
     if (mesh.instanced) continue;
     for (const glm::dvec3& p : mesh.positions) level->world_radius = std::max(level->world_radius, glm::length(p - gpu.anchor));
   }
+  return level;
+}
+
+// An instanced scene: the world's slots and nodes first, as many as its tree over its own
+// primitives and the instances can take (a binary tree of n leaf entries has at most n - 1 inner
+// nodes), then each instanced mesh's triangles and tree (their leaves' slots and inner nodes offset
+// to where they land), then the world's tree itself (place_instances).
+void lay_out_instances(GpuScene& gpu, const Scene& scene, std::vector<EncodedPrimitive> world,
+                       const std::vector<std::vector<EncodedPrimitive>>& instanced_triangles, const BvhBuildOptions& options) {
+  const std::shared_ptr<InstanceLevel> level = make_instance_level(gpu, scene, instanced_triangles);
+  level->world = std::move(world);
+  level->bvh = options;
   size_t placing = 0;
   for (const Instance& instance : scene.instances) placing += level->mesh_box[instance.mesh].empty() ? 0 : 1;
   level->world_slots = level->world.size() + placing;
@@ -490,7 +500,12 @@ GpuScene make_gpu_scene(const Scene& scene, const GpuSceneOptions& options, cons
   }
 
   if (gpu.search == PrimitiveSearch::ray_query) {
+    for (const auto& mesh_triangles : instanced_triangles) triangles.insert(triangles.end(), mesh_triangles.begin(), mesh_triangles.end());
     lay_out_for_ray_queries(gpu, scene, std::move(triangles), vertex_table);
+    if (shape.instances) {
+      gpu.instance_level = make_instance_level(gpu, scene, instanced_triangles);
+      place_instances(gpu, scene);
+    }
     return gpu;
   }
 
@@ -581,8 +596,33 @@ struct RefitState {
   }
 };
 
+namespace {
+
+// Each instance's map into its mesh's coordinates (VKRAY_TEXELS_PER_INSTANCE_*; fetch_placement).
+void write_instance_texels(GpuScene& gpu, const Scene& scene) {
+  gpu.instance_texels.clear();
+  for (const Instance& instance : scene.instances) {
+    const glm::dmat3 to_mesh = glm::inverse(instance.linear);
+    const glm::dvec3 translation = instance.translation - gpu.anchor;
+    if (gpu.precision == Precision::float64) {
+      for (int row = 0; row < 3; ++row) {
+        const gpu::GpuPoint point = encode_point(glm::dvec4(glm::row(to_mesh, row), translation[row]), gpu.precision);
+        gpu.instance_texels.push_back(point.first);
+        gpu.instance_texels.push_back(point.second);
+      }
+      continue;
+    }
+    const gpu::GpuPoint split = encode_point(glm::dvec4(translation, 0.0), gpu.precision);
+    for (int row = 0; row < 3; ++row) gpu.instance_texels.push_back(glm::vec4(glm::vec3(glm::row(to_mesh, row)), split.first[row]));
+    gpu.instance_texels.push_back(split.second);
+  }
+}
+
+}  // namespace
+
 void place_instances(GpuScene& gpu, const Scene& scene) {
   const InstanceLevel& level = *gpu.instance_level;
+  const bool first_placing = gpu.instance_texels.empty();
   // Each instance a primitive of the world's tree, boxed where it places its mesh; the radius about
   // the anchor (GpuScene::radius) grown to the placed boxes' corners.
   std::vector<EncodedPrimitive> entries = level.world;
@@ -600,6 +640,12 @@ void place_instances(GpuScene& gpu, const Scene& scene) {
     const gpu::GpuPrimitive record{glm::uvec4(k, level.root[instance.mesh], 0, primitive_word(VKRAY_PRIMITIVE_INSTANCE, instance.mask))};
     entries.push_back({record, glm::dvec3(0.0), outward(placed.lower - gpu.anchor, placed.upper - gpu.anchor), {}});
   }
+  write_instance_texels(gpu, scene);
+  gpu.rewritten = {};
+  gpu.rewritten.mesh_alone = true;
+  gpu.rewritten.instances = true;
+  // Ray queries: the device's top-level structure places the meshes (Renderer::set_transforms).
+  if (gpu.search == PrimitiveSearch::ray_query) return;
   std::vector<Box> boxes;
   boxes.reserve(entries.size());
   for (const auto& entry : entries) boxes.push_back({glm::dvec3(entry.box.lower), glm::dvec3(entry.box.upper)});
@@ -632,29 +678,9 @@ void place_instances(GpuScene& gpu, const Scene& scene) {
   // its pipeline anew (on lavapipe ~170 ms). The packet walk's stack is always
   // VKRAY_STACK_REGISTERS_MAX, which the tree itself must fit (Renderer::set_transforms).
   const uint32_t stack = bvh.depth + 3 + level.deepest_mesh;
-  const bool first_placing = gpu.instance_texels.empty();
   gpu.bvh_depth = std::max(gpu.bvh_depth, first_placing && gpu.search != PrimitiveSearch::bvh_packet ? stack + 4 : stack);
-  gpu.instance_texels.clear();
-  for (const Instance& instance : scene.instances) {
-    const glm::dmat3 to_mesh = glm::inverse(instance.linear);
-    const glm::dvec3 translation = instance.translation - gpu.anchor;
-    if (gpu.precision == Precision::float64) {
-      for (int row = 0; row < 3; ++row) {
-        const gpu::GpuPoint point = encode_point(glm::dvec4(glm::row(to_mesh, row), translation[row]), gpu.precision);
-        gpu.instance_texels.push_back(point.first);
-        gpu.instance_texels.push_back(point.second);
-      }
-      continue;
-    }
-    const gpu::GpuPoint split = encode_point(glm::dvec4(translation, 0.0), gpu.precision);
-    for (int row = 0; row < 3; ++row) gpu.instance_texels.push_back(glm::vec4(glm::vec3(glm::row(to_mesh, row)), split.first[row]));
-    gpu.instance_texels.push_back(split.second);
-  }
-  gpu.rewritten = {};
   gpu.rewritten.slots = {0, level.world_slots};
   gpu.rewritten.nodes = {0, level.world_nodes};
-  gpu.rewritten.mesh_alone = true;
-  gpu.rewritten.instances = true;
 }
 
 GpuScene::RefitStateHandle::RefitStateHandle() = default;

@@ -89,9 +89,12 @@ struct GpuScene {
   // order of their centroids (lavapipe's builder makes far better structures from ordered input:
   // the bunny at 1920x1080 traced 0.65 s a frame so against 72-86 s in the OBJ's order); the
   // spheres, where not tested apart, follow the triangles, with their float boxes (min x, y, z,
-  // max x, y, z, rounded outward) for the device's procedural geometry.
+  // max x, y, z, rounded outward) for the device's procedural geometry. An instanced mesh's range
+  // (`placed`) holds it in its own coordinates, for the top-level structure to place.
   struct SlotRange {
     uint32_t first = 0, count = 0;
+    uint32_t mesh = 0;  // the scene's
+    bool placed = false;
   };
   std::vector<SlotRange> structure_meshes;
   SlotRange structure_spheres;
@@ -199,7 +202,8 @@ bool refit_in_place(GpuScene& gpu, const Scene& scene, const ShaderVariant& shad
 // now stand (the same instances of the same meshes; nothing else moved): the world's tree built
 // anew over its own primitives and the instances' placed boxes, in the slots and nodes it held
 // (GpuScene::rewritten says which), and the instances' texels rewritten. The meshes' trees stay as
-// they are: the top level alone is rebuilt, as Vulkan's and Embree's instances are.
+// they are: the top level alone is rebuilt, as Vulkan's and Embree's instances are. For ray queries
+// the texels alone: the device's top-level structure is the renderer's to build.
 void place_instances(GpuScene& gpu, const Scene& scene);
 
 // Texels a slot's normal takes in GpuScene::normal_texels (VKRAY_TEXELS_PER_NORMAL_*).

@@ -157,6 +157,11 @@ void Renderer::set_transforms(std::span<const uint32_t> instances, std::span<con
       r.counts = run_time_counts(*r.placing, r.ray_mask);
     }
     r.write_refitted(*r.placing);
+    if (r.structures) {  // ray queries: the device's top level placed anew, which the tiles bind
+      r.structures->place(r.context, structure_placements(*r.placing, r.host_scene));
+      r.tile = TileOutputs{};
+      r.parked_tile = TileOutputs{};
+    }
     r.hit_sources = r.placing->hit_sources;  // the world's slots in their new order
     if (r.hit_source_table) {  // rewritten in place: bound descriptor sets name this buffer
       const GpuScene::ItemRange& slots = r.placing->rewritten.slots;

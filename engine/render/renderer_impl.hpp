@@ -96,6 +96,10 @@ struct PixelPatch {
   glm::vec4 value;  // as the shader stores it
 };
 
+// scene_upload.cpp: where `scene`'s instances place the ray-query structures' instanced meshes
+// (StructureInput::placements), for `gpu_scene` made from it or from it before they moved.
+std::vector<StructureInput::Placement> structure_placements(const GpuScene& gpu_scene, const Scene& scene);
+
 struct Renderer::Impl {
   Impl(VulkanContext& vulkan_context, RendererOptions renderer_options)
       : context(vulkan_context), options(renderer_options) {}

@@ -19,6 +19,29 @@ uint32_t checked_count(size_t count, const char* what) {
 
 }  // namespace
 
+std::vector<StructureInput::Placement> structure_placements(const GpuScene& gpu_scene, const Scene& scene) {
+  std::vector<uint32_t> structure_of_mesh(scene.meshes.size(), UINT32_MAX);
+  for (uint32_t k = 0; k < gpu_scene.structure_meshes.size(); ++k) {
+    if (gpu_scene.structure_meshes[k].placed) structure_of_mesh[gpu_scene.structure_meshes[k].mesh] = k;
+  }
+  std::vector<StructureInput::Placement> placements;
+  for (uint32_t k = 0; k < scene.instances.size(); ++k) {
+    const Instance& instance = scene.instances[k];
+    if (structure_of_mesh[instance.mesh] == UINT32_MAX) continue;  // a mesh without a triangle of non-zero area
+    StructureInput::Placement placement;
+    placement.mesh = structure_of_mesh[instance.mesh];
+    const glm::dvec3 translation = instance.translation - gpu_scene.anchor;
+    for (int row = 0; row < 3; ++row) {
+      for (int column = 0; column < 3; ++column) placement.to_world[row][column] = static_cast<float>(instance.linear[column][row]);
+      placement.to_world[row][3] = static_cast<float>(translation[row]);
+    }
+    placement.mask = static_cast<uint8_t>(instance.mask);
+    placement.instance = k;
+    placements.push_back(placement);
+  }
+  return placements;
+}
+
 void Renderer::Impl::upload_scene(const GpuScene& gpu_scene, const Scene& scene) {
   const vk::DeviceSize buffer_limit = binding_limit();
   auto upload = [&]<typename T>(const std::vector<T>& items, const char* what,
@@ -65,12 +88,13 @@ void Renderer::Impl::upload_scene(const GpuScene& gpu_scene, const Scene& scene)
     for (const auto& mesh : gpu_scene.structure_meshes) {
       // The mesh's mask, as each of its triangles' records carries it.
       const auto mask = static_cast<uint8_t>(gpu_scene.primitives[mesh.first].indices.w >> VKRAY_PRIMITIVE_MASK_SHIFT);
-      input.meshes.push_back({mesh.first, mesh.count, mask});
+      input.meshes.push_back({mesh.first, mesh.count, mask, mesh.placed});
       for (uint32_t slot = mesh.first; slot < mesh.first + mesh.count; ++slot) {
         const glm::uvec4& record = gpu_scene.primitives[slot].indices;
         input.triangles.push_back({record.x, record.y, record.z});
       }
     }
+    input.placements = structure_placements(gpu_scene, scene);
     input.sphere_boxes = gpu_scene.sphere_boxes;
     input.first_sphere_slot = gpu_scene.structure_spheres.first;
     structures.emplace(context, input);

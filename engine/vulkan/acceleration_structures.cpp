@@ -36,6 +36,7 @@ struct AccelerationStructures::Build {
   uint32_t primitive_offset = 0;  // bytes into the index data
   uint32_t first_slot = 0;
   uint8_t mask = 0xff;  // the instance's
+  bool placed = false;  // StructureInput::Range::placed
 };
 
 // What to build, a structure per mesh and one for the spheres; throws where one is more than the
@@ -59,6 +60,7 @@ std::vector<AccelerationStructures::Build> AccelerationStructures::describe_buil
     build.primitive_offset = triangles_before * static_cast<uint32_t>(sizeof(input.triangles[0]));
     build.first_slot = mesh.first_slot;
     build.mask = mesh.mask;
+    build.placed = mesh.placed;
     builds.push_back(build);
     triangles_before += mesh.count;
   }
@@ -101,16 +103,37 @@ AccelerationStructures::AccelerationStructures(VulkanContext& context, const Str
   }
 
   const std::vector<Build> builds = describe_builds(context, input, indices, boxes);
-  const vk::DeviceSize alignment = std::max<vk::DeviceSize>(1, context.info.structure_scratch_alignment);
-  if (!builds.empty()) build_bottom(context, builds, alignment);
-  build_top(context, builds, alignment);
+  alignment_ = std::max<vk::DeviceSize>(1, context.info.structure_scratch_alignment);
+  if (!builds.empty()) build_bottom(context, builds);
+  // Each bottom structure's instance, in place, its first slot as its custom index.
+  const vk::TransformMatrixKHR identity(std::array<std::array<float, 4>, 3>{{{1, 0, 0, 0}, {0, 1, 0, 0}, {0, 0, 1, 0}}});
+  for (size_t k = 0; k < bottom_.size(); ++k) {
+    const vk::DeviceAddress address = context.device.getAccelerationStructureAddressKHR(
+        vk::AccelerationStructureDeviceAddressInfoKHR(*bottom_[k].handle));
+    bottom_instance_.emplace_back(identity, builds[k].first_slot, builds[k].mask, 0,
+                                  vk::GeometryInstanceFlagBitsKHR::eForceNoOpaque, address);
+    placed_.push_back(builds[k].placed);
+  }
+  for (const StructureInput::Placement& placement : input.placements) {
+    if (placement.instance + 1 > max_custom_index) {
+      throw GpuError("ray queries take scenes of up to " + std::to_string(max_custom_index) + " instances");
+    }
+  }
+  build_top(context, input.placements);
+  build_ms_ = elapsed_ms(start);
+}
+
+void AccelerationStructures::place(VulkanContext& context, const std::vector<StructureInput::Placement>& placements) {
+  const auto start = Clock::now();
+  bytes_ -= top_bytes_;
+  build_top(context, placements);
   build_ms_ = elapsed_ms(start);
 }
 
 // Builds the bottom structures side by side, then copies each into storage of its compacted size.
-void AccelerationStructures::build_bottom(VulkanContext& context, const std::vector<Build>& builds,
-                                          vk::DeviceSize alignment) {
+void AccelerationStructures::build_bottom(VulkanContext& context, const std::vector<Build>& builds) {
   const vk::raii::Device& device = context.device;
+  const vk::DeviceSize alignment = alignment_;
   // Sizes, storage and scratch: each build its own part of one scratch buffer, so they need no
   // barrier between them.
   const auto flags = vk::BuildAccelerationStructureFlagBitsKHR::ePreferFastTrace |
@@ -184,17 +207,20 @@ void AccelerationStructures::build_bottom(VulkanContext& context, const std::vec
   }
 }
 
-void AccelerationStructures::build_top(VulkanContext& context, const std::vector<Build>& builds, vk::DeviceSize alignment) {
+void AccelerationStructures::build_top(VulkanContext& context, const std::vector<StructureInput::Placement>& placements) {
   const vk::raii::Device& device = context.device;
-  // The top: an instance of each bottom structure, in place (the scene's positions are already
-  // where they belong), its first slot as its custom index.
+  const vk::DeviceSize alignment = alignment_;
+  // The top: each bottom structure in place but a placed mesh's (the scene's positions are already
+  // where they belong), then each placement of a placed mesh.
   std::vector<vk::AccelerationStructureInstanceKHR> instances;
-  const vk::TransformMatrixKHR identity(std::array<std::array<float, 4>, 3>{{{1, 0, 0, 0}, {0, 1, 0, 0}, {0, 0, 1, 0}}});
   for (size_t k = 0; k < bottom_.size(); ++k) {
-    const vk::DeviceAddress address =
-        device.getAccelerationStructureAddressKHR(vk::AccelerationStructureDeviceAddressInfoKHR(*bottom_[k].handle));
-    instances.emplace_back(identity, builds[k].first_slot, builds[k].mask, 0,
-                           vk::GeometryInstanceFlagBitsKHR::eForceNoOpaque, address);
+    if (!placed_[k]) instances.push_back(bottom_instance_[k]);
+  }
+  for (const StructureInput::Placement& placement : placements) {
+    const vk::AccelerationStructureInstanceKHR& mesh = bottom_instance_.at(placement.mesh);
+    instances.emplace_back(vk::TransformMatrixKHR(placement.to_world), mesh.instanceCustomIndex, placement.mask,
+                           placement.instance + 1, vk::GeometryInstanceFlagBitsKHR::eForceNoOpaque,
+                           mesh.accelerationStructureReference);
   }
   GpuBuffer instance_buffer;
   vk::AccelerationStructureGeometryKHR top_geometry(vk::GeometryTypeKHR::eInstances,
@@ -213,7 +239,8 @@ void AccelerationStructures::build_top(VulkanContext& context, const std::vector
   top_ = vk::raii::AccelerationStructureKHR(
       device, vk::AccelerationStructureCreateInfoKHR({}, *top_storage_.buffer, 0, top_sizes.accelerationStructureSize,
                                                      vk::AccelerationStructureTypeKHR::eTopLevel));
-  bytes_ += top_sizes.accelerationStructureSize;
+  top_bytes_ = top_sizes.accelerationStructureSize;
+  bytes_ += top_bytes_;
   GpuBuffer top_scratch = create_device_buffer(context, top_sizes.buildScratchSize + alignment,
                                                vk::BufferUsageFlagBits::eStorageBuffer | vk::BufferUsageFlagBits::eShaderDeviceAddress);
   top_info.dstAccelerationStructure = *top_;
