@@ -155,7 +155,7 @@ TEST(GpuInstances, ExtremeScalesFarFromTheOrigin) {
 }
 
 // Given rays, each from its own origin and all from one, occlusion queries and counts of crossings:
-// ray by ray as the reference has them.
+// ray by ray as the reference has them, in every walk.
 TEST(GpuInstances, GivenRaysOcclusionAndCrossings) {
   const Scene scene = instanced_scene(48, 32);
   const std::vector<GivenRay> rays = pixel_rays(scene);
@@ -163,40 +163,43 @@ TEST(GpuInstances, GivenRaysOcclusionAndCrossings) {
   for (size_t k = 0; k < scattered.size(); ++k) {  // each from a point of its own along its pixel ray
     for (int c = 0; c < 3; ++c) scattered[k][c] += 0.5 * double(k % 5) * scattered[k][3 + c];
   }
-  Renderer renderer(device(), scene);
-  const ReferenceScene reference(scene);
-  const std::vector<GivenRay>& moved = scattered;
-  for (const std::vector<GivenRay>* given : {&rays, &moved}) {
-    const RayHits hits = renderer.cast_rays(*given);
-    const std::vector<uint8_t> blocked = renderer.occluded(*given);
-    const std::vector<uint32_t> crossings = renderer.count_intersections(*given);
-    if (given == &rays) {  // the pixel rays: as the camera's, within the envelope
-      Frame frame(scene.width, scene.height, {Aov::depth, Aov::normal});
-      frame.depth.assign(hits.t.begin(), hits.t.end());
-      frame.normal.assign(hits.normal.begin(), hits.normal.end());
-      std::vector<ObjectPrimitive> ids(hits.count);
-      for (size_t k = 0; k < hits.count; ++k) ids[k] = {hits.object[k], hits.primitive[k]};
-      const EnvelopeReport report = check_against_reference(scene, frame, 1, &ids);
-      EXPECT_EQ(report.failures, 0u) << report.describe();
-    }
-    size_t occlusion_differs = 0, crossings_differ = 0, instances_hit = 0, instance_differs = 0;
-    ASSERT_EQ(hits.instance.size(), given->size()) << "a scene with instances names the instance each ray hit";
-    for (size_t k = 0; k < given->size(); ++k) {
-      const GivenRay& ray = (*given)[k];
-      const ReferenceHit expected = trace_reference_ray(reference, ray, 0.0, no_hit);
-      const ObjectPrimitive expected_source = reference.source(expected);
-      if (hits.object[k] == expected_source.object && hits.primitive[k] == expected_source.primitive &&
-          hits.instance[k] != expected.instance) {
-        ++instance_differs;
+  for (const RendererOptions& options : every_walk()) {
+    SCOPED_TRACE(variant_name(options));
+    Renderer renderer(device(), scene, options);
+    const ReferenceScene reference(scene);
+    const std::vector<GivenRay>& moved = scattered;
+    for (const std::vector<GivenRay>* given : {&rays, &moved}) {
+      const RayHits hits = renderer.cast_rays(*given);
+      const std::vector<uint8_t> blocked = renderer.occluded(*given);
+      const std::vector<uint32_t> crossings = renderer.count_intersections(*given);
+      if (given == &rays) {  // the pixel rays: as the camera's, within the envelope
+        Frame frame(scene.width, scene.height, {Aov::depth, Aov::normal});
+        frame.depth.assign(hits.t.begin(), hits.t.end());
+        frame.normal.assign(hits.normal.begin(), hits.normal.end());
+        std::vector<ObjectPrimitive> ids(hits.count);
+        for (size_t k = 0; k < hits.count; ++k) ids[k] = {hits.object[k], hits.primitive[k]};
+        const EnvelopeReport report = check_against_reference(scene, frame, 1, &ids);
+        EXPECT_EQ(report.failures, 0u) << report.describe();
       }
-      if (bool(blocked[k]) != std::isfinite(hits.t[k])) ++occlusion_differs;
-      if (crossings[k] != count_reference_crossings(reference, ray, 0.0, no_hit)) ++crossings_differ;
-      if (hits.object[k] == 1 || hits.object[k] == 2) ++instances_hit;
+      size_t occlusion_differs = 0, crossings_differ = 0, instances_hit = 0, instance_differs = 0;
+      ASSERT_EQ(hits.instance.size(), given->size()) << "a scene with instances names the instance each ray hit";
+      for (size_t k = 0; k < given->size(); ++k) {
+        const GivenRay& ray = (*given)[k];
+        const ReferenceHit expected = trace_reference_ray(reference, ray, 0.0, no_hit);
+        const ObjectPrimitive expected_source = reference.source(expected);
+        if (hits.object[k] == expected_source.object && hits.primitive[k] == expected_source.primitive &&
+            hits.instance[k] != expected.instance) {
+          ++instance_differs;
+        }
+        if (bool(blocked[k]) != std::isfinite(hits.t[k])) ++occlusion_differs;
+        if (crossings[k] != count_reference_crossings(reference, ray, 0.0, no_hit)) ++crossings_differ;
+        if (hits.object[k] == 1 || hits.object[k] == 2) ++instances_hit;
+      }
+      EXPECT_EQ(occlusion_differs, 0u);
+      EXPECT_EQ(crossings_differ, 0u);
+      EXPECT_EQ(instance_differs, 0u) << "the same triangle, another instance";
+      EXPECT_GT(instances_hit, given->size() / 20) << "the rays must meet the instances";
     }
-    EXPECT_EQ(occlusion_differs, 0u);
-    EXPECT_EQ(crossings_differ, 0u);
-    EXPECT_EQ(instance_differs, 0u) << "the same triangle, another instance";
-    EXPECT_GT(instances_hit, given->size() / 20) << "the rays must meet the instances";
   }
 }
 
@@ -286,7 +289,7 @@ TEST(GpuInstances, SetTransformsMovesThemWithoutARebuild) {
 // distance and normal within the bounds of FirstHits.InOrderAsTheReference (a head-on hit's distance
 // within 8 eps (t + 16), a normal within 32 eps) grown by the placing instance's kappa, the factor
 // its transform puts on float32's errors (placement_condition), and twice for hits up to 60 degrees
-// from head-on through the sheared instance.
+// from head-on through the sheared instance; in every walk.
 TEST(GpuInstances, FirstHitsInOrderAsTheReference) {
   constexpr double eps = 0x1p-24;
   constexpr uint32_t count = 4;
@@ -304,40 +307,43 @@ TEST(GpuInstances, FirstHitsInOrderAsTheReference) {
       rays.push_back({from.x, from.y, from.z, dir.x, dir.y, dir.z});
     }
   }
-  Renderer renderer(device(), scene);
-  const ReferenceScene reference(scene);
-  const RayHits hits = renderer.cast_rays(rays, {}, count);
-  ASSERT_EQ(hits.count, rays.size() * count);
-  ASSERT_EQ(hits.instance.size(), hits.count) << "a scene with instances names the instance of each hit";
-  size_t wrong_ids = 0, wrong_t = 0, wrong_normals = 0, instance_hits = 0;
-  std::string first;
-  for (size_t k = 0; k < rays.size(); ++k) {
-    const std::vector<ReferenceHit> expected = first_reference_hits(reference, rays[k], 0.0, no_hit, count);
-    for (uint32_t layer = 0; layer < count; ++layer) {
-      const size_t at = k * count + layer;
-      const ReferenceHit& want = expected[layer];
-      const ObjectPrimitive source = reference.source(want);
-      const bool ids_differ = hits.object[at] != source.object || hits.primitive[at] != source.primitive ||
-                              hits.instance[at] != (want.kind == PrimitiveKind::none ? no_object : want.instance);
-      const double kappa = placement_condition(scene, want);
-      const double t = hits.t[at];
-      const bool t_differs =
-          want.kind == PrimitiveKind::none ? !std::isinf(t) : !(std::abs(t - want.t) <= 2 * kappa * 8 * eps * (want.t + 16.0));
-      const glm::dvec3 normal(hits.normal[at], hits.normal[hits.count + at], hits.normal[2 * hits.count + at]);
-      const bool normal_differs =
-          want.kind == PrimitiveKind::none ? normal != glm::dvec3(0.0) : !(angle_between(normal, want.normal) <= 2 * kappa * 32 * eps);
-      wrong_ids += ids_differ, wrong_t += t_differs, wrong_normals += normal_differs;
-      instance_hits += hits.instance[at] != no_object;
-      if ((ids_differ || t_differs || normal_differs) && first.empty()) {
-        first = "ray " + std::to_string(k) + " hit " + std::to_string(layer) + ": t " + std::to_string(t) + " (reference " +
-                std::to_string(want.t) + "), object " + std::to_string(hits.object[at]) + " (" + std::to_string(source.object) +
-                "), instance " + std::to_string(hits.instance[at]) + " (" + std::to_string(want.instance) + ")";
+  for (const RendererOptions& options : every_walk()) {
+    SCOPED_TRACE(variant_name(options));
+    Renderer renderer(device(), scene, options);
+    const ReferenceScene reference(scene);
+    const RayHits hits = renderer.cast_rays(rays, {}, count);
+    ASSERT_EQ(hits.count, rays.size() * count);
+    ASSERT_EQ(hits.instance.size(), hits.count) << "a scene with instances names the instance of each hit";
+    size_t wrong_ids = 0, wrong_t = 0, wrong_normals = 0, instance_hits = 0;
+    std::string first;
+    for (size_t k = 0; k < rays.size(); ++k) {
+      const std::vector<ReferenceHit> expected = first_reference_hits(reference, rays[k], 0.0, no_hit, count);
+      for (uint32_t layer = 0; layer < count; ++layer) {
+        const size_t at = k * count + layer;
+        const ReferenceHit& want = expected[layer];
+        const ObjectPrimitive source = reference.source(want);
+        const bool ids_differ = hits.object[at] != source.object || hits.primitive[at] != source.primitive ||
+                                hits.instance[at] != (want.kind == PrimitiveKind::none ? no_object : want.instance);
+        const double kappa = placement_condition(scene, want);
+        const double t = hits.t[at];
+        const bool t_differs =
+            want.kind == PrimitiveKind::none ? !std::isinf(t) : !(std::abs(t - want.t) <= 2 * kappa * 8 * eps * (want.t + 16.0));
+        const glm::dvec3 normal(hits.normal[at], hits.normal[hits.count + at], hits.normal[2 * hits.count + at]);
+        const bool normal_differs =
+            want.kind == PrimitiveKind::none ? normal != glm::dvec3(0.0) : !(angle_between(normal, want.normal) <= 2 * kappa * 32 * eps);
+        wrong_ids += ids_differ, wrong_t += t_differs, wrong_normals += normal_differs;
+        instance_hits += hits.instance[at] != no_object;
+        if ((ids_differ || t_differs || normal_differs) && first.empty()) {
+          first = "ray " + std::to_string(k) + " hit " + std::to_string(layer) + ": t " + std::to_string(t) + " (reference " +
+                  std::to_string(want.t) + "), object " + std::to_string(hits.object[at]) + " (" + std::to_string(source.object) +
+                  "), instance " + std::to_string(hits.instance[at]) + " (" + std::to_string(want.instance) + ")";
+        }
       }
     }
+    EXPECT_EQ(wrong_ids + wrong_t + wrong_normals, 0u)
+        << wrong_ids << " ids, " << wrong_t << " distances, " << wrong_normals << " normals; first: " << first;
+    EXPECT_GE(instance_hits, 2 * rays.size()) << "each ray goes in and out of the instance it aims at";
   }
-  EXPECT_EQ(wrong_ids + wrong_t + wrong_normals, 0u)
-      << wrong_ids << " ids, " << wrong_t << " distances, " << wrong_normals << " normals; first: " << first;
-  EXPECT_GE(instance_hits, 2 * rays.size()) << "each ray goes in and out of the instance it aims at";
 }
 
 // Brute force, which has no tree to place instances in, says so, naming itself, before anything is
