@@ -30,7 +30,7 @@ void add_traversal_option(CLI::App* command, std::string& traversal) {
   command
       ->add_option("--traversal", traversal,
                    "How rays find the primitives: " + traversal_names() +
-                       " (auto: brute force for a handful, else packets on llvmpipe from Mesa 25 without instances, per ray elsewhere)")
+                       " (auto: per ray with instances; else brute force for a handful, packets on llvmpipe from Mesa 25, per ray elsewhere)")
       ->check([](const std::string& name) {
         return traversal_from_name(name) ? std::string()
                                          : "unknown traversal '" + name + "' (choose from " + traversal_names() + ")";

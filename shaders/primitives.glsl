@@ -295,69 +295,6 @@ real3 primitive_normal(uint slot, Origin origin, real3 dir) {
   return facing_the_ray(normal, dir);
 }
 
-// Every sphere, then every triangle in batches of VKRAY_TRIANGLE_BATCH (one loop iteration each).
-PrimitiveHit nearest_primitive_brute_force(RayFrame frame, Origin origin, real3 dir, real t_max, uint sphere_count,
-                                           uint triangle_slots) {
-  PrimitiveHit result = PrimitiveHit(t_max, real3(0.0), false, VKRAY_HIT_NONE, VKRAY_NO_INSTANCE);
-  for (uint i = 0; i < sphere_count; ++i) {
-    real3 normal;
-    real far_root;
-    real t = intersect_sphere_point(fetch_point(spheres, int(i)), origin, dir, result.t, normal, far_root);
-    if (COUNT_CROSSINGS) {
-      if (apart_visible(i)) crossings += sphere_crossings(t, far_root, result.t);
-    } else if (FIRST_HITS) {
-      if (apart_visible(i)) result.t = list_sphere_hits(t, far_root, result.t, VKRAY_HIT_SPHERE_APART | i);
-    } else if (t < result.t && apart_visible(i)) {
-      result.t = t;
-      result.normal = normal;
-      result.id = VKRAY_HIT_SPHERE_APART | i;
-    }
-  }
-  SlotHit hit = SlotHit(result.t, no_primitive, VKRAY_NO_INSTANCE);
-  for (uint batch = 0; batch < triangle_slots; batch += VKRAY_TRIANGLE_BATCH) {
-    [[unroll]] for (uint k = 0; k < VKRAY_TRIANGLE_BATCH; ++k) test_triangle(frame, origin, dir, batch + k, hit);
-  }
-  if (FIRST_HITS) {
-    result.t = hit.t;  // the list's bound; its hits' normals are read when they are written
-  } else if (hit.slot != no_primitive) {
-    result = PrimitiveHit(hit.t, primitive_normal(hit.slot, origin, dir), false, hit.slot, VKRAY_NO_INSTANCE);
-  }
-  return result;
-}
-
-const uint no_node = 0x7fffffffu;  // `current` once the stack has run dry; no node has this index
-
-// The walk's stack in registers (see VKRAY_SPEC_STACK_REGISTERS): the top entry in top.x, each
-// vector's w spilling into the next one's x. Every vector past STACK_REGISTERS is removed by
-// specialization, with its moves.
-struct RegisterStack {
-  uvec4 top, r1, r2, r3, r4, r5, r6, r7;
-};
-
-void push_registers(inout RegisterStack s, uint entry) {
-  if (STACK_REGISTERS > 28) s.r7 = uvec4(s.r6.w, s.r7.xyz);
-  if (STACK_REGISTERS > 24) s.r6 = uvec4(s.r5.w, s.r6.xyz);
-  if (STACK_REGISTERS > 20) s.r5 = uvec4(s.r4.w, s.r5.xyz);
-  if (STACK_REGISTERS > 16) s.r4 = uvec4(s.r3.w, s.r4.xyz);
-  if (STACK_REGISTERS > 12) s.r3 = uvec4(s.r2.w, s.r3.xyz);
-  if (STACK_REGISTERS > 8) s.r2 = uvec4(s.r1.w, s.r2.xyz);
-  if (STACK_REGISTERS > 4) s.r1 = uvec4(s.top.w, s.r1.xyz);
-  s.top = uvec4(entry, s.top.xyz);
-}
-
-uint pop_registers(inout RegisterStack s) {
-  uint entry = s.top.x;
-  s.top = uvec4(s.top.yzw, s.r1.x);
-  if (STACK_REGISTERS > 4) s.r1 = uvec4(s.r1.yzw, s.r2.x);
-  if (STACK_REGISTERS > 8) s.r2 = uvec4(s.r2.yzw, s.r3.x);
-  if (STACK_REGISTERS > 12) s.r3 = uvec4(s.r3.yzw, s.r4.x);
-  if (STACK_REGISTERS > 16) s.r4 = uvec4(s.r4.yzw, s.r5.x);
-  if (STACK_REGISTERS > 20) s.r5 = uvec4(s.r5.yzw, s.r6.x);
-  if (STACK_REGISTERS > 24) s.r6 = uvec4(s.r6.yzw, s.r7.x);
-  if (STACK_REGISTERS > 28) s.r7 = uvec4(s.r7.yzw, 0u);
-  return entry;
-}
-
 // INSTANCES: instance `index`'s rows of A and its translation T (see VKRAY_TEXELS_PER_INSTANCE_*).
 struct Placement {
   real3 row0, row1, row2;
@@ -409,6 +346,90 @@ real3 instance_normal(uint slot, uint instance, real3 dir) {
   real3 normal = fetch_normal(int(slot));
   precise real3 world = normal.x * placement.row0 + normal.y * placement.row1 + normal.z * placement.row2;
   return facing_the_ray(world, dir);
+}
+
+// Every sphere, then every triangle in batches of VKRAY_TRIANGLE_BATCH (one loop iteration each);
+// with `placed` (INSTANCES), then every instance: the records after the world's triangles, up to
+// one of another kind, each naming its instance and its mesh's slots (whole batches), which are
+// tested with the ray in the mesh's coordinates.
+PrimitiveHit nearest_primitive_brute_force(RayFrame frame, Origin origin, real3 dir, real t_max, uint sphere_count,
+                                           uint triangle_slots, bool placed) {
+  PrimitiveHit result = PrimitiveHit(t_max, real3(0.0), false, VKRAY_HIT_NONE, VKRAY_NO_INSTANCE);
+  for (uint i = 0; i < sphere_count; ++i) {
+    real3 normal;
+    real far_root;
+    real t = intersect_sphere_point(fetch_point(spheres, int(i)), origin, dir, result.t, normal, far_root);
+    if (COUNT_CROSSINGS) {
+      if (apart_visible(i)) crossings += sphere_crossings(t, far_root, result.t);
+    } else if (FIRST_HITS) {
+      if (apart_visible(i)) result.t = list_sphere_hits(t, far_root, result.t, VKRAY_HIT_SPHERE_APART | i);
+    } else if (t < result.t && apart_visible(i)) {
+      result.t = t;
+      result.normal = normal;
+      result.id = VKRAY_HIT_SPHERE_APART | i;
+    }
+  }
+  SlotHit hit = SlotHit(result.t, no_primitive, VKRAY_NO_INSTANCE);
+  for (uint batch = 0; batch < triangle_slots; batch += VKRAY_TRIANGLE_BATCH) {
+    [[unroll]] for (uint k = 0; k < VKRAY_TRIANGLE_BATCH; ++k) test_triangle(frame, origin, dir, batch + k, hit);
+  }
+  for (uint entry = triangle_slots; INSTANCES && placed; ++entry) {
+    uvec4 record = FETCH(primitives, int(entry));
+    if ((record.w & VKRAY_PRIMITIVE_KIND_BITS) != VKRAY_PRIMITIVE_INSTANCE) break;
+    if (!slot_visible(entry)) continue;
+    Origin mesh_origin;
+    real3 mesh_dir;
+    ray_in_mesh(fetch_placement(record.x), origin, dir, mesh_origin, mesh_dir);
+    RayFrame mesh_frame = make_ray_frame(mesh_dir);
+    listing_instance = record.x;
+    for (uint batch = record.y; batch < record.y + record.z; batch += VKRAY_TRIANGLE_BATCH) {
+      real before = hit.t;
+      [[unroll]] for (uint k = 0; k < VKRAY_TRIANGLE_BATCH; ++k) test_triangle(mesh_frame, mesh_origin, mesh_dir, batch + k, hit);
+      if (hit.t != before) hit.instance = record.x;
+    }
+    listing_instance = VKRAY_NO_INSTANCE;
+  }
+  if (FIRST_HITS) {
+    result.t = hit.t;  // the list's bound; its hits' normals are read when they are written
+  } else if (hit.slot != no_primitive) {
+    real3 normal = INSTANCES && hit.instance != VKRAY_NO_INSTANCE ? instance_normal(hit.slot, hit.instance, dir)
+                                                                  : primitive_normal(hit.slot, origin, dir);
+    result = PrimitiveHit(hit.t, normal, false, hit.slot, hit.instance);
+  }
+  return result;
+}
+
+const uint no_node = 0x7fffffffu;  // `current` once the stack has run dry; no node has this index
+
+// The walk's stack in registers (see VKRAY_SPEC_STACK_REGISTERS): the top entry in top.x, each
+// vector's w spilling into the next one's x. Every vector past STACK_REGISTERS is removed by
+// specialization, with its moves.
+struct RegisterStack {
+  uvec4 top, r1, r2, r3, r4, r5, r6, r7;
+};
+
+void push_registers(inout RegisterStack s, uint entry) {
+  if (STACK_REGISTERS > 28) s.r7 = uvec4(s.r6.w, s.r7.xyz);
+  if (STACK_REGISTERS > 24) s.r6 = uvec4(s.r5.w, s.r6.xyz);
+  if (STACK_REGISTERS > 20) s.r5 = uvec4(s.r4.w, s.r5.xyz);
+  if (STACK_REGISTERS > 16) s.r4 = uvec4(s.r3.w, s.r4.xyz);
+  if (STACK_REGISTERS > 12) s.r3 = uvec4(s.r2.w, s.r3.xyz);
+  if (STACK_REGISTERS > 8) s.r2 = uvec4(s.r1.w, s.r2.xyz);
+  if (STACK_REGISTERS > 4) s.r1 = uvec4(s.top.w, s.r1.xyz);
+  s.top = uvec4(entry, s.top.xyz);
+}
+
+uint pop_registers(inout RegisterStack s) {
+  uint entry = s.top.x;
+  s.top = uvec4(s.top.yzw, s.r1.x);
+  if (STACK_REGISTERS > 4) s.r1 = uvec4(s.r1.yzw, s.r2.x);
+  if (STACK_REGISTERS > 8) s.r2 = uvec4(s.r2.yzw, s.r3.x);
+  if (STACK_REGISTERS > 12) s.r3 = uvec4(s.r3.yzw, s.r4.x);
+  if (STACK_REGISTERS > 16) s.r4 = uvec4(s.r4.yzw, s.r5.x);
+  if (STACK_REGISTERS > 20) s.r5 = uvec4(s.r5.yzw, s.r6.x);
+  if (STACK_REGISTERS > 24) s.r6 = uvec4(s.r6.yzw, s.r7.x);
+  if (STACK_REGISTERS > 28) s.r7 = uvec4(s.r7.yzw, 0u);
+  return entry;
 }
 
 // An entry the walk pushes below an instance's mesh tree: reached, the walk returns to the world's ray.

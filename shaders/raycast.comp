@@ -118,9 +118,9 @@ PrimitiveHit nearest_primitive(Origin origin, real3 dir, real t_max, uvec4 count
   uint search_mode = GENERIC ? counts.w & VKRAY_SEARCH_MODE_BITS : SEARCH_MODE;
   uint sphere_count = GENERIC ? counts.x : SPHERE_COUNT;
   if (search_mode == VKRAY_SEARCH_BRUTE_FORCE) {
-    return nearest_primitive_brute_force(frame, origin, dir, t_max, sphere_count, GENERIC ? counts.z : TRIANGLE_SLOTS);
+    return nearest_primitive_brute_force(frame, origin, dir, t_max, sphere_count, GENERIC ? counts.z : TRIANGLE_SLOTS, true);
   }
-  PrimitiveHit sphere_hit = nearest_primitive_brute_force(frame, origin, dir, t_max, sphere_count, 0u);
+  PrimitiveHit sphere_hit = nearest_primitive_brute_force(frame, origin, dir, t_max, sphere_count, 0u, false);
 #ifdef VKRAY_RAY_QUERY
   PrimitiveHit tree_hit = nearest_primitive_ray_query(frame, origin, dir, sphere_hit.t);
 #else
@@ -341,7 +341,7 @@ void main() {
     // Spheres tested one by one (a handful beside the tree's triangles) bound each ray's walk.
     float t_max[VKRAY_PACKET_ROWS];
     for (uint r = 0; r < RAYS; ++r) {
-      hits[r] = nearest_primitive_brute_force(make_ray_frame(dirs[r]), origin, dirs[r], primitive_t_max[r], SPHERE_COUNT, 0u);
+      hits[r] = nearest_primitive_brute_force(make_ray_frame(dirs[r]), origin, dirs[r], primitive_t_max[r], SPHERE_COUNT, 0u, false);
       t_max[r] = hits[r].t;
     }
     uint slots[VKRAY_PACKET_ROWS];

@@ -1,7 +1,7 @@
 // Instances on the device: a mesh stored once and placed by transforms is traced by taking each ray
 // into the mesh's coordinates (shaders/primitives.glsl), and every pixel and given ray agrees with
 // the fp64 reference within the error envelope, ids included: rotated, sheared, mirrored, masked,
-// at extreme scales far from the origin, in every walk and shader variant that traces them.
+// at extreme scales far from the origin, in every search and shader variant.
 #include "engine/reference/reference.hpp"
 #include "engine/render/gpu_scene.hpp"
 #include "engine/scene/mesh_generators.hpp"
@@ -72,11 +72,13 @@ std::set<uint32_t> expect_render_as_reference(const Scene& scene, const Renderer
   return objects;
 }
 
-// Options for each walk that traces instances and runs on this device (runnable), with `base`'s.
-std::vector<RendererOptions> every_walk(const RendererOptions& base = {}) {
+// Options for each search that runs on this device (runnable), with `base`'s: brute force, each
+// tree walk and ray queries, or the walks alone.
+std::vector<RendererOptions> every_search(const RendererOptions& base = {}, bool walks_alone = false) {
+  std::vector<PrimitiveSearch> wanted{PrimitiveSearch::bvh_per_ray, PrimitiveSearch::bvh_packet, PrimitiveSearch::ray_query};
+  if (!walks_alone) wanted.insert(wanted.begin(), PrimitiveSearch::brute_force);
   std::vector<RendererOptions> walks;
-  for (const PrimitiveSearch search :
-       runnable({PrimitiveSearch::bvh_per_ray, PrimitiveSearch::bvh_packet, PrimitiveSearch::ray_query}, base.shader)) {
+  for (const PrimitiveSearch search : runnable(wanted, base.shader)) {
     RendererOptions options = base;
     options.scene.search = search;
     walks.push_back(options);
@@ -84,15 +86,15 @@ std::vector<RendererOptions> every_walk(const RendererOptions& base = {}) {
   return walks;
 }
 
-// Every instance in view, through each walk and variant that traces them: per ray, in packets and
-// by ray queries, generic, float64, geometry in storage buffers, and rays past a small loop budget that the host
+// Every instance in view, through each search and variant: brute force, per ray, in packets and by
+// ray queries, generic, float64, geometry in storage buffers, and rays past a small loop budget that the host
 // finishes.
 TEST(GpuInstances, EveryPixelAsTheReferenceInEveryVariant) {
   const Scene scene = instanced_scene();
   RendererOptions budgeted;
   budgeted.loop_budget = 40;
-  std::vector<RendererOptions> variants = every_walk();
-  std::vector<RendererOptions> budgeted_walks = every_walk(budgeted);
+  std::vector<RendererOptions> variants = every_search();
+  std::vector<RendererOptions> budgeted_walks = every_search(budgeted, true);  // brute force has no loop budget
   for (RendererOptions& options : budgeted_walks) {  // a ray query's loop counts candidates, a handful a ray
     if (options.scene.search == PrimitiveSearch::ray_query) options.loop_budget = 2;
   }
@@ -117,7 +119,7 @@ TEST(GpuInstances, EveryPixelAsTheReferenceInEveryVariant) {
 // Masks: the coarse mesh's instance has mask 2; a ray mask without it sees through to what lies behind.
 TEST(GpuInstances, InstanceMasks) {
   const Scene scene = instanced_scene();
-  for (const RendererOptions& options : every_walk()) {
+  for (const RendererOptions& options : every_search()) {
     SCOPED_TRACE(variant_name(options));
     EXPECT_TRUE(expect_render_as_reference(scene, options, 0xfd).count(2) == 0) << "the masked instance was hit";
     EXPECT_TRUE(expect_render_as_reference(scene, options, 2).count(2) == 1) << "the instance its mask lets through";
@@ -144,7 +146,7 @@ TEST(GpuInstances, ExtremeScalesFarFromTheOrigin) {
     check_scene(scene);
     RendererOptions float64;
     float64.shader.precision = Precision::float64;
-    std::vector<RendererOptions> variants = every_walk();
+    std::vector<RendererOptions> variants = every_search();
     variants.push_back(float64);
     for (const RendererOptions& options : variants) {
       SCOPED_TRACE(variant_name(options));
@@ -155,7 +157,7 @@ TEST(GpuInstances, ExtremeScalesFarFromTheOrigin) {
 }
 
 // Given rays, each from its own origin and all from one, occlusion queries and counts of crossings:
-// ray by ray as the reference has them, in every walk.
+// ray by ray as the reference has them, in every search.
 TEST(GpuInstances, GivenRaysOcclusionAndCrossings) {
   const Scene scene = instanced_scene(48, 32);
   const std::vector<GivenRay> rays = pixel_rays(scene);
@@ -163,7 +165,7 @@ TEST(GpuInstances, GivenRaysOcclusionAndCrossings) {
   for (size_t k = 0; k < scattered.size(); ++k) {  // each from a point of its own along its pixel ray
     for (int c = 0; c < 3; ++c) scattered[k][c] += 0.5 * double(k % 5) * scattered[k][3 + c];
   }
-  for (const RendererOptions& options : every_walk()) {
+  for (const RendererOptions& options : every_search()) {
     SCOPED_TRACE(variant_name(options));
     Renderer renderer(device(), scene, options);
     const ReferenceScene reference(scene);
@@ -242,11 +244,11 @@ TEST(GpuInstances, InstanceIdsAndFrontFacingThroughTheTransform) {
   EXPECT_TRUE(instance_fronts.count({2, 0}) && !instance_fronts.count({2, 1}));
 }
 
-// set_transforms, in each walk: every instance moved at once, twice (the second time far from where
+// set_transforms, in each search: every instance moved at once, twice (the second time far from where
 // the scene was built, one instance mirrored now), renders as the reference of the moved scene; a
 // refused call (an instance out of range, a map not affine or not invertible) changes nothing.
 TEST(GpuInstances, SetTransformsMovesThemWithoutARebuild) {
-  for (const RendererOptions& options : every_walk()) {
+  for (const RendererOptions& options : every_search()) {
     SCOPED_TRACE(variant_name(options));
     Scene scene = instanced_scene();
     Renderer renderer(device(), scene, options);
@@ -289,7 +291,7 @@ TEST(GpuInstances, SetTransformsMovesThemWithoutARebuild) {
 // distance and normal within the bounds of FirstHits.InOrderAsTheReference (a head-on hit's distance
 // within 8 eps (t + 16), a normal within 32 eps) grown by the placing instance's kappa, the factor
 // its transform puts on float32's errors (placement_condition), and twice for hits up to 60 degrees
-// from head-on through the sheared instance; in every walk.
+// from head-on through the sheared instance; in every search.
 TEST(GpuInstances, FirstHitsInOrderAsTheReference) {
   constexpr double eps = 0x1p-24;
   constexpr uint32_t count = 4;
@@ -307,7 +309,7 @@ TEST(GpuInstances, FirstHitsInOrderAsTheReference) {
       rays.push_back({from.x, from.y, from.z, dir.x, dir.y, dir.z});
     }
   }
-  for (const RendererOptions& options : every_walk()) {
+  for (const RendererOptions& options : every_search()) {
     SCOPED_TRACE(variant_name(options));
     Renderer renderer(device(), scene, options);
     const ReferenceScene reference(scene);
@@ -346,13 +348,23 @@ TEST(GpuInstances, FirstHitsInOrderAsTheReference) {
   }
 }
 
-// Brute force, which has no tree to place instances in, says so, naming itself, before anything is
-// built.
-TEST(GpuInstances, BruteForceRefuses) {
-  const Scene scene = instanced_scene(16, 16);
+// Brute force walks every placed triangle in its loops: where a device stops loops (llvmpipe,
+// GpuDeviceInfo::max_loop_iterations), a scene whose instances need more is refused before anything is
+// drawn, naming the count, rather than drawn with instances left out.
+TEST(GpuInstances, BruteForceBeyondTheDevicesLoopsRefuses) {
+  const uint64_t limit = device().info().max_loop_iterations;
+  if (limit == 0) GTEST_SKIP() << device().info().name << " does not stop loops";
+  Scene scene = instanced_scene(16, 16);
+  const Instance placing = scene.instances[0];  // of the 1500-triangle mesh: 188 batches
+  scene.instances.assign(limit / 188 + 1, placing);
   RendererOptions options;
   options.scene.search = PrimitiveSearch::brute_force;
-  EXPECT_THROW(Renderer(device(), scene, options), InputError);
+  try {
+    Renderer renderer(device(), scene, options);
+    ADD_FAILURE() << "a scene beyond the device's loops was accepted";
+  } catch (const GpuError& error) {
+    EXPECT_NE(std::string(error.what()).find("shader loop iterations per pixel"), std::string::npos) << error.what();
+  }
 }
 
 }  // namespace

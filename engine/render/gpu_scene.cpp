@@ -198,6 +198,15 @@ uint32_t batched_slots(size_t triangle_count) {
   return static_cast<uint32_t>((triangle_count + VKRAY_TRIANGLE_BATCH - 1) / VKRAY_TRIANGLE_BATCH * VKRAY_TRIANGLE_BATCH);
 }
 
+// Slots of zero-area records (no ray meets them) up to `slots`.
+void pad_slots(GpuScene& gpu, size_t slots) {
+  while (gpu.primitives.size() < slots) {
+    gpu.primitives.push_back(gpu::GpuPrimitive{});
+    append_normal(gpu.normal_texels, glm::dvec3(0.0), gpu.precision);
+    gpu.hit_sources.slots.push_back({});
+  }
+}
+
 // The order of `centres` along a Morton curve (21 bits an axis over their box).
 std::vector<size_t> morton_order(const std::vector<glm::dvec3>& centres) {
   auto spread = [](uint64_t v) {  // 21 bits to every third of 63
@@ -286,12 +295,11 @@ GpuSceneShape shape_for_counts(size_t triangles, size_t spheres, size_t planes, 
     // each a few dozen pixels across, took 475 ms a frame per ray against 920 in packets; five of
     // them filling the frame 835 against 208 (`vkray bench SCENE --variants per-ray,packet`).
     const PrimitiveSearch requested = options.search;
-    if (requested == PrimitiveSearch::brute_force) {
-      throw InputError(std::string("instances: the ") + search_info(requested).name + " search cannot trace them; " +
-                       search_info(PrimitiveSearch::bvh_per_ray).name + ", " + search_info(PrimitiveSearch::bvh_packet).name +
-                       " and " + search_info(PrimitiveSearch::ray_query).name + " can");
-    }
     shape.search = requested == PrimitiveSearch::automatic ? PrimitiveSearch::bvh_per_ray : requested;
+    if (shape.search == PrimitiveSearch::brute_force) {  // each instance's mesh tested whole (make_gpu_scene)
+      shape.spheres_apart = static_cast<uint32_t>(spheres);
+      return shape;
+    }
     shape.spheres_apart = keeps_spheres_apart(triangles, spheres) ? static_cast<uint32_t>(spheres) : 0;
     shape.tree_has_triangles = true;
     shape.tree_has_spheres = spheres > 0 && shape.spheres_apart == 0;
@@ -420,6 +428,47 @@ void lay_out_instances(GpuScene& gpu, const Scene& scene, std::vector<EncodedPri
 
 }  // namespace
 
+namespace {
+
+// Brute force with instances, after the world's triangles: a record for each instance whose mesh
+// has triangles (its index, its mesh's first slot and slots, its mask), a zero-area record that ends
+// the list (nearest_primitive_brute_force), then each instanced mesh's triangles in whole batches.
+void lay_out_brute_force_instances(GpuScene& gpu, const Scene& scene,
+                                   const std::vector<std::vector<EncodedPrimitive>>& instanced_triangles) {
+  std::vector<uint32_t> first_slot(scene.meshes.size(), 0);
+  size_t records = 0;
+  for (const Instance& instance : scene.instances) records += instanced_triangles[instance.mesh].empty() ? 0 : 1;
+  size_t next = gpu.primitives.size() + records + 1;
+  for (uint32_t m = 0; m < scene.meshes.size(); ++m) {
+    first_slot[m] = static_cast<uint32_t>(next);
+    next += batched_slots(instanced_triangles[m].size());
+  }
+  uint64_t iterations = records + 1;
+  auto add_slot = [&](const gpu::GpuPrimitive& record, const glm::dvec3& normal, ObjectPrimitive source) {
+    gpu.primitives.push_back(record);
+    append_normal(gpu.normal_texels, normal, gpu.precision);
+    gpu.hit_sources.slots.push_back(source);
+  };
+  for (uint32_t k = 0; k < scene.instances.size(); ++k) {
+    const Instance& instance = scene.instances[k];
+    const uint32_t slots = batched_slots(instanced_triangles[instance.mesh].size());
+    if (slots == 0) continue;
+    add_slot({glm::uvec4(k, first_slot[instance.mesh], slots, primitive_word(VKRAY_PRIMITIVE_INSTANCE, instance.mask))},
+             glm::dvec3(0.0), {});
+    iterations += slots / VKRAY_TRIANGLE_BATCH;
+  }
+  add_slot(gpu::GpuPrimitive{}, glm::dvec3(0.0), {});
+  for (uint32_t m = 0; m < scene.meshes.size(); ++m) {
+    for (const EncodedPrimitive& triangle : instanced_triangles[m]) add_slot(triangle.primitive, triangle.normal, triangle.source);
+    pad_slots(gpu, first_slot[m] + batched_slots(instanced_triangles[m].size()));
+  }
+  gpu.brute_force_placed_iterations = static_cast<uint32_t>(std::min<uint64_t>(iterations, UINT32_MAX));
+  gpu.instance_level = make_instance_level(gpu, scene, instanced_triangles);
+  place_instances(gpu, scene);
+}
+
+}  // namespace
+
 GpuSceneShape plan_gpu_scene(const Scene& scene, const GpuSceneOptions& options) {
   return shape_for_counts(scene.triangle_count(), scene.spheres.size(), scene.planes.size(), scene.instances.size(),
                           scene.has_masks(), options);
@@ -491,11 +540,9 @@ GpuScene make_gpu_scene(const Scene& scene, const GpuSceneOptions& options, cons
       append_normal(gpu.normal_texels, triangle.normal, gpu.precision);
       gpu.hit_sources.slots.push_back(triangle.source);
     }
-    while (gpu.primitives.size() < batched_slots(triangles.size())) {
-      gpu.primitives.push_back(gpu::GpuPrimitive{});
-      append_normal(gpu.normal_texels, glm::dvec3(0.0), gpu.precision);
-      gpu.hit_sources.slots.push_back({});
-    }
+    pad_slots(gpu, batched_slots(triangles.size()));
+    gpu.world_triangle_slots = static_cast<uint32_t>(gpu.primitives.size());
+    if (shape.instances) lay_out_brute_force_instances(gpu, scene, instanced_triangles);
     return gpu;
   }
 
@@ -644,8 +691,9 @@ void place_instances(GpuScene& gpu, const Scene& scene) {
   gpu.rewritten = {};
   gpu.rewritten.mesh_alone = true;
   gpu.rewritten.instances = true;
-  // Ray queries: the device's top-level structure places the meshes (Renderer::set_transforms).
-  if (gpu.search == PrimitiveSearch::ray_query) return;
+  // Brute force tests each instance where its record points; for ray queries the device's top-level
+  // structure places the meshes (Renderer::set_transforms). Neither has a world's tree to build.
+  if (gpu.search == PrimitiveSearch::brute_force || gpu.search == PrimitiveSearch::ray_query) return;
   std::vector<Box> boxes;
   boxes.reserve(entries.size());
   for (const auto& entry : entries) boxes.push_back({glm::dvec3(entry.box.lower), glm::dvec3(entry.box.upper)});
@@ -825,6 +873,7 @@ GpuSceneShape GpuScene::shape() const {
           static_cast<uint32_t>(spheres.size()),
           static_cast<uint32_t>(planes.size()),
           brute_force_triangle_slots(),
+          brute_force_placed_iterations,
           tree_has_triangles,
           tree_has_spheres,
           masks,

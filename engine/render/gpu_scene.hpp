@@ -42,6 +42,9 @@ struct GpuSceneShape {
   uint32_t spheres_apart = 0;  // spheres tested one by one
   uint32_t planes = 0;
   uint32_t brute_force_triangle_slots = 0;
+  // Brute force with instances: the iterations of its loops over their records and their meshes'
+  // batches (what a device that stops loops counts; 0 in plan_gpu_scene, which has no meshes).
+  uint32_t brute_force_placed_iterations = 0;
   bool tree_has_triangles = false;
   bool tree_has_spheres = false;
   bool masks = false;  // Scene::has_masks (VKRAY_SPEC_MASKS)
@@ -150,8 +153,11 @@ struct GpuScene {
   // A tree or the device's structures find the primitives: no brute-force loop.
   bool has_tree() const { return search != PrimitiveSearch::brute_force; }
   GpuSceneShape shape() const;
-  // Triangle slots the brute-force loop walks (0 with the tree).
-  uint32_t brute_force_triangle_slots() const { return has_tree() ? 0 : static_cast<uint32_t>(primitives.size()); }
+  // Triangle slots the brute-force loop walks (0 with the tree): the world's own, whole batches;
+  // with instances, their records follow (make_gpu_scene), and the iterations walking them.
+  uint32_t brute_force_triangle_slots() const { return has_tree() ? 0 : world_triangle_slots; }
+  uint32_t world_triangle_slots = 0;
+  uint32_t brute_force_placed_iterations = 0;
   // Bytes of device memory the triangles, spheres and their tree take.
   size_t geometry_bytes() const {
     return spheres.size() * sizeof(gpu::GpuSphere) + primitives.size() * sizeof(gpu::GpuPrimitive) +

@@ -16,7 +16,7 @@ uint64_t fixed_loop_iterations(const GpuSceneShape& shape) {
   constexpr uint64_t loops_over_rays = 4;
   const uint64_t rays = shape.search == PrimitiveSearch::bvh_packet ? VKRAY_PACKET_ROWS : 1;
   uint64_t iterations = rays * (uint64_t{shape.spheres_apart} + shape.planes + loops_over_rays) + loop_margin;
-  iterations += shape.brute_force_triangle_slots / VKRAY_TRIANGLE_BATCH;
+  iterations += shape.brute_force_triangle_slots / VKRAY_TRIANGLE_BATCH + shape.brute_force_placed_iterations;
   return iterations;
 }
 
