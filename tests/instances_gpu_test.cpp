@@ -74,7 +74,7 @@ std::set<uint32_t> expect_render_as_reference(const Scene& scene, const Renderer
 
 // Options for each search that runs on this device (runnable), with `base`'s: brute force, each
 // tree walk and ray queries, or the walks alone.
-std::vector<RendererOptions> every_search(const RendererOptions& base = {}, bool walks_alone = false) {
+std::vector<RendererOptions> searches_with(const RendererOptions& base = {}, bool walks_alone = false) {
   std::vector<PrimitiveSearch> wanted{PrimitiveSearch::bvh_per_ray, PrimitiveSearch::bvh_packet, PrimitiveSearch::ray_query};
   if (!walks_alone) wanted.insert(wanted.begin(), PrimitiveSearch::brute_force);
   std::vector<RendererOptions> walks;
@@ -93,8 +93,8 @@ TEST(GpuInstances, EveryPixelAsTheReferenceInEveryVariant) {
   const Scene scene = instanced_scene();
   RendererOptions budgeted;
   budgeted.loop_budget = 40;
-  std::vector<RendererOptions> variants = every_search();
-  std::vector<RendererOptions> budgeted_walks = every_search(budgeted, true);  // brute force has no loop budget
+  std::vector<RendererOptions> variants = searches_with();
+  std::vector<RendererOptions> budgeted_walks = searches_with(budgeted, true);  // brute force has no loop budget
   for (RendererOptions& options : budgeted_walks) {  // a ray query's loop counts candidates, a handful a ray
     if (options.scene.search == PrimitiveSearch::ray_query) options.loop_budget = 2;
   }
@@ -119,7 +119,7 @@ TEST(GpuInstances, EveryPixelAsTheReferenceInEveryVariant) {
 // Masks: the coarse mesh's instance has mask 2; a ray mask without it sees through to what lies behind.
 TEST(GpuInstances, InstanceMasks) {
   const Scene scene = instanced_scene();
-  for (const RendererOptions& options : every_search()) {
+  for (const RendererOptions& options : searches_with()) {
     SCOPED_TRACE(variant_name(options));
     EXPECT_TRUE(expect_render_as_reference(scene, options, 0xfd).count(2) == 0) << "the masked instance was hit";
     EXPECT_TRUE(expect_render_as_reference(scene, options, 2).count(2) == 1) << "the instance its mask lets through";
@@ -146,7 +146,7 @@ TEST(GpuInstances, ExtremeScalesFarFromTheOrigin) {
     check_scene(scene);
     RendererOptions float64;
     float64.shader.precision = Precision::float64;
-    std::vector<RendererOptions> variants = every_search();
+    std::vector<RendererOptions> variants = searches_with();
     variants.push_back(float64);
     for (const RendererOptions& options : variants) {
       SCOPED_TRACE(variant_name(options));
@@ -165,7 +165,7 @@ TEST(GpuInstances, GivenRaysOcclusionAndCrossings) {
   for (size_t k = 0; k < scattered.size(); ++k) {  // each from a point of its own along its pixel ray
     for (int c = 0; c < 3; ++c) scattered[k][c] += 0.5 * double(k % 5) * scattered[k][3 + c];
   }
-  for (const RendererOptions& options : every_search()) {
+  for (const RendererOptions& options : searches_with()) {
     SCOPED_TRACE(variant_name(options));
     Renderer renderer(device(), scene, options);
     const ReferenceScene reference(scene);
@@ -248,7 +248,7 @@ TEST(GpuInstances, InstanceIdsAndFrontFacingThroughTheTransform) {
 // the scene was built, one instance mirrored now), renders as the reference of the moved scene; a
 // refused call (an instance out of range, a map not affine or not invertible) changes nothing.
 TEST(GpuInstances, SetTransformsMovesThemWithoutARebuild) {
-  for (const RendererOptions& options : every_search()) {
+  for (const RendererOptions& options : searches_with()) {
     SCOPED_TRACE(variant_name(options));
     Scene scene = instanced_scene();
     Renderer renderer(device(), scene, options);
@@ -309,7 +309,7 @@ TEST(GpuInstances, FirstHitsInOrderAsTheReference) {
       rays.push_back({from.x, from.y, from.z, dir.x, dir.y, dir.z});
     }
   }
-  for (const RendererOptions& options : every_search()) {
+  for (const RendererOptions& options : searches_with()) {
     SCOPED_TRACE(variant_name(options));
     Renderer renderer(device(), scene, options);
     const ReferenceScene reference(scene);
