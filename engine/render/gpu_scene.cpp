@@ -234,8 +234,9 @@ std::vector<size_t> morton_order(const std::vector<glm::dvec3>& centres) {
 
 // The slots for ray queries (GpuScene::structure_meshes): the triangles by mesh (an instanced
 // mesh's in its own coordinates), each mesh's in Morton order of their boxes' centres; then the
-// spheres not tested apart, in Morton order too, with their boxes. lavapipe builds a structure by halving its input in order: ordered input makes
-// it a Morton-code tree (the bunny at 1920x1080: 0.30 s a frame, 40 s in the OBJ's order).
+// spheres not tested apart, in Morton order too, with their boxes. lavapipe builds a structure by
+// halving its input in order: ordered input makes it a Morton-code tree (the bunny at 1920x1080:
+// 0.30 s a frame, 40 s in the OBJ's order).
 void lay_out_for_ray_queries(GpuScene& gpu, const Scene& scene, std::vector<EncodedPrimitive> triangles,
                              VertexTable& vertex_table) {
   auto centre = [](const FloatBox& box) { return 0.5 * (glm::dvec3(box.lower) + glm::dvec3(box.upper)); };
