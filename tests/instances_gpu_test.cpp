@@ -262,8 +262,22 @@ TEST(GpuInstances, SetTransformsMovesThemWithoutARebuild) {
         transforms.push_back(m);
         place_by(scene.instances[k], m);
       }
+      // Rays cast in place before the move make the table that turns slots into ids on the device:
+      // set_transforms keeps it right (or leaves it, where the world's slots did not move).
+      const std::vector<GivenRay> rays = pixel_rays(scene);
+      std::vector<float> t(rays.size()), normal(3 * rays.size());
+      std::vector<uint32_t> object(rays.size()), primitive(rays.size());
+      const HitArrays arrays{t.data(), normal.data(), object.data(), primitive.data()};
+      const bool in_place = renderer.cast_rays_in_place(rays, arrays);
       renderer.set_transforms(all, transforms);
       EXPECT_GT(renderer.timings().scene_update_ms, 0.0);
+      if (in_place) {
+        ASSERT_TRUE(renderer.cast_rays_in_place(rays, arrays));
+        const RayHits hits = renderer.cast_rays(rays);
+        size_t ids_differ = 0;
+        for (size_t k = 0; k < rays.size(); ++k) ids_differ += object[k] != hits.object[k] || primitive[k] != hits.primitive[k];
+        EXPECT_EQ(ids_differ, 0u) << "ids cast in place after set_transforms";
+      }
       const Frame frame = renderer.render(scene.camera, scene.width, scene.height, {Aov::depth, Aov::normal, Aov::mesh_id, Aov::primitive_id});
       const std::vector<ObjectPrimitive> ids = frame_ids(frame);
       const EnvelopeReport report = check_against_reference(scene, frame, 1, &ids);

@@ -162,9 +162,9 @@ void Renderer::set_transforms(std::span<const uint32_t> instances, std::span<con
       r.tile = TileOutputs{};
       r.parked_tile = TileOutputs{};
     }
-    r.hit_sources = r.placing->hit_sources;  // the world's slots in their new order
-    if (r.hit_source_table) {  // rewritten in place: bound descriptor sets name this buffer
-      const GpuScene::ItemRange& slots = r.placing->rewritten.slots;
+    r.hit_sources = r.placing->hit_sources;  // the world's slots in their new order (none moved without its tree)
+    const GpuScene::ItemRange& slots = r.placing->rewritten.slots;
+    if (r.hit_source_table && !slots.empty()) {  // rewritten in place: bound descriptor sets name this buffer
       write_buffer(r.context, *r.hit_source_table, r.hit_sources.slots.data() + slots.first,
                    (slots.end - slots.first) * sizeof(ObjectPrimitive), slots.first * sizeof(ObjectPrimitive));
     }
