@@ -109,8 +109,6 @@ int run_moving(const BenchOptions& options, const std::vector<BenchScene>& scene
 // --suite instances: the suite's models placed --instances times, against the scene flattened,
 // then every transform changed (engine/bench/instances_bench.hpp). The reference checks every 8th row.
 int run_instances(const BenchOptions& options, const std::vector<BenchScene>& scenes) {
-  GpuDevice device(options.device_options.device, options.device_options.transfer_mode());
-  print_cpu_device_note(device.info());
   std::vector<Scene> models;
   std::string names;
   for (const auto& scene : scenes) {
@@ -118,6 +116,9 @@ int run_instances(const BenchOptions& options, const std::vector<BenchScene>& sc
     models.push_back(scene.scene);
     names += (names.empty() ? "" : ", ") + scene.name;
   }
+  check_instances_fit(models, options.instances);
+  GpuDevice device(options.device_options.device, options.device_options.transfer_mode());
+  print_cpu_device_note(device.info());
   const uint32_t width = scenes.front().scene.width, height = scenes.front().scene.height;
   std::printf("vkray bench --suite instances on %s\n%s, each scaled to a unit box, placed in turn at %ux%u; medians of %u calls "
               "after a first; render: GPU ms; errors against the reference on every 8th row\n",

@@ -49,11 +49,11 @@ void add_mask_option(CLI::App* command, uint32_t& mask) {
 
 void print_mask_note(const Scene& scene, uint32_t mask) {
   std::set<uint32_t> masks;
-  for (uint32_t object = 0; object < scene.object_count(); ++object) {
-    if (mask_hits(object_mask(scene, object), static_cast<Mask>(mask))) return;
-    masks.insert(object_mask(scene, object));
+  for (const Mask drawn : drawn_masks(scene)) {  // an instanced mesh's instances' in place of its own
+    if (mask_hits(drawn, static_cast<Mask>(mask))) return;
+    masks.insert(drawn);
   }
-  if (scene.object_count() == 0) return;
+  if (masks.empty()) return;
   std::string listed;
   for (const uint32_t object_mask : masks) listed += (listed.empty() ? "" : ", ") + std::to_string(object_mask);
   std::fprintf(stderr, "vkray: note: --mask %u shares no bit with the mask of any object of the scene (%s): every ray misses\n",

@@ -179,11 +179,32 @@ float intersect_sphere_naive(vec3 f, float radius, vec3 dir, float t_max, out ve
 // must get the same bits from every pipeline that computes it (workgroup shapes, the generic and
 // storage-geometry variants; tests/shader_variant_test.cpp), and a compiler may otherwise fuse a
 // product and a sum into an FMA in one pipeline and not in another.
+float intersect_sphere_scaled(vec3 f_hi, vec3 f_lo, float r_hi, float r_lo, vec3 dir, float t_max, out vec3 normal,
+                              out float far_root, out vec3 far_normal);
+
+// The test below squares lengths: for a sphere 1e-20 across they fall below float32's range, for one
+// near 1e19 above it. So f and r are first scaled by the power of two that brings r near 1, and the
+// distances found are scaled back: exact both ways (a power of two changes no bit of a float's
+// significand), so a sphere of any size gets the bits it would get at r = 1; normals are ratios
+// of scaled lengths and need nothing.
 float intersect_sphere(vec3 f_hi, vec3 f_lo, float r_hi, float r_lo, vec3 dir, float t_max, out vec3 normal,
                        out float far_root, out vec3 far_normal) {
   if (SPHERE_FORMULA == VKRAY_SPHERE_NAIVE) {
     return intersect_sphere_naive(f_hi + f_lo, r_hi, dir, t_max, normal, far_root, far_normal);
   }
+  int exponent;
+  frexp(r_hi, exponent);
+  float down = ldexp(1.0, -exponent), up = ldexp(1.0, exponent);
+  float t = intersect_sphere_scaled(f_hi * down, f_lo * down, r_hi * down, r_lo * down, dir, t_max * down, normal, far_root,
+                                    far_normal);
+  // (Compared with t_max again after scaling back: a t_max scaled past float32's largest is inf.)
+  precise float hit = t * up, far = far_root * up;
+  far_root = far < t_max ? far : t_max;
+  return hit < t_max ? hit : t_max;
+}
+
+float intersect_sphere_scaled(vec3 f_hi, vec3 f_lo, float r_hi, float r_lo, vec3 dir, float t_max, out vec3 normal,
+                              out float far_root, out vec3 far_normal) {
   normal = vec3(0.0);
   far_root = t_max;
   far_normal = vec3(0.0);
@@ -385,9 +406,36 @@ real intersect_triangle(RayFrame frame, real3 dir, real3 v0, real3 v1, real3 v2,
   // masked whether or not a lane takes it): the bunny's walk 141-144 against 149-154 ms.
   dvec3 exact_uvw = dvec3(left_x) * dvec3(left_y) - dvec3(right_x) * dvec3(right_y);
   if (any(lessThan(exact_uvw, dvec3(0.0))) && any(greaterThan(exact_uvw, dvec3(0.0)))) return t_max;
-  uvw = vec3(exact_uvw);
   bvec3 on_edge = equal(exact_uvw, dvec3(0.0));  // before rounding to float, which may flush to 0
+  // The distance in double too: the edge functions are products of two coordinates and the
+  // numerator of three, which for a triangle 1e-15 across seen from nearby (1e-45) leaves float32's
+  // range (the distance came out 5% off; at 1e-16 as 0, no hit). In double they hold down to
+  // coordinates of float32's own least (1e-38), for 5 more double operations.
+  precise double exact_det = (exact_uvw.x + exact_uvw.y) + exact_uvw.z;
+  if (exact_det == 0.0) return t_max;
+  if (claim_edges && !claims_edges(a, b, c, on_edge, exact_det < 0.0 ? -1.0 : 1.0)) return t_max;
+  precise double exact_t = double(frame.shear.z) * dot(exact_uvw, dvec3(a.z, b.z, c.z)) / exact_det;
+  float t_double_edges = float(exact_t);
+  return (t_double_edges > 0.0 && t_double_edges < t_max) ? t_double_edges : t_max;
 #else
+#ifndef VKRAY_FLOAT64
+  // Coordinates below 2^-60 (a triangle 1e-20 across seen from nearby): every one scaled by 2^60,
+  // exactly, so that the edge functions (products of two) stay within float32's normal range (below
+  // 2^-126 they flush to 0 on many devices); the distance is scaled back at the end. Taken by no
+  // lane of an ordinary scene; where one takes it, the others' arithmetic is unchanged.
+  const float tiny = 8.6736174e-19;  // 2^-60
+  real unscale = 1.0;
+  if (all(lessThan(max(max(abs(a), abs(b)), abs(c)), vec3(tiny)))) {
+    const float up = 1.1529215e18;  // 2^60
+    a *= up, b *= up, c *= up;
+    unscale = 8.6736174e-19;  // 2^-60
+    left_x = real3(c.x, a.x, b.x), left_y = real3(b.y, c.y, a.y);
+    right_x = real3(c.y, a.y, b.y), right_y = real3(b.x, c.x, a.x);
+    left = left_x * left_y;
+    right = right_x * right_y;
+    uvw = left - right;
+  }
+#endif
 #ifndef VKRAY_FLOAT64
   // A triangle much smaller than its distance from the ray (1e-4 across, 500 to the side) has edge
   // functions below their rounding error, 2 eps (|left| + |right|) with eps = 2^-24: their signs are
@@ -412,13 +460,21 @@ real intersect_triangle(RayFrame frame, real3 dir, real3 v0, real3 v1, real3 v2,
 #endif
   if (any(lessThan(uvw, real3(0.0))) && any(greaterThan(uvw, real3(0.0)))) return t_max;
   bvec3 on_edge = equal(uvw, real3(0.0));  // exact zeros: float32's small ones error-free, float64's by Kahan
-#endif
   real u = uvw.x, v = uvw.y, w = uvw.z;
   real det = u + v + w;
   if (det == 0.0) return t_max;  // ray in the triangle's plane, or a degenerate projection
   if (claim_edges && !claims_edges(a, b, c, on_edge, det)) return t_max;
+#ifdef VKRAY_FLOAT64
   precise real t = frame.shear.z * (u * a.z + v * b.z + w * c.z) / det;
+#else
+  // The edge functions over their sum (the barycentric weights, in [0, 1]) before they meet the
+  // vertices' z: u a.z is a product of three coordinates, past float32's range for a triangle 1e13
+  // across (and below it at 1e-13), where the weights keep every product near the coordinates' size.
+  precise real3 weights = uvw / det;
+  precise real t = frame.shear.z * dot(weights, real3(a.z, b.z, c.z)) * unscale;
+#endif
   return (t > 0.0 && t < t_max) ? t : t_max;
+#endif
 }
 
 // 1 / dir, with components below 1e-37 in magnitude (in practice: exactly 0, a ray parallel to a

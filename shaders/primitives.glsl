@@ -345,7 +345,10 @@ real3 instance_normal(uint slot, uint instance, real3 dir) {
   Placement placement = fetch_placement(instance);
   real3 normal = fetch_normal(int(slot));
   precise real3 world = normal.x * placement.row0 + normal.y * placement.row1 + normal.z * placement.row2;
-  return facing_the_ray(world, dir);
+  // Over its largest component: A's rows are as long as 1 / the instance's scale (1e20 for one
+  // 1e-20 across), whose square, in the normalization after, would leave float32's range.
+  precise real3 scaled = world / max(max(abs(world.x), abs(world.y)), abs(world.z));
+  return facing_the_ray(scaled, dir);
 }
 
 // Every sphere, then every triangle in batches of VKRAY_TRIANGLE_BATCH (one loop iteration each);

@@ -1,6 +1,7 @@
 /* vkray.h from C (a C compiler, no C++): the built-in scene loaded and rendered, rays cast from its
  * camera through the image's centre, masks, first hits and counts, instances moved and a mesh's
- * vertices moved, a bad call answered with a status and a message. Exits 0 when
+ * vertices moved, a bad call answered with a status and a message, a finished scene left as checked.
+ * Exits 0 when
  * every check holds, else prints the first that failed. */
 #include "engine/api/vkray.h"
 
@@ -113,9 +114,47 @@ int main(void) {
   vkray_renderer_free(moving);
   vkray_scene_free(placed);
 
-  CHECK(vkray_scene_load("/nonexistent/scene.json", 0, 0, NULL, NULL, &scene) == VKRAY_INPUT_ERROR && scene == NULL);
+  /* A finished or loaded scene is read-only: every call that adds or changes is refused (a NaN radius
+   * added after the check would reach the renderer unchecked), and a loaded one too. */
+  const double sphere[4] = {0, 0, 0, 1}, plane[6] = {0, -1, 0, 0, 1, 0};
+  CHECK(vkray_scene_add_spheres(scene, sphere, 1) == VKRAY_INPUT_ERROR && strstr(vkray_last_error(), "finished") != NULL);
+  CHECK(vkray_scene_add_planes(scene, plane, 1) == VKRAY_INPUT_ERROR);
+  CHECK(vkray_scene_add_instance(scene, 0, NULL, 255) == VKRAY_INPUT_ERROR);
+  CHECK(vkray_scene_set_mask(scene, 0, 3) == VKRAY_INPUT_ERROR);
+  CHECK(vkray_scene_set_camera(scene, "{\"from\": [0, 0, 5], \"to\": [0, 0, 0]}") == VKRAY_INPUT_ERROR);
+  CHECK(vkray_scene_add_mesh(scene, near_far[0], 3, corners, 0, 1, NULL) == VKRAY_INPUT_ERROR);
+  /* Before the check, what it refuses: a NaN radius, a negative one, a zero plane normal, a singular
+   * placement, a mask on a mesh its instances draw. */
+  const double nan_sphere[4] = {0, 0, 0, NAN}, negative_sphere[4] = {0, 0, 0, -1}, flat_plane[6] = {0, 0, 0, 0, 0, 0};
+  const double singular[16] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 0, 0, 0, 0, 0, 1};
+  const double* bad_spheres[2] = {nan_sphere, negative_sphere};
+  for (int k = 0; k < 2; ++k) {
+    vkray_scene* unchecked = NULL;
+    CHECK(vkray_scene_new(8, 8, &unchecked) == VKRAY_OK && vkray_scene_add_spheres(unchecked, bad_spheres[k], 1) == VKRAY_OK);
+    CHECK(vkray_scene_finish(unchecked) == VKRAY_INPUT_ERROR && strstr(vkray_last_error(), "spheres[0].radius") != NULL);
+    vkray_scene_free(unchecked);
+  }
+  vkray_scene* unchecked = NULL;
+  CHECK(vkray_scene_new(8, 8, &unchecked) == VKRAY_OK && vkray_scene_add_planes(unchecked, flat_plane, 1) == VKRAY_OK);
+  CHECK(vkray_scene_finish(unchecked) == VKRAY_INPUT_ERROR && strstr(vkray_last_error(), "planes[0].normal") != NULL);
+  vkray_scene_free(unchecked);
+  CHECK(vkray_scene_new(8, 8, &unchecked) == VKRAY_OK && vkray_scene_add_mesh(unchecked, near_far[0], 3, corners, 0, 1, NULL) == VKRAY_OK);
+  CHECK(vkray_scene_add_instance(unchecked, 0, singular, 255) == VKRAY_OK);
+  CHECK(vkray_scene_finish(unchecked) == VKRAY_INPUT_ERROR && strstr(vkray_last_error(), "instances[0].transform") != NULL);
+  vkray_scene_free(unchecked);
+  CHECK(vkray_scene_new(8, 8, &unchecked) == VKRAY_OK && vkray_scene_add_mesh(unchecked, near_far[0], 3, corners, 0, 1, NULL) == VKRAY_OK);
+  CHECK(vkray_scene_add_instance(unchecked, 0, identity, 255) == VKRAY_OK && vkray_scene_set_mask(unchecked, 0, 2) == VKRAY_OK);
+  CHECK(vkray_scene_finish(unchecked) == VKRAY_INPUT_ERROR && strstr(vkray_last_error(), "meshes[0].mask") != NULL);
+  vkray_scene_free(unchecked);
+  /* A flag vkray does not know is refused, not ignored. */
+  CHECK(vkray_cast_rays(renderer, &rays[0][0], 1, NULL, NULL, 4, 255, 1, 2, outputs, hits) == VKRAY_INPUT_ERROR);
+  CHECK(strstr(vkray_last_error(), "flags") != NULL);
+
+  vkray_scene* missing = NULL;
+  CHECK(vkray_scene_load("/nonexistent/scene.json", 0, 0, NULL, NULL, &missing) == VKRAY_INPUT_ERROR && missing == NULL);
   CHECK(strstr(vkray_last_error(), "/nonexistent/scene.json") != NULL);
   vkray_renderer_free(renderer);
+  vkray_scene_free(scene);
   printf("c_api_test: vkray %s through its C API on %s\n", vkray_version(), "the default device");
   return 0;
 }

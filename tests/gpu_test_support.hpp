@@ -65,6 +65,20 @@ inline std::vector<PrimitiveSearch> runnable(const std::vector<PrimitiveSearch>&
   return kept;
 }
 
+// Options for each search that runs on this device (runnable), with `base`'s: brute force, each
+// tree walk and ray queries, or the walks alone.
+inline std::vector<RendererOptions> searches_with(const RendererOptions& base = {}, bool walks_alone = false) {
+  std::vector<PrimitiveSearch> wanted{PrimitiveSearch::bvh_per_ray, PrimitiveSearch::bvh_packet, PrimitiveSearch::ray_query};
+  if (!walks_alone) wanted.insert(wanted.begin(), PrimitiveSearch::brute_force);
+  std::vector<RendererOptions> walks;
+  for (const PrimitiveSearch search : runnable(wanted, base.shader)) {
+    RendererOptions options = base;
+    options.scene.search = search;
+    walks.push_back(options);
+  }
+  return walks;
+}
+
 inline Frame render(const Scene& scene, AovSet aovs = {Aov::depth, Aov::normal}) {
   Renderer renderer(device(), scene);
   return renderer.render(scene.camera, scene.width, scene.height, aovs);

@@ -72,20 +72,6 @@ std::set<uint32_t> expect_render_as_reference(const Scene& scene, const Renderer
   return objects;
 }
 
-// Options for each search that runs on this device (runnable), with `base`'s: brute force, each
-// tree walk and ray queries, or the walks alone.
-std::vector<RendererOptions> searches_with(const RendererOptions& base = {}, bool walks_alone = false) {
-  std::vector<PrimitiveSearch> wanted{PrimitiveSearch::bvh_per_ray, PrimitiveSearch::bvh_packet, PrimitiveSearch::ray_query};
-  if (!walks_alone) wanted.insert(wanted.begin(), PrimitiveSearch::brute_force);
-  std::vector<RendererOptions> walks;
-  for (const PrimitiveSearch search : runnable(wanted, base.shader)) {
-    RendererOptions options = base;
-    options.scene.search = search;
-    walks.push_back(options);
-  }
-  return walks;
-}
-
 // Every instance in view, through each search and variant: brute force, per ray, in packets and by
 // ray queries, generic, float64, geometry in storage buffers, and rays past a small loop budget that the host
 // finishes.

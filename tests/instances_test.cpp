@@ -225,11 +225,115 @@ TEST(Instances, BadInstancesAreRefusedByName) {
   EXPECT_NE(refusal(placed_scene({out_of_range})).find("instances[0].mesh: 7"), std::string::npos);
   Instance too_far = good;
   too_far.translation = glm::dvec3(0.0, 0.0, 1e15);
-  EXPECT_NE(refusal(placed_scene({too_far})).find("instances[0]: the mesh's positions["), std::string::npos);
+  EXPECT_NE(refusal(placed_scene({too_far})).find("instances[0].transform: the mesh's box placed"), std::string::npos);
   Instance not_finite = good;
   not_finite.linear[0][0] = std::nan("");
   EXPECT_NE(refusal(placed_scene({not_finite})).find("instances[0].transform"), std::string::npos);
   EXPECT_EQ(refusal(placed_scene({good})), "");
+  // A mask of the instanced mesh's own would be ignored (its instances' stand for it): refused.
+  Scene masked_mesh = placed_scene({good});
+  masked_mesh.meshes[1].mask = 2;
+  EXPECT_NE(refusal(masked_mesh).find("meshes[1].mask: the mesh is drawn by its instances"), std::string::npos);
+}
+
+glm::dmat3 scale_matrix(const glm::dvec3& s) { return glm::dmat3(glm::dvec3(s.x, 0, 0), glm::dvec3(0, s.y, 0), glm::dvec3(0, 0, s.z)); }
+
+// Placements float32 shaders walk as the reference does, and those they cannot (hostile campaign
+// 3): a scale along the mesh's axes, then a rotation, spreads a mesh coordinate's rounding over 3 of
+// the world's (each column's length times its row's is 1), at any ratio; an uneven scale along
+// turned axes (after the rotation, or between a rotation and its inverse) in proportion to its
+// ratio; a shear less than its length's; a flattening beyond 2^32 or an inverse beyond float32's
+// exponents is refused however it is composed.
+TEST(Instances, Float32WalksWhatIsAcceptedAsTheReferenceDoes) {
+  const glm::dmat3 turn = rotation_about_y(0.7) * glm::dmat3(glm::dvec3(1, 0, 0), glm::dvec3(0, std::cos(0.3), std::sin(0.3)),
+                                                             glm::dvec3(0, -std::sin(0.3), std::cos(0.3)));
+  for (const glm::dvec3& s : {glm::dvec3(1.0), glm::dvec3(1e-20), glm::dvec3(1e3, 1e-3, 2.0), glm::dvec3(1e6), glm::dvec3(1.0, 1.0, 0x1p-31),
+                              glm::dvec3(-3.0, 2.0, 1.0)}) {
+    SCOPED_TRACE("scale " + std::to_string(s.x) + ", " + std::to_string(s.y) + ", " + std::to_string(s.z));
+    EXPECT_EQ(vkray::float32_placement_fault(turn * scale_matrix(s)), "");
+  }
+  EXPECT_EQ(vkray::float32_placement_fault(scale_matrix(glm::dvec3(-2.0)) * turn), "");  // even: the order does not matter
+  EXPECT_NE(vkray::float32_placement_fault(scale_matrix({1e3, 1e-3, 2.0}) * turn).find("across rotated axes"), std::string::npos);
+  glm::dmat3 shear(1.0);
+  shear[1][0] = 1.0;  // x += y
+  EXPECT_EQ(vkray::float32_placement_fault(shear * scale_matrix({0.5, 1.3, 0.8})), "");
+  // A board 1 x 1 x 0.01 turned after it is scaled in turned axes: its coordinates' roundings reach ~70x.
+  const glm::dmat3 across = turn * scale_matrix({1.0, 1.0, 0.01}) * glm::transpose(turn);
+  EXPECT_NE(vkray::float32_placement_fault(across).find("scales or shears across rotated axes"), std::string::npos);
+  EXPECT_EQ(vkray::float32_placement_fault(turn * scale_matrix({1.0, 1.0, 0.5}) * glm::transpose(turn)), "");
+  // The campaign's: a scale of 1e-38 on one axis (float32 took its inverse's 1e38 to inf), and a
+  // condition number of 4e12.
+  EXPECT_NE(vkray::float32_placement_fault(scale_matrix({1.0, 1.0, 1e-38})).find("flattens the mesh"), std::string::npos);
+  EXPECT_NE(vkray::float32_placement_fault(turn * scale_matrix({2e6, 1.0, 5e-7})).find("flattens the mesh"), std::string::npos);
+  EXPECT_NE(vkray::float32_placement_fault(scale_matrix(glm::dvec3(1e-31))).find("row 0 reaches"), std::string::npos);
+  EXPECT_NE(vkray::float32_placement_fault(scale_matrix(glm::dvec3(1e31))).find("row 0 reaches"), std::string::npos);
+}
+
+// An instance costs its box's eight corners, not its vertices: the scene's box is the placed boxes'
+// (a rotated instance's a little larger than its vertices'), and the anchor and radius follow it.
+TEST(Instances, TheScenesBoxTakesEachPlacementsBoxCorners) {
+  const Instance turned = instance_of_mesh_1(rotation_about_y(0.7), glm::dvec3(10.0, 0.0, 0.0));
+  Scene scene = placed_scene({turned});
+  scene.meshes.erase(scene.meshes.begin());  // the placed mesh alone, now meshes[0]
+  scene.spheres.clear();
+  scene.instances[0].mesh = 0;
+  const std::vector<vkray::Bounds> boxes = vkray::instanced_mesh_boxes(scene);
+  const vkray::Bounds expected_box = [&] {
+    vkray::Bounds box;
+    for (int k = 0; k < 8; ++k) box.add(vkray::placed(scene.instances[0], boxes[0].corner(k)));
+    return box;
+  }();
+  const vkray::Bounds found = vkray::finite_bounds(scene);
+  EXPECT_EQ(found.lower, expected_box.lower);
+  EXPECT_EQ(found.upper, expected_box.upper);
+  double corner_radius = 0.0;
+  for (int k = 0; k < 8; ++k) corner_radius = std::max(corner_radius, glm::length(expected_box.corner(k) - glm::dvec3(10.0, 0.0, 0.0)));
+  EXPECT_LE(vkray::scene_radius(scene, glm::dvec3(10.0, 0.0, 0.0)), corner_radius);
+  for (const glm::dvec3& p : scene.meshes[0].positions) {  // and still every vertex where it is drawn
+    EXPECT_LE(glm::length(vkray::placed(scene.instances[0], p) - glm::dvec3(10.0, 0.0, 0.0)),
+              vkray::scene_radius(scene, glm::dvec3(10.0, 0.0, 0.0)));
+  }
+}
+
+// Moving an instanced mesh's vertices is checked where its instances place them, and an instance
+// listed twice in one set_transforms is refused; either leaves the scene as it was.
+TEST(Instances, MovedVerticesAndTransformsAreCheckedWhereTheyArePlaced) {
+  Scene scene = placed_scene({instance_of_mesh_1(scale_matrix(glm::dvec3(1e10)), glm::dvec3(0.0))});
+  std::vector<glm::dvec3> moved = scene.meshes[1].positions;
+  for (glm::dvec3& p : moved) p *= 1e6;  // 1e6 itself, 1e16 where the instance places it
+  const std::vector<glm::dvec3> before = scene.meshes[1].positions;
+  const std::string refused = [&] {
+    try {
+      vkray::move_vertices(scene, 1, moved);
+    } catch (const vkray::InputError& error) {
+      return std::string(error.what());
+    }
+    return std::string();
+  }();
+  EXPECT_NE(refused.find("instances[0].transform: the mesh's box placed"), std::string::npos) << refused;
+  EXPECT_EQ(scene.meshes[1].positions, before);
+
+  const uint32_t twice[] = {0, 0};
+  const glm::dmat4 transforms[] = {glm::dmat4(1.0), glm::dmat4(2.0)};
+  const std::string duplicate = [&] {
+    try {
+      vkray::set_instance_transforms(scene, twice, transforms);
+    } catch (const vkray::InputError& error) {
+      return std::string(error.what());
+    }
+    return std::string();
+  }();
+  EXPECT_NE(duplicate.find("instances[1]: instance 0 is placed twice (entries 0 and 1)"), std::string::npos) << duplicate;
+  EXPECT_EQ(scene.instances[0].linear, scale_matrix(glm::dvec3(1e10)));
+}
+
+// A named mesh no instance places is drawn nowhere: no triangle counts (the device has nothing to
+// build a tree from), as the reference has none.
+TEST(Instances, AMeshNoInstancePlacesHasNoDrawnTriangle) {
+  Scene scene = placed_scene({});
+  EXPECT_EQ(scene.drawn_triangle_count(), scene.meshes[0].triangles.size());
+  scene.instances.push_back(instance_of_mesh_1(glm::dmat3(1.0), glm::dvec3(0.0)));
+  EXPECT_EQ(scene.drawn_triangle_count(), scene.meshes[0].triangles.size() + scene.meshes[1].triangles.size());
 }
 
 }  // namespace

@@ -69,7 +69,7 @@ const std::string triangle_obj = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
 TEST(SceneJson, NamedMeshesArePlacedByInstances) {
   const Scene scene = parse(with_camera(R"("meshes": [
       {"positions": [[0, 0, 0], [1, 0, 0], [0, 1, 0]], "triangles": [[0, 1, 2]]},
-      {"name": "leaf", "positions": [[0, 0, 0], [1, 0, 0], [0, 1, 0]], "triangles": [[0, 1, 2]], "mask": 3}],
+      {"name": "leaf", "positions": [[0, 0, 0], [1, 0, 0], [0, 1, 0]], "triangles": [[0, 1, 2]]}],
     "instances": [{"mesh": "leaf"},
                   {"mesh": "leaf", "transform": {"scale": [2, 1, 1], "rotate": {"axis": [0, 0, 1], "degrees": 90},
                                                  "translate": [5, 0, 0]}, "mask": 4}])"));
@@ -97,6 +97,29 @@ TEST(SceneJson, InstancesNameAMeshThatIsNamedOnce) {
                "t.json: instances[0].transform.scale: ", "scale factors must be non-zero");
   expect_error(parse_error(with_camera(R"("meshes": [)" + leaf + R"(], "instances": [{"mesh": 3}])")),
                "t.json: instances[0].mesh: ", "expected a string");
+  // Its instances' masks stand for a named mesh's own: one given to it would be ignored.
+  const std::string masked_leaf = R"({"name": "leaf", "positions": [[0, 0, 0], [1, 0, 0], [0, 1, 0]], "triangles": [[0, 1, 2]], "mask": 3})";
+  expect_error(parse_error(with_camera(R"("meshes": [)" + masked_leaf + R"(], "instances": [{"mesh": "leaf"}])")),
+               "t.json: meshes[0].mask: ", "give each instance the mask");
+}
+
+// Each instance's transform is checked where the file places it, as Python's and the C API's are
+// (hostile campaign 3: a scale of 1e39 crashed Embree's builder, 1e38 rendered every ray a miss).
+TEST(SceneJson, InstanceTransformsAreCheckedWhereTheFilePlacesThem) {
+  const std::string leaf = R"({"name": "leaf", "positions": [[0, 0, 0], [1, 0, 0], [0, 1, 0]], "triangles": [[0, 1, 2]]})";
+  const auto placed_by = [&](const std::string& transform) {
+    return parse_error(with_camera(R"("meshes": [)" + leaf + R"(], "instances": [{"mesh": "leaf"}, {"mesh": "leaf", "transform": )" +
+                                   transform + "}]"));
+  };
+  expect_error(placed_by(R"({"scale": 1e39})"), "t.json: instances[1].transform: ", "within 1e15");
+  expect_error(placed_by(R"({"scale": 1e38})"), "t.json: instances[1].transform: ", "within 1e15");
+  expect_error(placed_by(R"({"translate": [1e16, 0, 0]})"), "t.json: instances[1].transform: ", "within 1e15");
+  expect_error(placed_by(R"({"scale": 1e14, "translate": [1e15, 0, 0]})"), "t.json: instances[1].transform: ",
+               "the mesh's box placed");
+  expect_error(placed_by(R"({"scale": 1e-120})"), "t.json: instances[1].transform: ", "cannot be inverted");
+  expect_error(placed_by(R"({"scale": [1, 1, 1e-38]})"), "t.json: instances[1].transform: ", "flattens the mesh");
+  expect_error(placed_by(R"({"scale": 1e-31})"), "t.json: instances[1].transform: ", "outside the 2^-100 .. 2^100");
+  EXPECT_EQ(placed_by(R"({"scale": [1e-6, 1e-6, 1e-6], "translate": [1e5, 0, 0]})"), "");
 }
 
 // ---- Invalid JSON ----------------------------------------------------------------------------

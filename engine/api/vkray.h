@@ -8,12 +8,20 @@
  * - Arrays are the caller's, C order: vkray reads rays and writes results in place, each output one
  *   value a pixel or ray and its components last (H x W x C for an image). Nothing the caller passes
  *   is kept after a call returns.
- * - A scene is built (vkray_scene_new, then meshes, spheres, planes and a camera, then
- *   vkray_scene_finish) or loaded, and read-only from then on. A renderer copies what it needs of
- *   its scene. A renderer serves one call at a time: calls from several threads wait their turn.
+ * - A scene is built (vkray_scene_new, then meshes, spheres, planes, instances, masks and a camera,
+ *   then vkray_scene_finish, which checks it) or loaded (checked as it loads), and read-only from then
+ *   on: the calls that add or change refuse a finished scene with VKRAY_INPUT_ERROR. A renderer copies
+ *   what it needs of its scene.
+ * - Threads: a finished scene may be read (described, given to vkray_renderer_new) from several
+ *   threads at once; one being built belongs to one thread. A renderer may be shared: its calls from
+ *   several threads wait their turn, each seeing the renderer as the one before left it. The caller's
+ *   arrays must stay allocated for the call; another thread rewriting rays during a call gets each ray
+ *   read as it stood at some moment (a ray refused is named with what was found wrong then).
  * - Distances along a ray are along its unit direction unless the call's flags say
  *   VKRAY_T_ALONG_DIRECTION (then in units of the direction as given: Embree's and Open3D's t).
- * - Strings returned are owned by the object they come from, valid until its next call or its end.
+ * - Strings returned (vkray_last_error, vkray_scene_describe, vkray_renderer_timings) are the calling
+ *   thread's own, valid until that thread's next call of the same function; those of the version, the
+ *   outputs, the traversals and a renderer's device name for the library's or the renderer's life.
  */
 #ifndef VKRAY_H
 #define VKRAY_H
@@ -86,11 +94,14 @@ VKRAY_API vkray_status vkray_scene_add_spheres(vkray_scene* scene, const double*
 VKRAY_API vkray_status vkray_scene_add_planes(vkray_scene* scene, const double* planes, uint64_t count);
 /* The ray mask (0..255) of object `object`, numbered as mesh_id numbers the objects added so far (the
  * meshes, then the spheres, then the planes; so set it once all are added): a call's rays (its
- * `mask`) hit it only where their mask shares a bit with it. Every bit (255) by default. */
+ * `mask`) hit it only where their mask shares a bit with it. Every bit (255) by default. A mesh that
+ * instances place takes theirs instead: vkray_scene_finish refuses a mask of its own. */
 VKRAY_API vkray_status vkray_scene_set_mask(vkray_scene* scene, uint32_t object, uint32_t mask);
 /* The camera in the scene file's form, as JSON: {"from": [0, 1, 5], "to": [0, 0, 0], "fovy": 40}. */
 VKRAY_API vkray_status vkray_scene_set_camera(vkray_scene* scene, const char* camera_json);
-/* Checks the scene as a scene file is checked; frames the geometry where no camera was set. */
+/* Checks the scene as a scene file is checked (every coordinate finite and within 1e15, radii > 0,
+ * plane normals non-zero, each instance's transform invertible, its mesh's box placed within 1e15 and
+ * walkable in float32 as the reference walks it); frames the geometry where no camera was set. */
 VKRAY_API vkray_status vkray_scene_finish(vkray_scene* scene);
 /* The finished scene as JSON: {"width", "height", "meshes", "triangles", "spheres", "planes",
  * "camera" (the scene file's form), "object_names" (what each mesh_id stands for), "masks" (each
@@ -143,7 +154,7 @@ typedef enum vkray_ray_flags {
   VKRAY_T_ALONG_DIRECTION = 1,  /* t, t_min and t_max in units of the direction as given */
   VKRAY_BAD_RAYS_FAIL = 2,      /* a ray with a zero or non-finite direction, or a bad range, fails the call
                                    (by default it is a miss) */
-} vkray_ray_flags;
+} vkray_ray_flags;  /* other bits: VKRAY_INPUT_ERROR */
 
 /* Traces rays (count x 6: origin, direction) to their nearest hits at t_min < t < t_max (each NULL,
  * for 0 and +inf, or count values). outputs[k] into results[k], count x components: "t" (float32 or

@@ -42,7 +42,6 @@ struct vkray_scene {
   Scene scene;
   bool camera_given = false;
   bool finished = false;
-  std::string description;  // vkray_scene_describe's
 };
 
 struct vkray_renderer {
@@ -53,7 +52,6 @@ struct vkray_renderer {
   Mask ray_mask = every_mask_bit;
   bool doubles = false;
   std::string device_name;
-  std::string timings;  // vkray_renderer_timings'
   RenderTimings setup;  // the constructor's
   RenderTimings last_call;  // the last call's: the engine's, summed over the engine calls it made
   double reference_ms = 0.0;  // the reference's last call
@@ -90,6 +88,20 @@ vkray_status guarded(Work&& work) {
 void require(const void* pointer, const char* what) {
   if (!pointer) throw InputError(std::string(what) + ": NULL");
 }
+
+// A scene is read-only once finished or loaded (vkray.h): what `call` would add or change is refused,
+// so that what a renderer takes has passed check_scene.
+void require_unfinished(const vkray_scene& scene, const char* call) {
+  if (scene.finished) {
+    throw InputError(std::string(call) + ": the scene is finished (vkray_scene_finish, or loaded): it is read-only; "
+                     "build another with vkray_scene_new");
+  }
+}
+
+// The strings a call returns (vkray_renderer_timings, vkray_scene_describe): each thread's own, valid
+// until that thread's next call of the same function, so that threads sharing a renderer never read
+// one another's (vkray.h).
+thread_local std::string returned_timings, returned_description;
 
 std::optional<uint32_t> size_or_default(uint32_t given, const char* what) {
   if (given == 0) return std::nullopt;
@@ -154,6 +166,10 @@ struct CallRays {
 
   CallRays(const double* given, uint64_t count, const double* t_min_given, const double* t_max_given, uint32_t flags)
       : bad_rays_fail((flags & VKRAY_BAD_RAYS_FAIL) != 0) {
+    if (const uint32_t unknown = flags & ~uint32_t{VKRAY_T_ALONG_DIRECTION | VKRAY_BAD_RAYS_FAIL}) {
+      throw InputError("flags: unknown bits " + std::to_string(unknown) + " (vkray_ray_flags: VKRAY_T_ALONG_DIRECTION = 1, "
+                       "VKRAY_BAD_RAYS_FAIL = 2)");
+    }
     if (count > 0) require(given, "rays");
     static_assert(sizeof(GivenRay) == 6 * sizeof(double));
     rays = {reinterpret_cast<const GivenRay*>(given), static_cast<size_t>(count)};
@@ -500,7 +516,7 @@ vkray_status vkray_scene_add_mesh(vkray_scene* scene, const double* vertices, ui
                                   int triangles_unsigned, uint64_t triangle_count, const double* transform) {
   return guarded([&] {
     require(scene, "scene");
-    if (scene->finished) throw InputError("the scene is finished: meshes are added before vkray_scene_finish");
+    require_unfinished(*scene, "vkray_scene_add_mesh");
     const std::string path = "meshes[" + std::to_string(scene->scene.meshes.size()) + "]";
     if (vertex_count > 0) require(vertices, (path + ".vertices").c_str());
     if (triangle_count > 0) require(triangles, (path + ".triangles").c_str());
@@ -541,6 +557,7 @@ vkray_status vkray_scene_add_mesh(vkray_scene* scene, const double* vertices, ui
 vkray_status vkray_scene_add_instance(vkray_scene* scene, uint32_t mesh, const double* transform, uint32_t mask) {
   return guarded([&] {
     require(scene, "scene");
+    require_unfinished(*scene, "vkray_scene_add_instance");
     const std::string path = "instances[" + std::to_string(scene->scene.instances.size()) + "]";
     if (mesh >= scene->scene.meshes.size()) {
       throw InputError(path + ".mesh: " + std::to_string(mesh) + " is not a mesh_id of the " +
@@ -558,6 +575,7 @@ vkray_status vkray_scene_add_instance(vkray_scene* scene, uint32_t mesh, const d
 vkray_status vkray_scene_add_spheres(vkray_scene* scene, const double* spheres, uint64_t count) {
   return guarded([&] {
     require(scene, "scene");
+    require_unfinished(*scene, "vkray_scene_add_spheres");
     if (count > 0) require(spheres, "spheres");
     for (size_t k = 0; k < count; ++k) scene->scene.spheres.push_back({vec3_at(spheres, k, 4), spheres[4 * k + 3]});
   });
@@ -566,6 +584,7 @@ vkray_status vkray_scene_add_spheres(vkray_scene* scene, const double* spheres, 
 vkray_status vkray_scene_add_planes(vkray_scene* scene, const double* planes, uint64_t count) {
   return guarded([&] {
     require(scene, "scene");
+    require_unfinished(*scene, "vkray_scene_add_planes");
     if (count > 0) require(planes, "planes");
     for (size_t k = 0; k < count; ++k) scene->scene.planes.push_back({vec3_at(planes, k, 6), vec3_at(planes, k, 6, 3)});
   });
@@ -574,6 +593,7 @@ vkray_status vkray_scene_add_planes(vkray_scene* scene, const double* planes, ui
 vkray_status vkray_scene_set_mask(vkray_scene* scene, uint32_t object, uint32_t mask) {
   return guarded([&] {
     require(scene, "scene");
+    require_unfinished(*scene, "vkray_scene_set_mask");
     set_object_mask(scene->scene, object, object_mask_argument(mask));
   });
 }
@@ -581,6 +601,7 @@ vkray_status vkray_scene_set_mask(vkray_scene* scene, uint32_t object, uint32_t 
 vkray_status vkray_scene_set_camera(vkray_scene* scene, const char* camera_json) {
   return guarded([&] {
     require(scene, "scene");
+    require_unfinished(*scene, "vkray_scene_set_camera");
     require(camera_json, "camera");
     scene->scene.camera = parse_camera_override(camera_json, "camera", Camera{});
     scene->camera_given = true;
@@ -612,8 +633,8 @@ const char* vkray_scene_describe(vkray_scene* scene) {
   std::vector<uint32_t> masks;
   for (uint32_t object = 0; object < s.object_count(); ++object) masks.push_back(object_mask(s, object));
   json["masks"] = masks;
-  scene->description = json.dump();
-  return scene->description.c_str();
+  returned_description = json.dump();
+  return returned_description.c_str();
 }
 
 void vkray_scene_free(vkray_scene* scene) { delete scene; }
@@ -721,8 +742,8 @@ const char* vkray_renderer_timings(vkray_renderer* renderer) {
   } else if (renderer->called) {
     json["reference_ms"] = renderer->reference_ms;
   }
-  renderer->timings = json.dump();
-  return renderer->timings.c_str();
+  returned_timings = json.dump();
+  return returned_timings.c_str();
 }
 
 void vkray_renderer_free(vkray_renderer* renderer) { delete renderer; }

@@ -3,6 +3,7 @@
 #include "engine/render/gpu_scene.hpp"
 #include "engine/bench/render_times.hpp"
 #include "engine/render/renderer.hpp"
+#include "engine/host_memory.hpp"
 
 #include <glm/geometric.hpp>
 
@@ -40,7 +41,29 @@ glm::dmat4 random_placement(std::mt19937_64& random, size_t cell, size_t side) {
 }
 
 
+// The host's peak bytes a flattened triangle costs the suite (its scene, its GpuScene and tree, the
+// reference's copy), measured: `vkray bench --suite instances --models` (the bunny) with
+// --instances 100 and 200 peaked at 1.53 and 2.95 GB, 1.42 GB for 6.9M triangles: 205 bytes each.
+constexpr double flattened_bytes_per_triangle = 205.0;
+
 }  // namespace
+
+void check_instances_fit(const std::vector<Scene>& models, uint32_t count) {
+  if (models.empty() || count == 0) return;
+  size_t per_round = 0;  // one instance of each model, in turn
+  for (const Scene& model : models) per_round += model.meshes.at(0).triangles.size();
+  const double average = double(per_round) / double(models.size());
+  const double triangles = average * count;
+  const size_t available = available_host_memory_bytes();
+  if (available == 0 || triangles * flattened_bytes_per_triangle <= double(available)) return;
+  const auto fitting = static_cast<uint64_t>(double(available) / flattened_bytes_per_triangle / average);
+  char text[400];
+  std::snprintf(text, sizeof text, "--instances %u: the flattened scene the suite measures against holds %.3g triangles, about "
+                "%.1f GB at %.0f bytes each, beyond the %.1f GB this machine has free: at most %llu instances of these models",
+                count, triangles, triangles * flattened_bytes_per_triangle / 1e9, flattened_bytes_per_triangle,
+                double(available) / 1e9, static_cast<unsigned long long>(fitting));
+  throw InputError(text);
+}
 
 InstancesRow bench_instances(GpuDevice& device, const std::vector<Scene>& models, uint32_t count, uint32_t width,
                              uint32_t height, uint32_t frames, uint32_t row_step) {

@@ -31,6 +31,11 @@ struct InstancesRow {
   EnvelopeReport instanced_error, flattened_error, moved_error;
 };
 
+// Throws InputError where the scene flattened for `count` instances of `models` would not fit in the
+// memory the machine has free (available_host_memory_bytes), naming the most that would: the suite
+// holds every placement's triangles once on the host and on the device besides.
+void check_instances_fit(const std::vector<Scene>& models, uint32_t count);
+
 // `count` instances of the first mesh of each of `models`, in turn, at width x height; `frames`
 // renders of each after a first, `frames` calls of set_transforms after a first.
 InstancesRow bench_instances(GpuDevice& device, const std::vector<Scene>& models, uint32_t count, uint32_t width,

@@ -400,13 +400,14 @@ std::optional<CallerArrays> Renderer::Impl::import_caller_arrays(std::span<const
 
 void Renderer::Impl::cast_listed_again(std::span<const GivenRay> rays, std::vector<uint32_t>& listed, const HitArrays& into) {
   // The first bad ray by its index among all the rays (the shader lists every bad one), as
-  // check_given_rays names it.
+  // check_given_rays names it. Copied before it is checked: what is checked is what is cast, even
+  // where the caller's other thread rewrites the rays meanwhile.
   std::sort(listed.begin(), listed.end());
-  for (const uint32_t k : listed) {
-    if (const char* fault = given_ray_fault(rays[k])) throw InputError("ray " + std::to_string(k) + ": " + fault);
-  }
   std::vector<GivenRay> again(listed.size());
   for (size_t n = 0; n < listed.size(); ++n) again[n] = rays[listed[n]];
+  for (size_t n = 0; n < listed.size(); ++n) {
+    if (const char* fault = given_ray_fault(again[n])) throw InputError("ray " + std::to_string(listed[n]) + ": " + fault);
+  }
   RenderTimings in_place = timings;
   const RayHits hits = cast_rays({again, {}, HitQuery::nearest});
   in_place.add(timings);

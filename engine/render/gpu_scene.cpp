@@ -467,7 +467,7 @@ void lay_out_brute_force_instances(GpuScene& gpu, const Scene& scene,
 }  // namespace
 
 GpuSceneShape plan_gpu_scene(const Scene& scene, const GpuSceneOptions& options) {
-  return shape_for_counts(scene.triangle_count(), scene.spheres.size(), scene.planes.size(), scene.instances.size(),
+  return shape_for_counts(scene.drawn_triangle_count(), scene.spheres.size(), scene.planes.size(), scene.instances.size(),
                           scene.has_masks(), options);
 }
 
@@ -490,12 +490,14 @@ GpuScene make_gpu_scene(const Scene& scene, const GpuSceneOptions& options, cons
   gpu.stored_vertex.resize(scene.meshes.size());
   // An instanced mesh's triangles in its own coordinates (encode_instances), the others' here.
   std::vector<std::vector<EncodedPrimitive>> instanced_triangles(scene.meshes.size());
+  std::vector<uint8_t> placed(scene.meshes.size(), 0);
+  for (const Instance& instance : scene.instances) placed[instance.mesh] = 1;
   for (uint32_t mesh_index = 0; mesh_index < scene.meshes.size(); ++mesh_index) {
     const Mesh& mesh = scene.meshes[mesh_index];
     std::vector<uint32_t>& stored = gpu.stored_vertex[mesh_index];
     stored.assign(mesh.positions.size(), GpuScene::no_vertex);
-    if (mesh.instanced) {
-      instanced_triangles[mesh_index] = encode_instanced_mesh(gpu, scene, mesh_index);
+    if (mesh.instanced) {  // (one no instance places is drawn nowhere: nothing to store)
+      if (placed[mesh_index]) instanced_triangles[mesh_index] = encode_instanced_mesh(gpu, scene, mesh_index);
       continue;
     }
     for (uint32_t triangle_index = 0; triangle_index < mesh.triangles.size(); ++triangle_index) {
@@ -676,11 +678,7 @@ void place_instances(GpuScene& gpu, const Scene& scene) {
     const Bounds& mesh_box = level.mesh_box[instance.mesh];
     if (mesh_box.empty()) continue;
     const Bounds placed = placed_box(mesh_box, instance);
-    for (int corner = 0; corner < 8; ++corner) {
-      const glm::dvec3 p((corner & 1) ? placed.upper.x : placed.lower.x, (corner & 2) ? placed.upper.y : placed.lower.y,
-                         (corner & 4) ? placed.upper.z : placed.lower.z);
-      gpu.radius = std::max(gpu.radius, glm::length(p - gpu.anchor));
-    }
+    for (int corner = 0; corner < 8; ++corner) gpu.radius = std::max(gpu.radius, glm::length(placed.corner(corner) - gpu.anchor));
     const gpu::GpuPrimitive record{glm::uvec4(k, level.root[instance.mesh], 0, primitive_word(VKRAY_PRIMITIVE_INSTANCE, instance.mask))};
     entries.push_back({record, glm::dvec3(0.0), outward(placed.lower - gpu.anchor, placed.upper - gpu.anchor), {}});
   }

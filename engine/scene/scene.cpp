@@ -6,12 +6,14 @@
 #include "engine/unit_vector.hpp"
 
 #include <glm/geometric.hpp>
+#include <glm/gtc/matrix_access.hpp>
 #include <glm/matrix.hpp>
 
 #include <algorithm>
-#include <atomic>
+#include <array>
 #include <cmath>
 #include <cstdio>
+#include <mutex>
 #include <string>
 
 namespace vkray {
@@ -42,6 +44,14 @@ std::string one_line_message(const std::string& text) {
 size_t Scene::triangle_count() const {
   size_t count = 0;
   for (const auto& mesh : meshes) count += mesh.triangles.size();
+  return count;
+}
+
+size_t Scene::drawn_triangle_count() const {
+  std::vector<uint8_t> placed(meshes.size(), 0);
+  for (const Instance& instance : instances) placed[instance.mesh] = 1;
+  size_t count = 0;
+  for (size_t m = 0; m < meshes.size(); ++m) count += (!meshes[m].instanced || placed[m]) ? meshes[m].triangles.size() : 0;
   return count;
 }
 
@@ -135,6 +145,15 @@ void check_scene(Scene& scene) {
       }
     }
   }
+  for (size_t m = 0; m < scene.meshes.size(); ++m) {
+    if (scene.meshes[m].instanced && scene.meshes[m].mask != every_mask_bit) {
+      throw InputError(item("meshes", m) + ".mask: the mesh is drawn by its instances, whose masks stand for its own: give "
+                       "each instance the mask");
+    }
+  }
+  // Each placement against its mesh's box: the placed corners bound every placed vertex, for eight
+  // points an instance rather than every vertex (1e5 placements of a 35k-vertex model).
+  std::vector<Bounds> mesh_boxes;
   for (size_t k = 0; k < scene.instances.size(); ++k) {
     const Instance& instance = scene.instances[k];
     const std::string path = item("instances", k);
@@ -142,12 +161,43 @@ void check_scene(Scene& scene) {
       throw InputError(path + ".mesh: " + std::to_string(instance.mesh) + " is not an instanced mesh of the scene's " +
                        std::to_string(scene.meshes.size()));
     }
-    check_transform(instance, Bounds{}, path);
-    const Mesh& mesh = scene.meshes[instance.mesh];
-    for (size_t v = 0; v < mesh.positions.size(); ++v) {
-      check_coordinates(placed(instance, mesh.positions[v]), path + ": the mesh's " + item("positions", v) + " placed");
+    if (mesh_boxes.empty()) mesh_boxes = instanced_mesh_boxes(scene);
+    check_transform(instance, mesh_boxes[instance.mesh], path);
+  }
+}
+
+std::string float32_placement_fault(const glm::dmat3& linear) {
+  const glm::dmat3 to_mesh = glm::inverse(linear);
+  double spread = 0.0, linear_norm = 0.0, to_mesh_norm = 0.0;
+  std::array<double, 3> largest{};  // in each row of the inverse
+  for (int i = 0; i < 3; ++i) {
+    const glm::dvec3 row = glm::row(to_mesh, i);
+    spread += glm::length(linear[i]) * glm::length(row);
+    linear_norm += glm::dot(linear[i], linear[i]);
+    to_mesh_norm += glm::dot(row, row);
+    largest[i] = std::max({std::abs(row.x), std::abs(row.y), std::abs(row.z)});
+  }
+  const double condition = std::sqrt(linear_norm * to_mesh_norm);
+  char text[300];
+  if (!(condition <= max_placement_condition)) {
+    std::snprintf(text, sizeof text, "it flattens the mesh by %.3g along some axis (its condition number), beyond the 2^32 "
+                  "that float32 mesh coordinates hold: flatten the mesh itself", condition);
+    return text;
+  }
+  for (int i = 0; i < 3; ++i) {
+    if (!(largest[i] >= 0x1p-100 && largest[i] <= 0x1p100)) {
+      std::snprintf(text, sizeof text, "its inverse's row %d reaches %.3g, outside the 2^-100 .. 2^100 that float32 mesh "
+                    "coordinates hold", i, largest[i]);
+      return text;
     }
   }
+  if (!(spread <= max_placement_spread)) {
+    std::snprintf(text, sizeof text, "it scales or shears across rotated axes so that float32 mesh coordinates place the mesh "
+                  "up to %.3g roundings off (a rotation and scale: 3, vkray takes up to %g): give the mesh its own "
+                  "positions, or scale along its axes before rotating", spread, max_placement_spread);
+    return text;
+  }
+  return {};
 }
 
 void check_transform(const Instance& instance, const Bounds& mesh_box, const std::string& path) {
@@ -159,11 +209,12 @@ void check_transform(const Instance& instance, const Bounds& mesh_box, const std
   if (!(std::abs(determinant) >= std::numeric_limits<double>::min()) || !std::isfinite(determinant)) {
     throw InputError(path + ".transform: cannot be inverted (its determinant is " + std::to_string(determinant) + ")");
   }
+  if (const std::string fault = float32_placement_fault(instance.linear); !fault.empty()) {
+    throw InputError(path + ".transform: " + fault);
+  }
   if (mesh_box.empty()) return;
   for (int corner = 0; corner < 8; ++corner) {
-    const glm::dvec3 p((corner & 1) ? mesh_box.upper.x : mesh_box.lower.x, (corner & 2) ? mesh_box.upper.y : mesh_box.lower.y,
-                       (corner & 4) ? mesh_box.upper.z : mesh_box.lower.z);
-    check_coordinates(placed(instance, p), path + ".transform: the mesh's box placed");
+    check_coordinates(placed(instance, mesh_box.corner(corner)), path + ".transform: the mesh's box placed");
   }
 }
 
@@ -184,12 +235,19 @@ void set_instance_transforms(Scene& scene, std::span<const uint32_t> instances, 
   }
   std::vector<Instance> placed_instances = scene.instances;
   std::vector<Bounds> found_boxes;
+  std::vector<uint32_t> listed_at(placed_instances.size(), UINT32_MAX);  // each instance's entry
   for (size_t k = 0; k < instances.size(); ++k) {
     const std::string path = "transforms[" + std::to_string(k) + "]";
     if (instances[k] >= placed_instances.size()) {
       throw InputError("instances[" + std::to_string(k) + "]: " + std::to_string(instances[k]) +
                        " is not an instance of the scene's " + std::to_string(placed_instances.size()));
     }
+    if (listed_at[instances[k]] != UINT32_MAX) {
+      throw InputError("instances[" + std::to_string(k) + "]: instance " + std::to_string(instances[k]) +
+                       " is placed twice (entries " + std::to_string(listed_at[instances[k]]) + " and " + std::to_string(k) +
+                       "): one transform an instance");
+    }
+    listed_at[instances[k]] = static_cast<uint32_t>(k);
     const glm::dmat4& m = transforms[k];
     if (m[0][3] != 0.0 || m[1][3] != 0.0 || m[2][3] != 0.0 || m[3][3] != 1.0) {
       throw InputError(path + ": not an affine map (its last row is not 0 0 0 1)");
@@ -214,22 +272,24 @@ const char* given_ray_fault(const GivenRay& ray) {
 
 namespace {
 
-// Throws InputError naming the first k < count for which fault(k) is not null. On every core (a
-// million rays took 4 ms on one, a tenth of their casting).
+// Throws InputError naming the first k < count for which fault(k) is not null, with that fault as
+// found: the caller's rays may change meanwhile (another thread of theirs), and a second look could
+// find another fault or none. On every core (a million rays took 4 ms on one, a tenth of their casting).
 template <typename Fault>
 void check_each_ray(size_t count, Fault&& fault) {
-  std::atomic<size_t> first_fault = count;
+  std::mutex first_lock;
+  size_t first_fault = count;
+  const char* first_message = nullptr;
   parallel_for_chunks(count, [&](size_t begin, size_t end) {
     for (size_t k = begin; k < end; ++k) {
-      if (fault(k)) {
-        size_t known = first_fault.load();
-        while (k < known && !first_fault.compare_exchange_weak(known, k)) {
-        }
+      if (const char* message = fault(k)) {
+        const std::lock_guard keep(first_lock);
+        if (k < first_fault) first_fault = k, first_message = message;
         return;
       }
     }
   });
-  if (const size_t k = first_fault.load(); k < count) throw InputError("ray " + std::to_string(k) + ": " + fault(k));
+  if (first_message) throw InputError("ray " + std::to_string(first_fault) + ": " + first_message);
 }
 
 }  // namespace
@@ -293,9 +353,7 @@ Bounds placed_box(const Bounds& mesh_box, const Instance& instance) {
   Bounds bounds;
   glm::dvec3 magnitude = glm::abs(instance.translation);
   for (int corner = 0; corner < 8; ++corner) {
-    const glm::dvec3 p((corner & 1) ? mesh_box.upper.x : mesh_box.lower.x, (corner & 2) ? mesh_box.upper.y : mesh_box.lower.y,
-                       (corner & 4) ? mesh_box.upper.z : mesh_box.lower.z);
-    const glm::dvec3 placed_corner = placed(instance, p);
+    const glm::dvec3 placed_corner = placed(instance, mesh_box.corner(corner));
     bounds.add(placed_corner);
     magnitude = glm::max(magnitude, glm::abs(placed_corner));
   }
@@ -313,8 +371,10 @@ Bounds finite_bounds(const Scene& scene) {
     if (mesh.instanced) continue;
     for (const auto& position : mesh.positions) bounds.add(position);
   }
+  const std::vector<Bounds> mesh_boxes = scene.instances.empty() ? std::vector<Bounds>{} : instanced_mesh_boxes(scene);
   for (const auto& instance : scene.instances) {
-    for (const auto& position : scene.meshes[instance.mesh].positions) bounds.add(placed(instance, position));
+    if (mesh_boxes[instance.mesh].empty()) continue;
+    for (int corner = 0; corner < 8; ++corner) bounds.add(placed(instance, mesh_boxes[instance.mesh].corner(corner)));
   }
   return bounds;
 }
@@ -351,9 +411,11 @@ double scene_radius(const Scene& scene, const glm::dvec3& anchor) {
     if (mesh.instanced) continue;
     for (const auto& position : mesh.positions) radius = std::max(radius, glm::length(position - anchor));
   }
+  const std::vector<Bounds> mesh_boxes = scene.instances.empty() ? std::vector<Bounds>{} : instanced_mesh_boxes(scene);
   for (const auto& instance : scene.instances) {
-    for (const auto& position : scene.meshes[instance.mesh].positions) {
-      radius = std::max(radius, glm::length(placed(instance, position) - anchor));
+    if (mesh_boxes[instance.mesh].empty()) continue;
+    for (int corner = 0; corner < 8; ++corner) {
+      radius = std::max(radius, glm::length(placed(instance, mesh_boxes[instance.mesh].corner(corner)) - anchor));
     }
   }
   return radius;
@@ -372,6 +434,13 @@ void move_vertices(Scene& scene, uint32_t mesh, std::span<const glm::dvec3> posi
   std::swap(moved.positions, before);
   try {
     check_mesh_values(moved, 0);
+    if (moved.instanced) {  // where its instances now place it: the new box's corners, each placement's
+      Bounds box;
+      for (const glm::dvec3& p : moved.positions) box.add(p);
+      for (size_t k = 0; k < scene.instances.size(); ++k) {
+        if (scene.instances[k].mesh == mesh) check_transform(scene.instances[k], box, "instances[" + std::to_string(k) + "]");
+      }
+    }
   } catch (const InputError&) {
     std::swap(moved.positions, before);
     throw;
@@ -445,6 +514,17 @@ void set_object_mask(Scene& scene, uint32_t object, Mask mask) {
                      ": its meshes, then spheres, then planes)");
   }
   *field = mask;
+}
+
+std::vector<Mask> drawn_masks(const Scene& scene) {
+  std::vector<Mask> masks;
+  for (size_t m = 0; m < scene.meshes.size(); ++m) {
+    if (!scene.meshes[m].instanced) masks.push_back(scene.meshes[m].mask);
+  }
+  for (const Instance& instance : scene.instances) masks.push_back(instance.mask);
+  for (const Sphere& sphere : scene.spheres) masks.push_back(sphere.mask);
+  for (const Plane& plane : scene.planes) masks.push_back(plane.mask);
+  return masks;
 }
 
 std::vector<std::string> object_names(const Scene& scene) {

@@ -136,6 +136,10 @@ struct Scene {
   std::vector<Instance> instances;
 
   size_t triangle_count() const;
+  // The triangles of the drawn meshes, each mesh's once however many instances place it: an
+  // ordinary mesh's, and an instanced one's where some instance places it (a named mesh no instance
+  // places is drawn nowhere, as the reference has it).
+  size_t drawn_triangle_count() const;
   // Triangles of zero area (coincident or collinear vertices: their edge vectors' cross product is
   // exactly 0 in double). No ray can hit them; the renderer and the reference leave them out, and
   // the command line says how many.
@@ -185,6 +189,10 @@ struct Bounds {
     upper = glm::max(upper, p);
   }
   bool empty() const { return !(lower.x <= upper.x); }
+  // Corner `k` (0..7) of a box that holds some point: bit 0 takes x from upper, bit 1 y, bit 2 z.
+  glm::dvec3 corner(int k) const {
+    return {(k & 1) ? upper.x : lower.x, (k & 2) ? upper.y : lower.y, (k & 4) ? upper.z : lower.z};
+  }
 };
 
 // The world box of `mesh_box` placed by `instance`: its eight corners placed, and 1e-12 of their
@@ -194,9 +202,28 @@ struct Bounds {
 Bounds placed_box(const Bounds& mesh_box, const Instance& instance);
 
 // Throws InputError naming `path` where `instance`'s transform is not finite or cannot be inverted,
-// or places a corner of `mesh_box` (its mesh's box; none where empty) beyond max_coordinate: the
-// placed corners bound every placed position.
+// places a corner of `mesh_box` (its mesh's box; none where empty) beyond max_coordinate (the placed
+// corners bound every placed position), or cannot be walked in float32 as the reference walks it
+// (float32_placement_fault): what is accepted is drawn as the fp64 reference draws it.
 void check_transform(const Instance& instance, const Bounds& mesh_box, const std::string& path);
+
+// Why float32 shaders cannot take a ray into the mesh of a placement by `linear` as the reference
+// does; empty where they can. They store its inverse A rounded to float32 and take a ray (o, d) to
+// (A (o - T), A d) in float32, which moves the mesh coordinate i by a rounding of |A row i| |v| at
+// most (v: the ray's point relative to T), and so the world point by
+// mu = sum_i |linear column i| |A row i| roundings of |v|: 3 for a rotation and scale in any order of
+// its own axes (each column's length times its row's is 1), more for a scale or shear across
+// rotated axes. Refused where:
+// - mu > max_placement_spread: more than about twice a rotation's and scale's spread, beyond the
+//   depth contract's few float32 roundings (bake such a placement into a mesh of its own);
+// - the condition number, |linear|_F |A|_F, exceeds max_placement_condition: the mesh flattened by
+//   more than 2^32 along some axis, whose mesh coordinates a ray resolving it (within 2^24 of its
+//   size) reaches past float32's squares;
+// - A's entries leave [2^-100, 2^100] in some row (rounded to float32: a row lost to underflow,
+//   or overflowing the coordinates it makes).
+std::string float32_placement_fault(const glm::dmat3& linear);
+inline constexpr double max_placement_spread = 8.0;
+inline constexpr double max_placement_condition = 4294967296.0;  // 2^32
 
 // Instances placed anew: instances[k] of a scene by transforms[k], an affine map of its mesh's
 // positions (last row 0 0 0 1). A view of many may carry its own (a views file's "instances").
@@ -213,12 +240,14 @@ std::vector<Bounds> instanced_mesh_boxes(const Scene& scene);
 // Instance instances[k] of `scene` placed by transforms[k], an affine map of its mesh's positions
 // (last row 0 0 0 1). Every one is checked first (check_transform, against its mesh's box, from
 // `mesh_boxes` (instanced_mesh_boxes) where given, else found here), so a refused call changes nothing: an
-// InputError names the entry.
+// InputError names the entry, or the second entry of an instance listed twice.
 void set_instance_transforms(Scene& scene, std::span<const uint32_t> instances, std::span<const glm::dmat4> transforms,
                              const std::vector<Bounds>* mesh_boxes = nullptr);
 
-// The box of the finite primitives: every sphere and vertex where it is drawn, an instanced mesh's
-// where each instance places it (planes are infinite).
+// A box of the finite primitives: every sphere and ordinary mesh's vertex, and the corners of each
+// instanced mesh's box where an instance places it (planes are infinite). An instance costs its
+// eight corners, not its vertices: 1e5 placements of a 35k-vertex model are 8e5 points, not 3.5e9.
+// The box holds every placed vertex, a little more than they need where a placement rotates.
 Bounds finite_bounds(const Scene& scene);
 
 // The centre of finite_bounds, where the framed camera looks; the camera for a scene of planes alone.
@@ -231,13 +260,15 @@ glm::dvec3 scene_centre(const Scene& scene);
 // object's stored positions as they were and redoes the moved one's part alone.
 glm::dvec3 scene_anchor(const Scene& scene);
 
-// The largest distance from `anchor` of a sphere's surface or a vertex where it is drawn (0 without
-// either).
+// The largest distance from `anchor` of a sphere's surface, an ordinary mesh's vertex or a corner of
+// an instanced mesh's box where an instance places it (0 without any): at least that of every
+// vertex where it is drawn, in the time of finite_bounds.
 double scene_radius(const Scene& scene, const glm::dvec3& anchor);
 
 // Moves the vertices of scene.meshes[mesh] to `positions`, one a vertex in its order. Throws
-// InputError, the scene unchanged, for a mesh out of range, another count of positions, or a
-// coordinate not finite or beyond max_coordinate.
+// InputError, the scene unchanged, for a mesh out of range, another count of positions, a
+// coordinate not finite or beyond max_coordinate, or (an instanced mesh) a placement of the moved
+// mesh that check_transform refuses (its box placed beyond max_coordinate).
 void move_vertices(Scene& scene, uint32_t mesh, std::span<const glm::dvec3> positions);
 
 // The anchor and the radius about it, found once for all who need them (two passes over the vertices).
@@ -246,6 +277,10 @@ struct SceneExtent {
   double radius = 0.0;
 };
 SceneExtent scene_extent(const Scene& scene);
+
+// The masks of what a ray can meet: each drawn ordinary mesh's, sphere's and plane's, and each
+// instance's in place of its mesh's (the CLI's note that a --mask sees nothing).
+std::vector<Mask> drawn_masks(const Scene& scene);
 
 // What each mesh_id of the outputs stands for, by id: the meshes' sources (Mesh::source; "meshes[i]"
 // for one built in memory), then "spheres[i]", then "planes[i]", as ObjectPrimitive numbers them.
@@ -270,8 +305,9 @@ void check_camera_reach(const Camera& camera, uint32_t width, uint32_t height, c
 // radii > 0, plane normals non-zero (made unit length here), vertex indices within their mesh, at
 // least one triangle a mesh, the camera's from and to apart, its up non-zero and its fovy in
 // (0, 180) degrees, the image size within limits; each instance placing an instanced mesh by a
-// finite transform that can be inverted, every vertex it places within max_coordinate. Throws
-// InputError.
+// finite transform that can be inverted and walked in float32 (check_transform), its mesh's box placed
+// within max_coordinate, and no mask of the mesh's own (its instances' masks stand for it). Throws
+// InputError. Every way a scene comes in (a scene file, a model, Python and the C API) ends here.
 void check_scene(Scene& scene);
 
 // A ray the caller gives (Python's cast_rays): its origin, then its direction (any length but 0), in
@@ -282,7 +318,9 @@ using GivenRay = std::array<double, 6>;
 // max_coordinate, or its direction is 0; null for nothing.
 const char* given_ray_fault(const GivenRay& ray);
 
-// Throws InputError naming the first ray (by its index) given_ray_fault finds fault with.
+// Throws InputError naming the first ray (by its index) given_ray_fault finds fault with. The rays
+// are read once: a caller's thread rewriting them meanwhile changes which one is named, never the
+// message's making (the ray is not read again for it).
 void check_given_rays(std::span<const GivenRay> rays);
 
 // Where along each given ray a hit counts: t_min < t < t_max, t the distance from the ray's origin

@@ -360,6 +360,9 @@ std::vector<Mesh> parse_meshes(const Node& node, const std::filesystem::path& ba
   if (node.has("name") && meshes.size() != 1) {
     node.at("name").fail("a named mesh is placed by instances as one mesh; the model gives " + std::to_string(meshes.size()));
   }
+  if (node.has("name") && node.has("mask")) {
+    node.at("mask").fail("a named mesh is drawn by its instances, whose masks stand for its own: give each instance the mask");
+  }
   for (Mesh& mesh : meshes) {
     mesh.instanced = node.has("name");  // drawn only where instances place it
     if (node.has("mask")) mesh.mask = node.at("mask").mask();
@@ -514,6 +517,7 @@ Scene parse_scene(std::string_view json_text, const std::string& name, const std
     }
   }
   if (top.has("instances")) {
+    std::vector<Bounds> mesh_boxes;  // instanced_mesh_boxes, found at the first transform
     for (const Node& entry : top.at("instances").elements()) {
       entry.expect_object({"mesh", "transform", "mask"});
       const Node placed_name = entry.at("mesh");
@@ -530,6 +534,10 @@ Scene parse_scene(std::string_view json_text, const std::string& name, const std
         const ParsedTransform transform = parse_transform(entry.at("transform"));
         instance.linear = transform.linear();
         instance.translation = transform.translation;
+        // Where it places the mesh's box, and whether float32 walks it as the reference does: the
+        // check every way in takes (check_transform), here naming the file and the entry.
+        if (mesh_boxes.empty()) mesh_boxes = instanced_mesh_boxes(scene);
+        check_transform(instance, mesh_boxes[instance.mesh], entry.where());
       }
       if (entry.has("mask")) instance.mask = entry.at("mask").mask();
       scene.instances.push_back(instance);

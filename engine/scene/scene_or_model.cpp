@@ -23,7 +23,7 @@ Scene load_scene_or_model(const std::filesystem::path& path, std::optional<uint3
     Scene scene = path.empty() ? default_scene() : load_scene_file(path);
     if (width) scene.width = *width;
     if (height) scene.height = *height;
-    check_image_size(scene.width, scene.height);
+    check_scene(scene);  // what the file's parser left (it names each item by file and place first)
     return scene;
   }
   Model model = load_model(path);
@@ -50,6 +50,7 @@ Scene load_scene_or_model(const std::filesystem::path& path, std::optional<uint3
   } else {
     scene.camera = frame_scene(scene, scene.width, scene.height);
   }
+  check_scene(scene);
   return scene;
 }
 

@@ -87,12 +87,22 @@ def _shape_text(shape: Sequence[int]) -> str:
     return "(" + ", ".join(str(d) for d in shape) + ")"
 
 
+def _array(value: Any, what: str, expected: str) -> np.ndarray:
+    """`value` as an array of real numbers, as given (booleans, complex numbers, strings, objects and
+    ragged lists refused, naming `what`)."""
+    try:
+        array = np.asarray(value)
+    except (TypeError, ValueError):  # ragged nested lists: numpy's own message names no argument
+        raise ValueError(f"{what}: expected an array of numbers, {expected} (rows of different lengths?)") from None
+    if array.dtype.kind not in "fiu":
+        hint = " (an Open3D tensor: pass tensor.numpy())" if type(value).__module__.startswith("open3d") else ""
+        raise ValueError(f"{what}: expected an array of numbers, {expected}{hint}")
+    return array
+
+
 def _numbers(value: Any, what: str, expected: str) -> np.ndarray:
     """`value` as float64, C order: any real dtype (booleans, complex numbers and objects refused)."""
-    array = np.asarray(value)
-    if array.dtype.kind not in "fiu":
-        raise ValueError(f"{what}: expected an array of numbers, {expected}")
-    return np.ascontiguousarray(array, dtype=np.float64)
+    return np.ascontiguousarray(_array(value, what, expected), dtype=np.float64)
 
 
 def _rows(value: Any, what: str, columns: int) -> np.ndarray:
@@ -130,26 +140,28 @@ def _mask(value: Any, what: str, least: int = 1) -> int:
     return int(value)
 
 
-def _matrices(value: Any, what: str) -> np.ndarray:
-    """4 x 4 matrices (one, or N x 4 x 4) as float64 rows, C order: N x 16."""
-    try:
-        array = np.asarray(value, dtype=np.float64)
-    except (TypeError, ValueError):
-        raise ValueError(f"{what}: expected 4 x 4 matrices of numbers") from None
-    if array.shape == (4, 4):
-        array = array[np.newaxis]
-    if array.ndim != 3 or array.shape[1:] != (4, 4):
-        raise ValueError(f"{what}: expected a 4 x 4 matrix or N x 4 x 4, got shape {array.shape}")
-    return np.ascontiguousarray(array.reshape(-1, 16))
+def _matrices(value: Any, what: str, one: bool = False) -> np.ndarray:
+    """4 x 4 matrices of real numbers (N x 4 x 4, or with `one` a single 4 x 4) as float64 rows, C
+    order: N x 16."""
+    array = _array(value, what, "a 4 x 4 matrix" if one else "N x 4 x 4")
+    if array.shape == (4, 4) or (not one and array.shape == (0,)):
+        array = array.reshape(-1, 4, 4)
+    if array.ndim != 3 or array.shape[1:] != (4, 4) or (one and len(array) != 1):
+        expected = "a 4 x 4 matrix" if one else "a 4 x 4 matrix or N x 4 x 4"
+        raise ValueError(f"{what}: expected {expected}, got shape {_shape_text(array.shape)}")
+    return np.ascontiguousarray(array.reshape(-1, 16), dtype=np.float64)
+
+
+def _whole(value: Any, what: str, least: int, most: int) -> int:
+    """A whole number in least .. most (booleans and fractions refused: never wrapped or rounded)."""
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or not least <= value <= most:
+        raise ValueError(f"{what}: expected a whole number in {least} .. {most}, got {value!r}")
+    return int(value)
 
 
 def _size(value: Optional[int], what: str) -> int:
     """A side in pixels, 0 for the default."""
-    if value is None:
-        return 0
-    if not 1 <= int(value) <= 65536:
-        raise ValueError(f"{what}: must be in 1 .. 65536, got {int(value)}")
-    return int(value)
+    return 0 if value is None else _whole(value, what, 1, 65536)
 
 
 class Scene:
@@ -168,7 +180,7 @@ class Scene:
                  width: int = 800, height: int = 600, masks: Union[None, Mapping[int, int], Sequence[int]] = None,
                  instances: Optional[Iterable[Mapping[str, Any]]] = None):
         handle = ctypes.c_void_p()
-        _check(_native.lib.vkray_scene_new(int(width), int(height), ctypes.byref(handle)))
+        _check(_native.lib.vkray_scene_new(_size(width, "width"), _size(height, "height"), ctypes.byref(handle)))
         self._handle = handle
         given = []
         if vertices is not None or triangles is not None:
@@ -209,7 +221,7 @@ class Scene:
             mesh = instance["mesh"]
             if isinstance(mesh, bool) or not isinstance(mesh, (int, np.integer)) or not 0 <= mesh < 2**32:
                 raise ValueError(f"{path}.mesh: expected a mesh_id, got {mesh!r}")
-            transform = _matrices(instance["transform"], f"{path}.transform")[0] if "transform" in instance else None
+            transform = _matrices(instance["transform"], f"{path}.transform", one=True)[0] if "transform" in instance else None
             mask = _mask(instance.get("mask", 255), f"{path}.mask", 0)
             _check(_native.lib.vkray_scene_add_instance(self._handle, int(mesh), None if transform is None else _pointer(transform), mask))
         if camera is not None:
@@ -229,10 +241,7 @@ class Scene:
         corners = np.ascontiguousarray(corners, dtype=np.uint64 if unsigned else np.int64)
         transform = mesh.get("transform")
         if transform is not None:
-            affine = f"{path}.transform: expected a 4 x 4 affine matrix of finite numbers (last row 0, 0, 0, 1)"
-            if np.shape(transform) != (4, 4):
-                raise ValueError(affine)
-            transform = _numbers(transform, f"{path}.transform", "4 x 4")
+            transform = _matrices(transform, f"{path}.transform", one=True)[0]
         _check(_native.lib.vkray_scene_add_mesh(self._handle, _pointer(vertices), len(vertices), corners.ctypes.data_as(ctypes.c_void_p),
                                                 1 if unsigned else 0, len(corners), _pointer(transform)))
 
@@ -396,9 +405,7 @@ class _Caster:
         return dict(zip(keys, results))
 
     def _rays_and_ranges(self, rays: Any, t_min: Any, t_max: Any):
-        given = np.asarray(rays)
-        if given.dtype.kind not in "fiu":
-            raise ValueError("rays: expected an array of numbers, of shape (..., 6)")
+        given = _array(rays, "rays", "of shape (..., 6)")
         if given.ndim == 0 or given.shape[-1] != 6:
             raise ValueError(f"rays: expected an array of shape (..., 6), got shape {_shape_text(given.shape)}")
         leading = given.shape[:-1]
@@ -408,9 +415,15 @@ class _Caster:
         def one_end(value, what):
             if value is None:
                 return None
-            array = np.asarray(value)
-            if array.dtype.kind not in "fiu":
-                raise ValueError(f"{what}: expected an array of numbers (None, a number or one value a ray)")
+            array = _array(value, what, "None, a number or one value a ray")
+            # One number for every ray that cannot be right would make every ray a miss under
+            # bad_rays='miss' (meant for a dead beam among many): refused, naming it.
+            if array.ndim == 0:
+                number = float(array)
+                if what == "t_min" and not (np.isfinite(number) and number >= 0.0):
+                    raise ValueError(f"t_min: {number!r} for every ray: a range starts at a finite t >= 0")
+                if what == "t_max" and not number > 0.0:
+                    raise ValueError(f"t_max: {number!r} for every ray: a range ends at a t > 0 (inf for no end)")
             try:
                 spread = np.broadcast_to(array.astype(np.float64), leading)
             except ValueError:
@@ -418,7 +431,10 @@ class _Caster:
                                  f"{_shape_text(leading)}), got shape {_shape_text(array.shape)}") from None
             return np.ascontiguousarray(spread).reshape(-1)
 
-        return flat, leading, one_end(t_min, "t_min"), one_end(t_max, "t_max")
+        lo, hi = one_end(t_min, "t_min"), one_end(t_max, "t_max")
+        if np.ndim(t_min) == 0 and np.ndim(t_max) == 0 and lo is not None and hi is not None and count and not hi[0] > lo[0]:
+            raise ValueError(f"t_max: {float(hi[0])!r} is not above t_min {float(lo[0])!r}: every ray's range would be empty")
+        return flat, leading, lo, hi
 
     @staticmethod
     def _flags(t_along: str, bad_rays: str) -> int:
@@ -515,9 +531,11 @@ class _Caster:
         top level (the tree over the instances) is built anew where they now stand, the meshes' trees
         kept; the next call renders the moved scene (timings: 'scene_update_ms'). ValueError for a bad
         instance or transform, the scene unchanged."""
-        ids = np.ascontiguousarray(np.atleast_1d(np.asarray(instances)))
+        ids = np.atleast_1d(_array(instances, "instances", "a list of instance_ids"))
+        if ids.size == 0:
+            ids = ids.astype(np.uint32)  # [] reads as float64: nothing to move
         if ids.dtype.kind not in "iu" or ids.ndim != 1 or (ids.size and (ids.min() < 0 or ids.max() >= 2**32)):
-            raise ValueError("instances: expected a list of instance_ids")
+            raise ValueError("instances: expected a list of instance_ids, whole numbers from 0")
         ids = np.ascontiguousarray(ids, dtype=np.uint32)
         matrices = _matrices(transforms, "transforms")
         if len(matrices) != len(ids):

@@ -253,7 +253,7 @@ def read_obj(path):
     (lambda r: r.render({"fov": 30}), "camera: fov: unknown key 'fov' (did you mean 'fovy'?)"),
     (lambda r: r.render({"fovy": 200}), "camera: fovy: field of view must be in (0, 180) degrees"),
     (lambda r: r.render("front"), "camera: expected a dict"),
-    (lambda r: r.render(width=0), "width: must be in 1 .. 65536, got 0"),
+    (lambda r: r.render(width=0), "width: expected a whole number in 1 .. 65536, got 0"),
     (lambda r: r.render(aovs=["depht"]), "aovs: unknown output 'depht'"),
     (lambda r: r.render(aovs=[]), "aovs: name at least one output"),
 ])
@@ -274,7 +274,7 @@ def test_bad_calls_raise_value_error_with_the_place(default_renderer, call, mess
     ({"spheres": np.array([[0, 0, 0, -1]]), "camera": {"from": [0, 0, 5], "to": [0, 0, 0]}}, "spheres[0].radius: must be > 0"),
     ({"planes": np.array([[0, 0, 0, 0, 0, 0]]), "camera": {"from": [0, 0, 5], "to": [0, 0, 0]}}, "planes[0].normal: must be finite and non-zero"),
     ({"meshes": [{"vertices": np.eye(3), "triangles": [[0, 1, 2]], "scale": 2}]}, "meshes[0]: unknown key 'scale'"),
-    ({"meshes": [{"vertices": np.eye(3), "triangles": [[0, 1, 2]], "transform": np.eye(3)}]}, "meshes[0].transform: expected a 4 x 4 affine matrix"),
+    ({"meshes": [{"vertices": np.eye(3), "triangles": [[0, 1, 2]], "transform": np.eye(3)}]}, "meshes[0].transform: expected a 4 x 4 matrix, got shape (3, 3)"),
     ({"planes": np.array([[0, 0, 0, 0, 1, 0]])}, "nothing to frame: the scene has no mesh or sphere"),
 ])
 def test_bad_scenes_raise_value_error_with_the_place(arguments, message):
