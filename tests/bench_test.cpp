@@ -343,9 +343,9 @@ TEST(BenchReport, NarrowTableFitsOneHundredColumns) {
 }
 
 TEST(BenchScenes, HashesAreDeterministicAndSeeEveryBit) {
-  for (const char* suite : {"basic", "stiff"}) {
-    const auto first = bench_suite(suite, 64, 48, "");
-    const auto second = bench_suite(suite, 64, 48, "");
+  for (const BenchSceneSet scenes : {BenchSceneSet{basic_scenes}, BenchSceneSet{stiff_scenes}}) {
+    const auto first = scenes(64, 48, {}, nullptr);
+    const auto second = scenes(64, 48, {}, nullptr);
     ASSERT_EQ(first.size(), second.size());
     ASSERT_FALSE(first.empty());
     for (size_t k = 0; k < first.size(); ++k) {
@@ -353,11 +353,11 @@ TEST(BenchScenes, HashesAreDeterministicAndSeeEveryBit) {
       EXPECT_EQ(scene_hash(first[k].scene), scene_hash(second[k].scene)) << first[k].name;
     }
   }
-  Scene scene = bench_suite("basic", 64, 48, "")[0].scene;
+  Scene scene = basic_scenes(64, 48)[0].scene;
   const std::string hash = scene_hash(scene);
   scene.spheres[0].radius = std::nextafter(scene.spheres[0].radius, 2.0);
   EXPECT_NE(scene_hash(scene), hash);
-  scene = bench_suite("basic", 64, 48, "")[0].scene;
+  scene = basic_scenes(64, 48)[0].scene;
   scene.width = 65;
   EXPECT_NE(scene_hash(scene), hash);
 }
@@ -395,8 +395,8 @@ TEST(AccuracyMarkdown, JudgesTheGoalsOnTopOfTheFloat32RayAndNamesTheCommand) {
 // it silently); the README states the stiff suite's size as the code has it.
 TEST(BenchScenes, AccuracySuiteNamesTheMissingBunnyAndTheReadmeCountsTheStiffCases) {
   std::vector<std::string> skipped;
-  const auto accuracy = bench_suite("accuracy", 8, 8, "/nonexistent/vkray-models", &skipped);
-  const size_t stiff = bench_suite("stiff", 8, 8, "").size(), basic = bench_suite("basic", 8, 8, "").size();
+  const auto accuracy = accuracy_scenes(8, 8, "/nonexistent/vkray-models", &skipped);
+  const size_t stiff = stiff_scenes(8, 8).size(), basic = basic_scenes(8, 8).size();
   EXPECT_EQ(accuracy.size(), stiff + basic);
   ASSERT_EQ(skipped.size(), 1u);
   EXPECT_NE(skipped[0].find("stanford-bunny.obj: not in the models folder '/nonexistent/vkray-models'"),
@@ -407,9 +407,8 @@ TEST(BenchScenes, AccuracySuiteNamesTheMissingBunnyAndTheReadmeCountsTheStiffCas
   EXPECT_NE(text.find("`stiff` (" + std::to_string(stiff) + " numerically hard cases"), std::string::npos);
 }
 
-TEST(BenchScenes, UnknownSuiteOrAbsentModelsFolder) {
-  EXPECT_THROW(bench_suite("fast", 64, 48, ""), InputError);
-  EXPECT_TRUE(bench_suite("models", 64, 48, "/nonexistent/vkray-models").empty());
+TEST(BenchScenes, AbsentModelsFolder) {
+  EXPECT_TRUE(model_folder_scenes(64, 48, "/nonexistent/vkray-models", nullptr).empty());
 }
 
 }  // namespace

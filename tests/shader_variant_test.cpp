@@ -55,7 +55,7 @@ TEST(ShaderVariants, LayoutAndGenericVariantsChangeNoBit) {
       {"generic", generic},
       {"stack-in-memory", stack_in_memory},
   };
-  for (const auto& scene : bench_suite("basic", 37, 29, "")) {
+  for (const auto& scene : basic_scenes(37, 29)) {
     SCOPED_TRACE(scene.name);
     const bool tree = choose_search(scene.scene.triangle_count(), scene.scene.spheres.size()) != PrimitiveSearch::brute_force;
     const Frame per_ray = render_with(scene.scene, ShaderVariant{}, tree ? PrimitiveSearch::bvh_per_ray : PrimitiveSearch::automatic);

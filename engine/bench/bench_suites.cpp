@@ -23,7 +23,9 @@ BenchScene framed(std::string name, Scene scene) {
   return {std::move(name), std::move(scene)};
 }
 
-std::vector<BenchScene> basic_suite(uint32_t width, uint32_t height) {
+}  // namespace
+
+std::vector<BenchScene> basic_scenes(uint32_t width, uint32_t height, const std::filesystem::path&, std::vector<std::string>*) {
   std::vector<BenchScene> scenes;
   Scene built_in = default_scene();
   built_in.width = width;
@@ -46,7 +48,7 @@ std::vector<BenchScene> basic_suite(uint32_t width, uint32_t height) {
   return scenes;
 }
 
-std::vector<BenchScene> scaling_suite(uint32_t width, uint32_t height) {
+std::vector<BenchScene> scaling_scenes(uint32_t width, uint32_t height, const std::filesystem::path&, std::vector<std::string>*) {
   std::vector<BenchScene> scenes;
   for (const size_t triangles : {1'000, 10'000, 100'000, 1'000'000, 4'000'000}) {
     Scene scene = empty_scene(width, height);
@@ -63,15 +65,14 @@ std::vector<BenchScene> scaling_suite(uint32_t width, uint32_t height) {
   return scenes;
 }
 
-// The numerically hard cases (engine/bench/stiff_cases.hpp).
-std::vector<BenchScene> stiff_suite(uint32_t width, uint32_t height) {
+std::vector<BenchScene> stiff_scenes(uint32_t width, uint32_t height, const std::filesystem::path&, std::vector<std::string>*) {
   std::vector<BenchScene> scenes;
   for (auto& stiff : stiff_cases(width, height)) scenes.push_back({std::move(stiff.name), std::move(stiff.scene)});
   return scenes;
 }
 
-std::vector<BenchScene> models_suite(uint32_t width, uint32_t height, const std::filesystem::path& models_dir,
-                                     std::vector<std::string>* skipped) {
+std::vector<BenchScene> model_folder_scenes(uint32_t width, uint32_t height, const std::filesystem::path& models_dir,
+                                            std::vector<std::string>* skipped) {
   std::vector<std::filesystem::path> files;
   std::error_code listing_error;
   for (const auto& entry : std::filesystem::directory_iterator(models_dir, listing_error)) {
@@ -92,6 +93,8 @@ std::vector<BenchScene> models_suite(uint32_t width, uint32_t height, const std:
   return scenes;
 }
 
+namespace {
+
 // `name` from `models_dir`, framed at width x height; a line in `skipped` where it is not there.
 void add_model(std::vector<BenchScene>& scenes, const char* name, uint32_t width, uint32_t height,
                const std::filesystem::path& models_dir, std::vector<std::string>* skipped) {
@@ -110,41 +113,38 @@ void add_model(std::vector<BenchScene>& scenes, const char* name, uint32_t width
   }
 }
 
+std::vector<BenchScene> named_models(std::initializer_list<const char*> names, uint32_t width, uint32_t height,
+                                     const std::filesystem::path& models_dir, std::vector<std::string>* skipped) {
+  std::vector<BenchScene> scenes;
+  for (const char* name : names) add_model(scenes, name, width, height, models_dir, skipped);
+  return scenes;
+}
+
 }  // namespace
 
-std::vector<BenchScene> bench_suite(const std::string& suite, uint32_t width, uint32_t height,
-                                    const std::filesystem::path& models_dir, std::vector<std::string>* skipped) {
-  if (suite == "basic") return basic_suite(width, height);
-  if (suite == "scaling") return scaling_suite(width, height);
-  if (suite == "stiff") return stiff_suite(width, height);
-  if (suite == "accuracy") {
-    // The stiff cases, then ordinary scenes to show what the robust default costs there.
-    std::vector<BenchScene> scenes = stiff_suite(width, height);
-    for (auto& scene : basic_suite(width, height)) scenes.push_back(std::move(scene));
-    add_model(scenes, accuracy_model, width, height, models_dir, skipped);
-    return scenes;
-  }
-  if (suite == "models") return models_suite(width, height, models_dir, skipped);
-  if (suite == given_rays_suite) {
-    std::vector<BenchScene> scenes;
-    for (const char* name : {"teapot.obj", "stanford-bunny.obj", "stanford-dragon-100k.obj"}) {
-      add_model(scenes, name, width, height, models_dir, skipped);
-    }
-    return scenes;
-  }
-  if (suite == moving_suite) {
-    std::vector<BenchScene> scenes;
-    for (const char* name : {"stanford-bunny.obj", "stanford-dragon-100k.obj"}) add_model(scenes, name, width, height, models_dir, skipped);
-    return scenes;
-  }
-  if (suite == instances_suite) {
-    std::vector<BenchScene> scenes;
-    for (const char* name : {"stanford-bunny.obj", "stanford-dragon-100k.obj", "armadillo-50k.obj", "spot.obj", "teapot.obj"}) {
-      add_model(scenes, name, width, height, models_dir, skipped);
-    }
-    return scenes;
-  }
-  throw InputError("--suite: unknown suite '" + suite + "' (choose from " + bench_suite_names + ")");
+std::vector<BenchScene> accuracy_scenes(uint32_t width, uint32_t height, const std::filesystem::path& models_dir,
+                                        std::vector<std::string>* skipped) {
+  // The stiff cases, then ordinary scenes to show what the robust default costs there.
+  std::vector<BenchScene> scenes = stiff_scenes(width, height);
+  for (auto& scene : basic_scenes(width, height)) scenes.push_back(std::move(scene));
+  add_model(scenes, accuracy_model, width, height, models_dir, skipped);
+  return scenes;
+}
+
+std::vector<BenchScene> given_rays_scenes(uint32_t width, uint32_t height, const std::filesystem::path& models_dir,
+                                          std::vector<std::string>* skipped) {
+  return named_models({"teapot.obj", "stanford-bunny.obj", "stanford-dragon-100k.obj"}, width, height, models_dir, skipped);
+}
+
+std::vector<BenchScene> moving_scenes(uint32_t width, uint32_t height, const std::filesystem::path& models_dir,
+                                      std::vector<std::string>* skipped) {
+  return named_models({"stanford-bunny.obj", "stanford-dragon-100k.obj"}, width, height, models_dir, skipped);
+}
+
+std::vector<BenchScene> instances_scenes(uint32_t width, uint32_t height, const std::filesystem::path& models_dir,
+                                         std::vector<std::string>* skipped) {
+  return named_models({"stanford-bunny.obj", "stanford-dragon-100k.obj", "armadillo-50k.obj", "spot.obj", "teapot.obj"}, width,
+                      height, models_dir, skipped);
 }
 
 }  // namespace vkray

@@ -119,7 +119,7 @@ GroupScene parse_group_scene(const std::string& id) {
 
 Scene load_group_scene(const ReportSettings& settings, const std::string& scene, uint32_t width, uint32_t height) {
   if (scene == stand_in_model) {
-    for (auto& bench : bench_suite("basic", width, height, "")) {
+    for (auto& bench : basic_scenes(width, height)) {
       if (bench.name == stand_in_model) return std::move(bench.scene);
     }
     throw std::logic_error("the basic suite has no " + std::string(stand_in_model));
