@@ -105,7 +105,7 @@ Action add_bench_command(CLI::App& app) {
   measuring.push_back(command->add_flag("--wide", options->wide,
                                         "Print every column (about 160 characters wide; the default fits 100)"));
   measuring.push_back(
-      command->add_option("--json", options->json, "Write every figure as JSON (schema: README, 'vkray bench')"));
+      command->add_option("--json", options->json, "Write every figure as JSON (schema: docs/bench.md)"));
   measuring.push_back(command->add_option("--csv", options->csv, "Write every figure as CSV, a line per row"));
   measuring.push_back(command->add_option("--markdown", options->markdown,
                                           "Write the accuracy document (docs/accuracy.md) of this run: use with --suite "

@@ -21,7 +21,7 @@ Action add_manifest_command(CLI::App& app) {
   merge->add_option("-o,--output", *output, "The merged manifest, in any folder: its file names are made relative to it")
       ->required();
   CLI::App* to_format = command->add_subcommand(
-      "export", "Write a manifest's cameras as NeRF's transforms.json or COLMAP's text model (README: Many views).");
+      "export", "Write a manifest's cameras as NeRF's transforms.json or COLMAP's text model (docs/many-views.md).");
   auto manifest = std::make_shared<std::string>();
   auto format = std::make_shared<std::string>();
   auto folder = std::make_shared<std::string>();

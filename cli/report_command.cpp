@@ -338,7 +338,7 @@ int run_report(const ReportOptions& options) {
 Action add_report_command(CLI::App& app) {
   CLI::App* command = app.add_subcommand(
       "report", "Report what this device does: correctness checks, the bench, many views and given rays, as JSON and "
-                "Markdown (README, 'The GPU report').");
+                "Markdown (docs/gpu-report.md).");
   auto options = std::make_shared<ReportOptions>();
   command->add_option("folder", options->folder, "Folder for report.json, report.md and each group's log (parts/)")->required();
   command->add_option("scenes", options->scenes, "Scene files to bench beside the models (docs/bench-scenes/room.json)");

@@ -1,5 +1,5 @@
 #!/bin/sh
-# The relocatable bundle where a user meets it (README, "Installing on a GPU server"): in a fresh
+# The relocatable bundle where a user meets it (docs/install.md, "Installing on a GPU server"): in a fresh
 # Debian 12 (debootstrap minbase: no compiler, no -dev package, no build tree), unpacked into a
 # folder of a user who is not root and run from another one:
 # 1. before the machine has any Vulkan package, it starts on its own loader and says in one line
@@ -10,7 +10,7 @@
 #    (`vkray report --reduced`: every row ran, every check passed) and renders from Python;
 # 3. the wheel, installed by a user into a venv, runs the README's quick start (cmake/try-wheel.sh).
 # CI runs it after the suite (.ci/run). Usage: sh cmake/check-bundle.sh [BUILD_DIR], as root, after
-# sh cmake/make-bundle.sh and building the wheel (README, "Python"); it installs debootstrap
+# sh cmake/make-bundle.sh and building the wheel (docs/python.md); it installs debootstrap
 # (cmake/debian-packages-bundle.txt).
 set -eu
 cd "$(dirname "$0")/.."

@@ -1,7 +1,7 @@
 #!/bin/sh
 # The wheel in a fresh Debian 13 (Python 3.13, numpy 2), the same file CI tried in a fresh Debian 12
 # (cmake/check-bundle.sh): cmake/try-wheel.sh in a fresh root (cmake/fresh-root.sh). As root, after
-# building the wheel (README, "Python"). Usage: sh cmake/check-debian13.sh [WHEEL]
+# building the wheel (docs/python.md). Usage: sh cmake/check-debian13.sh [WHEEL]
 set -eu
 cd "$(dirname "$0")/.."
 wheel="${1:-$(ls build/dist/vkray-*.whl 2>/dev/null | head -n 1)}"

@@ -1,5 +1,5 @@
 #!/bin/sh
-# The reliability checks CI runs after the README's test command (README, "Reliability"):
+# The reliability checks CI runs after the README's test command (docs/reliability.md):
 # 1. the suite again, built with AddressSanitizer and UndefinedBehaviorSanitizer: every test that
 #    runs on the host alone, and the GPU tests but those whose cost is their size (below), without
 #    the validation layer;
@@ -19,9 +19,10 @@ jobs="$(nproc)"
 # validation layer: the suite ran every Vulkan call of these tests under it, and here the subject is
 # the host's memory. Without the tests whose cost is their size, not their code
 # (tests/CMakeLists.txt, sized_by_scale_tests: the 7680x4320 renders, 14.7 GB at their peak under
-# ASan, the 120 random scenes, the camera inside a million triangles, the README's commands), nor
-# those whose subject is the device's arithmetic over many variants (arithmetic_tests there): the
-# README's test command runs them, and smaller tests of the same kind run their host code here.
+# ASan, the 120 random scenes, the camera inside a million triangles, the commands of the README and
+# docs/), nor those whose subject is the device's arithmetic over many variants (arithmetic_tests
+# there): the README's test command runs them, and smaller tests of the same kind run their host
+# code here.
 # A unity build: each target's sources compiled in batches (CMakeLists.txt, CMAKE_UNITY_BUILD). The
 # tests' cache is the suite's (build/test-cache, when there): the pipelines it compiled are taken from
 # there, not compiled again (tests/CMakeLists.txt, VKRAY_TEST_CACHE_HOME).
@@ -42,10 +43,11 @@ step "host tests, sanitized" env ASAN_OPTIONS=detect_leaks=1 ctest --test-dir bu
 # files (157 s more): the module is Python, not instrumented; what is, libvkray.so, these reach
 # through the C API's functions, every one of which test_vkray.py or CApi.FromC calls (instances,
 # masks, first hits, moved vertices: tests/c_api_test.c), and the engine beneath through the C++
-# tests of the same features. Without the README's Python examples and the many-views runs (89 s
-# and 146 s): the first make the calls the module's own tests make, on the real models; the second
-# run the command line killed, resumed and under schedulers, whose views and manifest parsers the
-# fuzzers and the host tests check under the sanitizers. The README's test command runs them all.
+# tests of the same features. Without the Python examples of the README and docs/ and the many-views
+# runs (89 s and 146 s): the first make the calls the module's own tests make, on the real models;
+# the second run the command line killed, resumed and under schedulers, whose views and manifest
+# parsers the fuzzers and the host tests check under the sanitizers. The README's test command runs
+# them all.
 step "GPU tests, sanitized" env ASAN_OPTIONS=detect_leaks=0 ctest --test-dir build-sanitize --output-on-failure -j"$jobs" -L gpu \
                                 -E '^Python[.](ManyViews|Module[.](readme_python|every_hit|masks|moving_vertices|robotics_calls|instances|bench_plot))$'
 

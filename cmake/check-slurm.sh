@@ -1,5 +1,5 @@
 #!/bin/sh
-# The README's Slurm example (docs/slurm-views.sh; README, "Many views") on a real one-node Slurm
+# The Slurm example of docs/many-views.md (docs/slurm-views.sh) on a real one-node Slurm
 # cluster, as CI runs it after the suite: Debian 12's slurm-wlm and munge, with a MUNGE key, munged,
 # slurmctld and slurmd started in a temporary folder (proctrack/linuxproc, task/none, no
 # accounting). The script's array of 4 tasks renders views of the built-in scene; while its tasks

@@ -5,7 +5,7 @@
 # A line is a package name, or a name, a release and the least version vkray needs from it
 # ("mesa-vulkan-drivers bookworm-backports 25.0"): such a package is installed from that release,
 # with the dependencies it needs from there, when its installed version is older; for it the
-# release's apt source is added to /etc/apt/sources.list.d/vkray-RELEASE.list. README.md, "What the
+# release's apt source is added to /etc/apt/sources.list.d/vkray-RELEASE.list. docs/install.md, "What the
 # install script changes", lists the effect on a machine.
 set -eu
 list="${1:-$(dirname "$0")/debian-packages.txt}"

@@ -1,5 +1,5 @@
 #!/bin/sh
-# Makes the relocatable bundle of a built tree (README, "Installing on a GPU server"):
+# Makes the relocatable bundle of a built tree (docs/install.md, "Installing on a GPU server"):
 # BUILD/vkray-VERSION-linux-ARCH.tar.gz holding
 #   bin/vkray          a launcher: the machine's Vulkan loader where it has one, lib/vulkan/'s otherwise
 #   libexec/vkray      the executable, RUNPATH $ORIGIN/../lib

@@ -1,5 +1,5 @@
 #!/bin/sh
-# The wheel where a user meets it (README, "Python"): in the fresh Debian root ROOT (debootstrap
+# The wheel where a user meets it (docs/python.md): in the fresh Debian root ROOT (debootstrap
 # minbase, /proc mounted, made by the caller), with only the distribution's python3-venv,
 # python3-numpy, libvulkan1 and mesa-vulkan-drivers, a user who is not root makes a venv with
 # --system-site-packages (numpy from the distribution), installs the wheel with pip install

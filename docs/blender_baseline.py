@@ -1,4 +1,4 @@
-# The path tracer vkray's whole-render time is compared with (README, "Command line"): Blender's
+# The path tracer vkray's whole-render time is compared with (docs/speed.md): Blender's
 # Cycles writing the same depth and normal passes of an OBJ model, from the camera `vkray render
 # MODEL.obj` frames it with, 1 sample on the CPU, to a multilayer OpenEXR, at Blender's fastest:
 # its C++ OBJ importer (wm.obj_import, Blender 3.2 and later; the legacy Python one took 0.6 s more

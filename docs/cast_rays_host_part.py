@@ -1,4 +1,4 @@
-"""The host's part of cast_rays (README, "On a GPU: transfers and long dispatches"): a call's wall
+"""The host's part of cast_rays (docs/command-line.md, "On a GPU: transfers and long dispatches"): a call's wall
 time less its dispatches' GPU time (timings['dispatch_gpu_ms'], which holds ordering the rays by
 direction where the device does it, timings['order_gpu_ms']), for a million rays from one origin
 given two ways: a sensor's 256 rows of 4096 (elevation -15..15 degrees, azimuth -30..30 about the
@@ -6,7 +6,7 @@ view of the bunny) and directions drawn over the whole sphere. Best of CALLS cal
 rays (the C API's own type: no conversion in Python).
 
 Run from the repository root after building:
-    PYTHONPATH=build/python python3 docs/cast_rays_host_part.py [MODEL.obj] [CALLS]
+    PYTHONPATH=build/python /usr/bin/python3 docs/cast_rays_host_part.py [MODEL.obj] [CALLS]
 """
 import sys
 import time

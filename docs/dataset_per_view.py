@@ -1,4 +1,4 @@
-"""A dataset of objects placed per view (README, "Python"): five models (the bunny, the dragon, the
+"""A dataset of objects placed per view (docs/python.md): five models (the bunny, the dragon, the
 armadillo, spot and the cow) stood on the floor of a room at a new random place and turn in every
 view, seen by a camera from a random side, each view's depth and mesh_id (the object's label)
 written as .npy files, as a synthetic-data generator does. Each view moves every object by
@@ -6,7 +6,7 @@ Renderer.set_vertices (its vertices posed with numpy), then renders. Times the w
 parts, and checks one view against the double-precision reference.
 
 Run from the repository root after building:
-    PYTHONPATH=build/python python3 docs/dataset_per_view.py [VIEWS] [WIDTH] [HEIGHT]
+    PYTHONPATH=build/python /usr/bin/python3 docs/dataset_per_view.py [VIEWS] [WIDTH] [HEIGHT]
 """
 import math
 import os

@@ -1,4 +1,4 @@
-"""A deforming mesh (README, "Python"): the bunny with every vertex moved by up to 1% of its size,
+"""A deforming mesh (docs/python.md): the bunny with every vertex moved by up to 1% of its size,
 through Renderer.set_vertices, which refits the tree (keeps its shape, recomputes its boxes; from the
 second call on in place), against the same call where one triangle also collapses to a point or
 opens again, which builds the tree anew. Then the render after a refit against a Renderer made from
@@ -6,7 +6,7 @@ the moved bunny (its tree built for it): GPU time, and the depth's relative erro
 double-precision reference. Best of CALLS.
 
 Run from the repository root after building:
-    PYTHONPATH=build/python python3 docs/moving_vertices.py [MODEL.obj] [CALLS]
+    PYTHONPATH=build/python /usr/bin/python3 docs/moving_vertices.py [MODEL.obj] [CALLS]
 """
 import sys
 

@@ -1,4 +1,4 @@
-"""How fast hostile polygons load (README, "Scene format"): binary PLYs of 64 faces of 4096 corners
+"""How fast hostile polygons load (docs/scene-format.md): binary PLYs of 64 faces of 4096 corners
 each, in the shapes that make ear clipping slow (combs with their teeth along either axis, stars,
 one with a tiny inner radius, spirals, random corners), each timed by `vkray render --timings`'s
 scene load (reading, triangulating and checking), in MB/s of the file.

@@ -1,5 +1,5 @@
 """How long a Renderer's constructor takes, and each kind of call's first run against its tenth, for
-the bunny at 640x480 (README, "Python"): the constructor makes and runs every pipeline once, so no
+the bunny at 640x480 (docs/python.md): the constructor makes and runs every pipeline once, so no
 call pays for a first use.
 
     PYTHONPATH=build/python /usr/bin/python3 docs/python_first_calls.py [MODEL]

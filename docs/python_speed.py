@@ -1,4 +1,4 @@
-"""What the Python module saves, timed (README, "Python"):
+"""What the Python module saves, timed (docs/python.md):
 
 1. Views: VIEWS renders of a model at 640x480 on one vkray.Renderer, the camera turning about the
    model, against as many `vkray render` processes of the same views (each writes its EXR, no PNG).
@@ -16,7 +16,7 @@
    times Embree itself on rays made the same way.
 
 Run from the repository root after building:
-    PYTHONPATH=build/python python3 docs/python_speed.py [MODEL.obj] [VIEWS]
+    PYTHONPATH=build/python /usr/bin/python3 docs/python_speed.py [MODEL.obj] [VIEWS]
 """
 import math
 import os
@@ -46,7 +46,7 @@ def orbit(camera, count):
 
 
 def pixel_rays(camera, width, height):
-    """The camera's pixel rays in double, as README's output contract defines them."""
+    """The camera's pixel rays in double, as docs/outputs.md's output contract defines them."""
     eye, target, up = (np.array(camera[k], dtype=np.float64) for k in ("from", "to", "up"))
     forward = (eye - target) / np.linalg.norm(eye - target)
     right = np.cross(up, forward)

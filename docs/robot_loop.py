@@ -1,4 +1,4 @@
-"""A robot's loop (README, "Python"): a spinning sensor of 64 rings of 1024 rays (65,536 rays from one
+"""A robot's loop (docs/python.md): a spinning sensor of 64 rings of 1024 rays (65,536 rays from one
 origin) in a room (a floor, four walls and a ceiling) with the dragon and the armadillo, and the bunny
 carried about. Two loops
 of POSES poses each, timed whole as a user's loop runs (numpy's work included):
@@ -15,7 +15,7 @@ With `open`, the room has no walls and ceiling: the bunny then changes the scene
 set_vertices refits the whole scene.
 
 Run from the repository root after building:
-    PYTHONPATH=build/python python3 docs/robot_loop.py [POSES] [ROUNDS] [open]
+    PYTHONPATH=build/python /usr/bin/python3 docs/robot_loop.py [POSES] [ROUNDS] [open]
 """
 import math
 import os
@@ -58,7 +58,7 @@ dragon, dragon_triangles = load_obj(os.path.join(MODELS, "stanford-dragon-100k.o
 armadillo, armadillo_triangles = load_obj(os.path.join(MODELS, "armadillo-50k.obj"), 1.0)
 # The room's walls and ceiling, 10 x 10 x 3 about the sensor (the floor is a plane): they bound the
 # scene, so its box, whose centre every stored position is relative to, stays while the bunny moves
-# and set_vertices redoes the bunny's part alone (README, "Python").
+# and set_vertices redoes the bunny's part alone (docs/python.md).
 walls, wall_triangles = room(5.0, 3.0)
 meshes = [{"vertices": posed(bunny, 0), "triangles": bunny_triangles},
           {"vertices": dragon + [3.0, 0.0, 1.0], "triangles": dragon_triangles},

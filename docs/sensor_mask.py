@@ -1,4 +1,4 @@
-"""Ray masks (README, "Ray masks"): a robot (the armadillo, standing in for one) carries a spinning
+"""Ray masks (docs/python.md, "Ray masks"): a robot (the armadillo, standing in for one) carries a spinning
 sensor of 64 rings of 1024 rays at its chest, inside its own body's surface; the room holds the dragon and
 the bunny. The robot has mask 2, everything else 1:
 
@@ -10,7 +10,7 @@ the bunny. The robot has mask 2, everything else 1:
    same hits, the masks tested; mask=1: the robot left out).
 
 Run from the repository root after building:
-    PYTHONPATH=build/python python3 docs/sensor_mask.py [CALLS] [ROUNDS]
+    PYTHONPATH=build/python /usr/bin/python3 docs/sensor_mask.py [CALLS] [ROUNDS]
 """
 import math
 import os

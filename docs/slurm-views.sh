@@ -1,6 +1,6 @@
 #!/bin/bash
 # Renders MODEL's views on a Slurm cluster, one shard of them per array task, into one shared folder
-# (README, "Many views"). Each task renders the views whose index is its shard modulo the task count
+# (docs/many-views.md). Each task renders the views whose index is its shard modulo the task count
 # and writes its own manifest part; after the array, one command merges the parts:
 #
 #   sbatch docs/slurm-views.sh
@@ -15,7 +15,7 @@
 # together), so one task run again alone (sbatch --array=2 docs/slurm-views.sh) renders its own shard,
 # not every view. A task that is requeued or run again renders only the views it has not finished. The settings
 # below may also be given in the environment (sbatch --export). VKRAY is the relocatable bundle's
-# bin/vkray unpacked on the shared file system (README, "Installing on a GPU server"), e.g.
+# bin/vkray unpacked on the shared file system (docs/install.md, "Installing on a GPU server"), e.g.
 # VKRAY=$HOME/vkray-0.1.0-linux-x86_64/bin/vkray; add #SBATCH --gpus=1 on GPU partitions.
 #SBATCH --job-name=vkray-views
 #SBATCH --array=0-3

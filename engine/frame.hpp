@@ -129,7 +129,7 @@ struct Frame {
   std::vector<float> depth;   // distance along the primary ray, +inf on a miss; also for the camera outputs
   std::vector<float> normal;  // 3 planes: unit geometric normal facing the ray, 0 on a miss
   std::vector<float> uv;      // 2 planes: image-plane coordinates of the pixel centre
-  // The camera outputs (README, "Output contract"): the hit point's distance to the image plane
+  // The camera outputs (docs/outputs.md, "Output contract"): the hit point's distance to the image plane
   // (+inf on a miss), and the hit point in world space and in OpenEXR's camera space (3 planes each,
   // 0 on a miss).
   std::vector<float> planar_depth;
@@ -141,7 +141,7 @@ struct Frame {
   std::vector<uint32_t> primitive_id;
   // The instance placing the mesh hit (Scene::instances), no_object for anything else and a miss.
   std::vector<uint32_t> instance_id;
-  // The surface outputs (README, "Output contract"), 0 where nothing or no triangle gives them: the
+  // The surface outputs (docs/outputs.md, "Output contract"), 0 where nothing or no triangle gives them: the
   // hit's weights of its triangle's second and third vertices (2 planes), the shading normal (3
   // planes), the texture coordinates (2 planes) and the side of the primitive the ray meets.
   std::vector<float> barycentric;

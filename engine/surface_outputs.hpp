@@ -1,4 +1,4 @@
-// The surface outputs of a camera's frame (README, "Output contract"): what the primitive each
+// The surface outputs of a camera's frame (docs/outputs.md, "Output contract"): what the primitive each
 // pixel's ray hit gives at the hit, evaluated on the host in double from the frame's ids and the
 // pixel's ray, so that the device keeps no per-corner attributes and computes nothing more.
 #pragma once

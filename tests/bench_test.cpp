@@ -392,7 +392,7 @@ TEST(AccuracyMarkdown, JudgesTheGoalsOnTopOfTheFloat32RayAndNamesTheCommand) {
 }
 
 // Without the models folder the accuracy suite says that it leaves the bunny out (it used to drop
-// it silently); the README states the stiff suite's size as the code has it.
+// it silently); docs/bench.md states the stiff suite's size as the code has it.
 TEST(BenchScenes, AccuracySuiteNamesTheMissingBunnyAndTheReadmeCountsTheStiffCases) {
   std::vector<std::string> skipped;
   const auto accuracy = accuracy_scenes(8, 8, "/nonexistent/vkray-models", &skipped);
@@ -402,8 +402,8 @@ TEST(BenchScenes, AccuracySuiteNamesTheMissingBunnyAndTheReadmeCountsTheStiffCas
   EXPECT_NE(skipped[0].find("stanford-bunny.obj: not in the models folder '/nonexistent/vkray-models'"),
             std::string::npos)
       << skipped[0];
-  std::ifstream readme(std::filesystem::path(__FILE__).parent_path().parent_path() / "README.md");
-  const std::string text{std::istreambuf_iterator<char>(readme), {}};
+  std::ifstream page(std::filesystem::path(__FILE__).parent_path().parent_path() / "docs" / "bench.md");
+  const std::string text{std::istreambuf_iterator<char>(page), {}};
   EXPECT_NE(text.find("`stiff` (" + std::to_string(stiff) + " numerically hard cases"), std::string::npos);
 }
 

@@ -842,13 +842,13 @@ std::string project_version() {
   return match[1];
 }
 
-// The README's synopses (its "Command line" block) name every option each command's --help lists,
-// by its long name or its short one: a student reads the synopsis first.
+// The synopses of docs/command-line.md (the page's first block) name every option each command's
+// --help lists, by its long name or its short one: a student reads the synopsis first.
 TEST_F(CliTest, ReadmeSynopsesNameEveryOption) {
-  const std::string readme = read_text(fs::path(__FILE__).parent_path().parent_path() / "README.md");
-  const size_t block = readme.find("```", readme.find("\n## Command line\n"));
+  const std::string page = read_text(fs::path(__FILE__).parent_path().parent_path() / "docs" / "command-line.md");
+  const size_t block = page.find("\n```");
   ASSERT_NE(block, std::string::npos);
-  const std::string synopses = readme.substr(block, readme.find("```", block + 3) - block);
+  const std::string synopses = page.substr(block, page.find("```", block + 4) - block);
   for (const std::vector<std::string>& command :
        {std::vector<std::string>{"render"}, {"bench"}, {"view"}, {"info"}, {"report"}, {"manifest", "merge"}, {"manifest", "export"}}) {
     std::string name = "vkray";
@@ -876,7 +876,7 @@ TEST_F(CliTest, ReadmeSynopsesNameEveryOption) {
       auto named = [&](const std::string& flag) {
         return !flag.empty() && std::regex_search(lines, std::regex("[\\[ |]" + flag + "[\\] ]"));
       };
-      EXPECT_TRUE(named(long_name) || named(short_name)) << long_name << " is not in the README's synopsis";
+      EXPECT_TRUE(named(long_name) || named(short_name)) << long_name << " is not in the synopsis of docs/command-line.md";
     }
     EXPECT_GT(options, 0u);
   }
@@ -1876,7 +1876,7 @@ TEST_F(CliTest, ReportEndsRowsThatLoseTheDeviceAndGoesOn) {
 
 // Every output of the engine's table (engine/frame.hpp, outputs()) through the command line: --aov
 // takes its name with '-' or '_', the help names it, the EXR holds its channels, and the bench's
-// +every-output row measures each host output against the reference's (README, "vkray bench").
+// +every-output row measures each host output against the reference's (docs/bench.md).
 TEST_F(CliTest, EveryOutputOfTheTableThroughRenderAndBench) {
   expect_error(vkray({"render", "--aov", "depth,planer_depth", "-o", "x.exr"}), 2, {"did you mean 'planar-depth'?"});
   const RunResult help = vkray({"render", "--help"});

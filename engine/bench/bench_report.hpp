@@ -1,5 +1,5 @@
 // What `vkray bench` writes: the table on the terminal, JSON and CSV with every figure (schema in
-// README.md, "vkray bench"), and the comparison of two JSON files. Reading and writing a report are
+// docs/bench.md), and the comparison of two JSON files. Reading and writing a report are
 // in this one file so the schema cannot drift between them.
 #pragma once
 

@@ -29,7 +29,7 @@ namespace {
 
 using Json = nlohmann::ordered_json;
 
-// What --precision double promises (README, "Precision"): the report measures whether this device keeps it.
+// What --precision double promises (docs/precision.md): the report measures whether this device keeps it.
 constexpr double float64_promise = 1e-12;
 
 // The models the report renders, by file name in the models folder; a generated mesh where the
@@ -587,7 +587,7 @@ std::string report_markdown(const std::string& json_text) {
     if (!row->value("row", "").starts_with("float64/") || row->value("status", "") != "ok") continue;
     const double worst = (*row)["error"].value("depth_rel_max", 0.0);
     text += format("\nfloat64 (`--precision double`, %s, %s): depth within %.2e of the reference at worst, %zu flips: "
-                   "%s the README's 1e-12.\n",
+                   "%s the 1e-12 of docs/precision.md.\n",
                    row->value("row", "").substr(8).c_str(), row->value("group", "").c_str(), worst,
                    (*row)["error"].value("hit_mismatches", size_t{0}), worst <= float64_promise ? "within" : "**outside**");
   }

@@ -1,5 +1,5 @@
 // `vkray report`: what one device does, in one run that writes a JSON and a Markdown report
-// (README, "The GPU report"). Its groups of rows: the device as Vulkan describes it; checks of
+// (docs/gpu-report.md). Its groups of rows: the device as Vulkan describes it; checks of
 // correctness against the reference (the stiff cases and models, every traversal and geometry
 // layout the device runs, both transfers, float64); the bench at two sizes and an 8K frame with
 // Embree beside it; many views; given rays; whole `vkray render` processes. Each group runs in a process of its own (the CLI starts
@@ -26,7 +26,7 @@ struct ReportSettings {
   // Where stanford-bunny.obj and stanford-dragon-100k.obj are; without them a generated mesh of
   // 80k triangles stands in, and the report says so.
   std::filesystem::path models_dir;
-  // Further scenes for the bench (a scene file; docs/bench-scenes/room.json is the README's room).
+  // Further scenes for the bench (a scene file; docs/bench-scenes/room.json is docs/gpu-report.md's room).
   std::vector<std::filesystem::path> scene_files;
   // Rows whose variant (the traversal or layout a row runs: report_row_variant) ended its process in
   // an earlier group are skipped, saying so: a walk that hangs the device costs the report once.

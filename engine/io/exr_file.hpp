@@ -15,8 +15,8 @@ namespace vkray {
 // OpenEXR's lossless compressions, by the name OpenEXR gives them; zip and zips (deflate over
 // blocks of 16 rows and of 1 row) also as "zip:LEVEL", deflate level 1 (fastest) to 9, plain "zip"
 // being OpenEXR's default level 4. Their deflate streams are libdeflate's: at level 1 as fast as
-// zlib's on the bunny's depth and normals at 1920x1080 (about 2.5 ns a byte) and 7% smaller (README,
-// "Speed of a whole render", has the measured table). Lossy ones (pxr24, b44, dwa) would change the
+// zlib's on the bunny's depth and normals at 1920x1080 (about 2.5 ns a byte) and 7% smaller
+// (docs/speed.md has the measured table). Lossy ones (pxr24, b44, dwa) would change the
 // float32 values and are not offered.
 inline constexpr const char* exr_compressions[] = {"zip", "zips", "piz", "rle", "none"};
 inline constexpr const char* default_exr_compression = "zip:1";

@@ -218,7 +218,7 @@ RayHits Renderer::Impl::cast_rays(const GivenRays& given) {
     };
     // Rays from one origin (a camera's, a LiDAR's) walk the tree in packets as a camera's pixels
     // do, where the camera's rays would (the float32 packet walk): one by one they take five times
-    // as long (README, "Python"). A packet's rays must point nearly the same way: rays listed as an
+    // as long (docs/python.md). A packet's rays must point nearly the same way: rays listed as an
     // image's rows keep their places, as a camera's pixels; others are ordered by direction, 64
     // consecutive ones a packet, in tiles of whole packets (where the device's buffers hold one).
     // Ranges that start past the origin move it, ray by ray: those rays walk one by one, as do

@@ -21,7 +21,7 @@ struct PinholeIntrinsics {
   bool operator==(const PinholeIntrinsics&) const = default;
 };
 
-// How a camera's pixels map to rays (README, "Output contract"):
+// How a camera's pixels map to rays (docs/outputs.md, "Output contract"):
 // - perspective: every ray from `from` through its pixel of the image plane (fovy or intrinsics);
 // - orthographic: every ray along the view direction, from its pixel of the image plane through
 //   `from`, which spans `view_height` world units vertically;
@@ -98,7 +98,7 @@ PixelRay pixel_ray(const Camera& camera, const CameraBasis& basis, uint32_t i, u
 CameraBasis make_camera_basis(const Camera& camera, uint32_t width, uint32_t height);
 
 // The camera as OpenCV's pinhole model describes it (PinholeIntrinsics): its own intrinsics where
-// it has them; for fovy and vkray's image plane (README, "Output contract") fx = fy =
+// it has them; for fovy and vkray's image plane (docs/outputs.md, "Output contract") fx = fy =
 // H / (2 tan(fovy / 2)), cx = (W - 1) / 2, cy = (H - 1) / 2.
 PinholeIntrinsics pinhole_intrinsics(const Camera& camera, uint32_t width, uint32_t height);
 

@@ -117,7 +117,7 @@ class GltfReader {
     for (const int root : roots) walk(walk, root, 0);
     if (placed > max_gltf_instancing * held_bytes) {
       fail("its nodes place " + std::to_string(placed) + " triangle corners and vertices, more than " + std::to_string(max_gltf_instancing) +
-           " for each of the " + std::to_string(held_bytes) + " bytes of mesh data it holds (vkray stores every placement: README, Model files)");
+           " for each of the " + std::to_string(held_bytes) + " bytes of mesh data it holds (vkray stores every placement: docs/scene-format.md, Model files)");
     }
   }
 
@@ -362,7 +362,7 @@ class GltfReader {
 // vkray reads no textures: images are accepted unread.
 bool skip_image(tinygltf::Image*, const int, std::string*, std::string*, int, int, const unsigned char*, int, void*) { return true; }
 
-// tinygltf's file access, narrowed to what the README promises: a buffer is embedded, or a regular
+// tinygltf's file access, narrowed to what docs/scene-format.md promises: a buffer is embedded, or a regular
 // file beside the model or below its folder. tinygltf tries its uri in the model's folder, then in
 // the working folder, and would read an absolute path, a "../" path, a FIFO (waiting for ever) or a
 // folder; here only the first try can succeed, and only for a regular file there.

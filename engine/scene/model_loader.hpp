@@ -13,7 +13,7 @@
 namespace vkray {
 
 // Every kind of model file, by its extension (lower case): the one list the loaders, the command
-// line's messages and the README's table follow.
+// line's messages and the table of docs/scene-format.md follow.
 struct ModelKind {
   const char* extension;
   const char* description;

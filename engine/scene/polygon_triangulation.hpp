@@ -17,7 +17,7 @@ namespace vkray {
 // Beyond this many corners a face is refused (its line named): real exports stay far below (Blender's
 // n-gons, CAD caps of a few hundred segments), and ear clipping's cost grows faster than the corners.
 // The hostile shapes tried (combs, stars, spirals, random corners) of 4096 corners each take at most
-// 300 corner tests a corner (a star of radii 1 and 0.001), 8 ms (README, "Model files").
+// 300 corner tests a corner (a star of radii 1 and 0.001), 8 ms (docs/scene-format.md, "Model files").
 inline constexpr size_t max_polygon_corners = 4096;
 
 // Appends the polygon's n - 2 triangles to `triangles`, each as three numbers of its corners (0 is the

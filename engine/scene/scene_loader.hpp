@@ -1,4 +1,4 @@
-// Scene files: JSON (format in README.md) parsed with nlohmann::json and checked strictly. Every
+// Scene files: JSON (format in docs/scene-format.md) parsed with nlohmann::json and checked strictly. Every
 // error names the file and the JSON path of the offending value, e.g. "a.json: spheres[2].radius:
 // must be > 0, got -1".
 #pragma once

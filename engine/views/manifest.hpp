@@ -10,7 +10,7 @@
 // file an output; "png" only where previews are written; "objects" (what each mesh_id stands for: a mesh's file or
 // glTF node, "spheres[i]", "planes[i]") only with the mesh-id output; "mask" (the rays') where not 255; file names relative to the manifest's folder; "scene" the
 // geometry's hash (geometry_hash); the camera's keys as engine/scene/camera_description.hpp
-// describes them (README "Many views").
+// describes them (docs/many-views.md).
 #pragma once
 
 #include "engine/io/array_files.hpp"

@@ -41,7 +41,7 @@ std::vector<View> orbit_views(const Camera& start, uint32_t count);
 // about it: a Fibonacci lattice (Gonzalez, "Measurement of areas on a sphere using Fibonacci and
 // latitude-longitude lattices", Math. Geosci. 42, 2010) whose poles lie along start.up, the same
 // directions on every machine. Up and fovy stay (a view straight along up takes the camera's
-// fallback up, README "Scene format").
+// fallback up, docs/scene-format.md).
 std::vector<View> sphere_views(const Camera& start, uint32_t count);
 
 }  // namespace vkray

@@ -1,6 +1,6 @@
 // The Vulkan loader (libvulkan.so.1) vkray talks to, found at run time rather than linked: the
 // machine's wherever the dynamic linker finds one (it knows the machine's drivers and layers), else
-// the copy a relocatable bundle carries in lib/vulkan/ (README, "Installing on a GPU server"), for
+// the copy a relocatable bundle carries in lib/vulkan/ (docs/install.md, "Installing on a GPU server"), for
 // machines that have a driver but no loader. Only engine/ code includes this file.
 #pragma once
 

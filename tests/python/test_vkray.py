@@ -114,7 +114,7 @@ def test_scene_without_a_camera_is_framed_like_a_model():
 
 
 def camera_rays(camera, width, height):
-    """The pixel rays of a look-at camera in double, as README's output contract defines them."""
+    """The pixel rays of a look-at camera in double, as docs/outputs.md's output contract defines them."""
     eye, target, up = (np.array(camera[k], dtype=np.float64) for k in ("from", "to", "up"))
     forward = (eye - target) / np.linalg.norm(eye - target)
     right = np.cross(up, forward)
@@ -564,15 +564,15 @@ def test_every_output_is_the_command_lines_exr_channel(tmp_path, model):
 
 def test_the_help_names_every_output_and_argument():
     """help(vkray.Renderer.render) lists every output of vkray.outputs by its key, and the
-    constructor's help its every argument, as the README's API lines show them."""
+    constructor's help its every argument, as the Python page's API lines show them."""
     render_help = vkray.Renderer.render.__doc__
     missing = [o["name"] for o in vkray.outputs if f" {o['name']} (" not in render_help]
     assert not missing, missing
     for argument in ("device", "precision", "traversal"):
         assert f"{argument}:" in vkray.Renderer.__init__.__doc__, argument
     assert "device it opened" in vkray.Renderer.device_name.__doc__
-    readme = (pathlib.Path(__file__).parents[2] / "README.md").read_text()
-    assert 'vkray.Renderer(scene, device=None, precision="float", traversal="auto")' in readme
+    page = (pathlib.Path(__file__).parents[2] / "docs" / "python.md").read_text()
+    assert 'vkray.Renderer(scene, device=None, precision="float", traversal="auto")' in page
 
 
 def test_planar_depth_reprojects_to_the_position_channel_with_the_headers_camera(tmp_path):

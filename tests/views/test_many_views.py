@@ -1,6 +1,6 @@
 """Many views in one run of `vkray render` (--views, --orbit, --sphere): shards, resuming after a
-kill, the manifest, the errors a batch user meets, and the Slurm script and Kubernetes Job of the
-README run locally with the environment their schedulers set. ctest runs this with pytest
+kill, the manifest, the errors a batch user meets, and the Slurm script and Kubernetes Job of
+docs/many-views.md run locally with the environment their schedulers set. ctest runs this with pytest
 (tests/CMakeLists.txt sets VKRAY_CLI and VKRAY_SOURCE_DIR); nothing is written outside tmp_path."""
 import json
 import math
