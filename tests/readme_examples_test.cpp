@@ -1,6 +1,6 @@
 // Every vkray command the README and the manual's pages (docs/*.md) show in a ```sh block runs and
-// exits 0, in their order (the README first, then the pages by file name), each distinct command
-// once, in a temporary copy of the layout they assume (build/vkray, ../shared/models, docs/ with its
+// exits 0, each distinct command a test of its own (the README's first, then the pages' by file
+// name), in a temporary copy of the layout they assume (build/vkray, ../shared/models, docs/ with its
 // bench scenes, a scene.json made of docs/scene-format.md's own scene example). So an option renamed,
 // removed or misspelt in the README or a page fails here. To keep the suite short, image sizes are cut to 64x36, the bench to one
 // frame of one round and the rays suite to 4096 rays a kind: what this checks is that each
@@ -13,6 +13,7 @@
 #include <sys/wait.h>
 
 #include <algorithm>
+#include <cctype>
 #include <chrono>
 #include <cstdlib>
 #include <filesystem>
@@ -98,6 +99,12 @@ std::string shrunk(std::string command) {
     if (command.find("--suite rays") != std::string::npos && command.find("--rays") == std::string::npos) {
       command += " --rays 4096";
     }
+    // The accuracy suite's 7680x4320 case keeps its size: with each variant it ran 154 s, with the
+    // first (the default) 31 s. That the others are variants is --variants' business, checked by
+    // the CLI's own tests.
+    if (command.find("--suite accuracy") != std::string::npos) {
+      command = std::regex_replace(command, std::regex(R"(--variants ([^, ]+)\S*)"), "--variants $1");
+    }
     // Nor the instances suite's thousand instances, whose flattened scene holds 46M triangles.
     if (command.find("--suite instances") != std::string::npos && command.find("--instances") == std::string::npos) {
       command += " --instances 10";
@@ -113,15 +120,57 @@ std::string shrunk(std::string command) {
   return command;
 }
 
-class ReadmeExamplesTest : public vkray::test::TempDirTest {};
+// A command of a page, as the test runs it (shrunk), and the earlier commands whose files it reads
+// (bench --compare A B: those that wrote A and B with --json), run first in its folder.
+struct PageCommand {
+  std::string page;  // README.md or docs/NAME.md
+  std::string line;  // as the page shows it
+  std::vector<std::string> before;  // earlier lines, as their pages show them
+  std::string name;  // the test's: the page and the command's place in it
+};
 
-TEST_F(ReadmeExamplesTest, EveryVkrayCommandRuns) {
-  if (!fs::is_directory(VKRAY_MODELS_DIR)) GTEST_SKIP() << "no models folder at " << VKRAY_MODELS_DIR << " (the README's examples use it)";
+// Every distinct vkray command of the pages, in order: a command shown twice (a headline figure's
+// in the README, and again on its page) is tested where it is met first; the others are printed at
+// discovery as what this does not run (CI runs the setup and test commands; the rest are a person's).
+std::vector<PageCommand> page_commands() {
+  std::vector<PageCommand> commands;
+  std::set<std::string> seen;
+  for (const fs::path& page : documents()) {
+    const std::string name = fs::relative(page, repository).string();
+    size_t place = 0;
+    for (const std::string& line : shell_lines(read_text(page))) {
+      if (!line.starts_with("build/vkray ") || !seen.insert(line).second) continue;
+      PageCommand command{name, line, {}, name + "_" + std::to_string(++place)};
+      for (char& c : command.name) {
+        if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
+      }
+      std::smatch compared;
+      if (std::regex_search(line, compared, std::regex(R"(--compare (\S+) (\S+))"))) {
+        for (const std::string& file : {compared[1].str(), compared[2].str()}) {
+          for (const PageCommand& earlier : commands) {
+            if (earlier.line.find("--json " + file) != std::string::npos) command.before.push_back(earlier.line);
+          }
+        }
+      }
+      commands.push_back(std::move(command));
+    }
+  }
+  return commands;
+}
+
+const std::vector<PageCommand>& every_command() {
+  static const std::vector<PageCommand> all = page_commands();
+  return all;
+}
+
+class ReadmeCommand : public vkray::test::TempDirTest, public testing::WithParamInterface<size_t> {};
+
+// Each command a test of its own (ctest runs them side by side, each within the suite's budget), in a
+// folder laid out as the pages assume, from the repository root.
+TEST_P(ReadmeCommand, Runs) {
+  if (!fs::is_directory(VKRAY_MODELS_DIR)) GTEST_SKIP() << "no models folder at " << VKRAY_MODELS_DIR << " (the pages' examples use it)";
   if (std::system("command -v xvfb-run >/dev/null 2>&1") != 0) GTEST_SKIP() << "xvfb-run is missing (Debian: xvfb, xauth)";
-  const std::vector<fs::path> pages = documents();
-  ASSERT_GT(pages.size(), 1u) << "no pages in " << repository / "docs";
-
-  // The layout the README's commands assume, from the repository root.
+  const PageCommand& page_command = every_command()[GetParam()];
   const fs::path repo = dir_ / "repo";
   fs::create_directories(repo / "build");
   fs::create_directories(repo / "docs");
@@ -136,40 +185,26 @@ TEST_F(ReadmeExamplesTest, EveryVkrayCommandRuns) {
   ASSERT_FALSE(scene.empty()) << "no ```json scene example in docs/scene-format.md";
   std::ofstream(repo / "scene.json") << scene;
 
-  // Each page's commands with the page they are on; a command shown twice (a headline figure's in the
-  // README, and again on its page) runs once, where it is met first.
-  std::vector<std::pair<std::string, std::string>> commands;
-  std::set<std::string> seen;
-  for (const fs::path& page : pages) {
-    const std::string text = read_text(page);
-    ASSERT_FALSE(text.empty()) << page;
-    const std::string name = fs::relative(page, repository).string();
-    for (const std::string& line : shell_lines(text)) {
-      if (!line.starts_with("build/vkray ")) {
-        std::printf("not run here (CI runs the setup and test commands; the rest are a person's): %s: %s\n", name.c_str(), line.c_str());
-      } else if (!seen.insert(line).second) {
-        std::printf("run above already: %s: %s\n", name.c_str(), line.c_str());
-      } else {
-        commands.emplace_back(name, line);
-      }
-    }
-  }
-
-  size_t ran = 0;
-  for (const auto& [page, line] : commands) {
+  std::vector<std::string> lines = page_command.before;
+  lines.push_back(page_command.line);
+  for (const std::string& line : lines) {
     const std::string command = shrunk(line);
     SCOPED_TRACE(command);
     const fs::path log = dir_ / "log.txt";
     const std::string shell = "cd '" + repo.string() + "' && timeout 600 " + command + " >'" + log.string() + "' 2>&1 </dev/null";
     const auto started = std::chrono::steady_clock::now();
     const int status = std::system(shell.c_str());
-    // Each command's time in the log: what to shrink first when the suite grows slow.
     std::printf("%.1f s: %s\n", std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count(), command.c_str());
-    EXPECT_TRUE(status != -1 && WIFEXITED(status) && WEXITSTATUS(status) == 0)
-        << page << ": command failed: " << line << "\nran as: " << command << "\n" << read_text(log);
-    ++ran;
+    ASSERT_TRUE(status != -1 && WIFEXITED(status) && WEXITSTATUS(status) == 0)
+        << page_command.page << ": command failed: " << line << "\nran as: " << command << "\n" << read_text(log);
   }
-  EXPECT_GE(ran, 8u) << "the sh blocks of the README and docs/ hold fewer vkray commands than expected";
 }
+
+std::string command_name(const testing::TestParamInfo<size_t>& command) { return every_command()[command.param].name; }
+
+INSTANTIATE_TEST_SUITE_P(Pages, ReadmeCommand, testing::Range(size_t{0}, every_command().size()), command_name);
+
+// The pages hold the commands this runs: a page whose sh blocks lost their commands fails here.
+TEST(ReadmeCommands, ThePagesShowEnoughCommands) { EXPECT_GE(every_command().size(), 8u); }
 
 }  // namespace

@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -16,8 +17,9 @@ class TempDirTest : public testing::Test {
  protected:
   void SetUp() override {
     const auto* test = testing::UnitTest::GetInstance()->current_test_info();
-    dir_ = std::filesystem::temp_directory_path() / ("vkray-" + std::string(test->test_suite_name()) + "-" +
-                                                     test->name() + "-" + std::to_string(getpid()));
+    std::string name = "vkray-" + std::string(test->test_suite_name()) + "-" + test->name() + "-" + std::to_string(getpid());
+    std::replace(name.begin(), name.end(), '/', '_');  // parameterized tests' names hold slashes
+    dir_ = std::filesystem::temp_directory_path() / name;
     std::filesystem::remove_all(dir_);
     std::filesystem::create_directories(dir_);
   }
