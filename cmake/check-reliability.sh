@@ -49,7 +49,7 @@ step "host tests, sanitized" env ASAN_OPTIONS=detect_leaks=1 ctest --test-dir bu
 # parsers the fuzzers and the host tests check under the sanitizers. The README's test command runs
 # them all.
 step "GPU tests, sanitized" env ASAN_OPTIONS=detect_leaks=0 ctest --test-dir build-sanitize --output-on-failure -j"$jobs" -L gpu \
-                                -E '^Python[.](ManyViews|Module[.](readme_python|every_hit|masks|moving_vertices|robotics_calls|instances|bench_plot))$'
+                                -E '^Python[.](ManyViews|Module[.](readme_python|every_hit|masks|moving_vertices|robotics_calls|instances|bench_plot|docs))([.][0-9]+)?$'
 
 step "fuzzer build" sh -c "sh cmake/install-deps.sh cmake/debian-packages-fuzz.txt &&
                            cmake -S . -B build-fuzz -DCMAKE_CXX_COMPILER=clang++ -DVKRAY_FUZZ=ON -DVKRAY_WERROR=ON &&

@@ -44,6 +44,13 @@ TEST_P(StiffCaseTest, DefaultWithinTheEnvelopeTextbookVariantNot) {
   const test::EnvelopeReport report = test::check_against_reference(stiff.scene, frame, row_step);
   EXPECT_EQ(report.failures, 0u) << report.describe();
   std::printf("    default: %s\n", report.stats.summary().c_str());
+  // The 7680x4320 case is about the image's size (tiles, buffers, readback), which the default's
+  // render takes; the other arithmetics and walks are the smaller cases' subject (at this size their
+  // renders took 120 of the test's 132 s, the ray queries most).
+  if (row_step > 1) {
+    std::printf("    the other arithmetics and walks: left to the smaller cases\n");
+    return;
+  }
   // On a CPU device the default takes edge functions from double products; the float arithmetic
   // with its error-free fallback, which GPUs run, must meet the same bounds.
   if (stiff.scene.triangle_count() > 0) {

@@ -12,3 +12,4 @@ def renderer(scene):
 @pytest.fixture(scope="module")
 def reference(scene):
     return vkray.Reference(scene)
+

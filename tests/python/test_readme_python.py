@@ -31,21 +31,29 @@ def python_blocks(readme):
     return blocks
 
 
-def test_every_python_example_in_the_readme_runs():
+def every_block():
+    """Each ```python block of the pages, with its page and place there: a test each."""
+    return [pytest.param(page, block, id=f"{page.relative_to(ROOT)}:{k + 1}")
+            for page in documents() for k, block in enumerate(python_blocks(page.read_text()))]
+
+
+def test_the_pages_hold_python_examples():
+    assert python_blocks((ROOT / "README.md").read_text()), "the README has no ```python block"
+    assert len(every_block()) >= 6, "the README and docs/ hold fewer ```python blocks than expected"
+
+
+@pytest.mark.parametrize("page, block", every_block())
+def test_every_python_example_in_the_readme_runs(page, block):
     if not os.path.isdir(os.environ.get("VKRAY_MODELS_DIR", "")):
         pytest.skip("the README's examples use ../shared/models, which is absent")
-    blocks = [(page, block) for page in documents() for block in python_blocks(page.read_text())]
-    assert python_blocks((ROOT / "README.md").read_text()), "the README has no ```python block"
-    assert len(blocks) >= 6, "the README and docs/ hold fewer ```python blocks than expected"
-    for page, block in blocks:
-        # The paths are relative to the repository root, the models beside it.
-        code = block.replace("../shared/models", os.environ["VKRAY_MODELS_DIR"])
-        result = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True,
-                                env=dict(os.environ, MPLBACKEND="Agg"))
-        assert result.returncode == 0, f"{page.relative_to(ROOT)}: example failed:\n{block}\n{result.stderr}"
-        # Each runs from the package alone: the wheel holds no file of docs/ to import.
-        assert not re.search(r"sys\.path|^\s*(from|import)\s+(obj_arrays|robot_loop|sensor_mask)\b", block, re.M), \
-            f"{page.relative_to(ROOT)}: an example imports from the repository, which the wheel does not hold:\n{block}"
+    # Each runs from the package alone: the wheel holds no file of docs/ to import.
+    assert not re.search(r"sys\.path|^\s*(from|import)\s+(obj_arrays|robot_loop|sensor_mask)\b", block, re.M), \
+        f"{page.relative_to(ROOT)}: an example imports from the repository, which the wheel does not hold:\n{block}"
+    # The paths are relative to the repository root, the models beside it.
+    code = block.replace("../shared/models", os.environ["VKRAY_MODELS_DIR"])
+    result = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True,
+                            env=dict(os.environ, MPLBACKEND="Agg"))
+    assert result.returncode == 0, f"{page.relative_to(ROOT)}: example failed:\n{block}\n{result.stderr}"
 
 
 def test_the_one_line_import_in_the_readme_runs():
