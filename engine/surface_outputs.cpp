@@ -109,6 +109,32 @@ SurfaceAt surface_at(const Scene& scene, ObjectPrimitive hit, const glm::dvec3& 
   return surface;
 }
 
+PointSurface point_surface(const Scene& scene, ObjectPrimitive found, uint32_t instance, const glm::dvec3& nearest) {
+  const size_t meshes = scene.meshes.size(), spheres = scene.spheres.size();
+  PointSurface surface;
+  if (found.object < meshes) {
+    const Mesh& mesh = scene.meshes[found.object];
+    const auto& corners = mesh.triangles[found.primitive];
+    const glm::dvec3 &a = mesh.positions[corners[0]], &b = mesh.positions[corners[1]], &c = mesh.positions[corners[2]];
+    const glm::dvec3 face = unit_vector(glm::cross(b - a, c - a));
+    if (instance == no_object) {
+      surface.barycentric = clamped_to_triangle(projected_weights(a, b, c, nearest));
+      surface.normal = face;
+      return surface;
+    }
+    const Instance& placement = scene.instances[instance];
+    const glm::dmat3 to_mesh = glm::inverse(placement.linear);
+    surface.barycentric = clamped_to_triangle(projected_weights(a, b, c, to_mesh * (nearest - placement.translation)));
+    const double mirrored = glm::determinant(placement.linear) < 0.0 ? -1.0 : 1.0;
+    surface.normal = mirrored * unit_vector(glm::transpose(to_mesh) * face);
+  } else if (found.object < meshes + spheres) {
+    surface.normal = unit_vector(nearest - scene.spheres[found.object - meshes].center);
+  } else if (found.object < meshes + spheres + scene.planes.size()) {
+    surface.normal = scene.planes[found.object - meshes - spheres].normal;
+  }
+  return surface;
+}
+
 void add_surface_outputs(Frame& frame, const Scene& scene) {
   if (!frame.aovs.has_surface_outputs()) return;
   if (!frame.camera || frame.depth.empty() || frame.mesh_id.empty() || frame.primitive_id.empty()) {

@@ -41,4 +41,15 @@ struct SurfaceAt {
 SurfaceAt surface_at(const Scene& scene, ObjectPrimitive hit, const glm::dvec3& origin, const glm::dvec3& dir, double t,
                      uint32_t instance = no_object);
 
+// What the primitive `found` (an instance's triangle where `instance` names one) gives at `nearest`, a
+// point of it (a point query's answer): its outward unit normal (a triangle's by its winding, the
+// face normal (b - a) x (c - a) normalized; through an instance's inverse transpose, turned where
+// it mirrors, so that it points out of the placed solid; a sphere's away from its centre; a plane's
+// own) and a triangle's weights (b1, b2) there (0 elsewhere).
+struct PointSurface {
+  glm::dvec3 normal{0.0};
+  glm::dvec2 barycentric{0.0};
+};
+PointSurface point_surface(const Scene& scene, ObjectPrimitive found, uint32_t instance, const glm::dvec3& nearest);
+
 }  // namespace vkray

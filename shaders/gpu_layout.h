@@ -72,10 +72,20 @@ using uvec4 = glm::uvec4;
 // instance each ray hit (VKRAY_NO_INSTANCE for none), beside VKRAY_BINDING_HITS.
 #define VKRAY_BINDING_INSTANCES 21       // texels, as positions
 #define VKRAY_BINDING_INSTANCE_HITS 22   // storage buffer
+// Point queries (VKRAY_RAY_INPUT_POINTS), made at a renderer's first: each instance's linear map (its
+// rows in three texels' xyz, the least factor it shrinks a length by in the first's w:
+// smallest_scale) to measure its mesh's triangles in the world's coordinates; and for the winding
+// number, each node's caps (a uvec4: the first edge and count of each child's, VKRAY_NO_CAP for a
+// child walked into) and the caps' edges (two vertex indices each, two edges a texel), see
+// engine/scene/winding_caps.hpp.
+#define VKRAY_BINDING_PLACEMENTS 23      // texels, as positions
+#define VKRAY_BINDING_WINDING_CAPS 24    // texels, RGBA32UI
+#define VKRAY_BINDING_CAP_EDGES 25       // texels, RGBA32UI
 // The ray-query traversal's top-level acceleration structure (VKRAY_SEARCH_RAY_QUERY): in its
 // pipelines' descriptor sets alone, the last binding.
-#define VKRAY_BINDING_TOP_STRUCTURE 23
-#define VKRAY_BINDING_COUNT 24
+#define VKRAY_BINDING_TOP_STRUCTURE 26
+#define VKRAY_BINDING_COUNT 27
+#define VKRAY_NO_CAP 0xffffffffu
 
 // How the shader finds the nearest triangle or sphere (VKRAY_SPEC_SEARCH_MODE). Planes are
 // infinite: they stay outside the tree, in their own loop.
@@ -214,6 +224,13 @@ VKRAY_SHARED_FUNCTION uint direction_key(float x, float y, float z, uint bits) {
 // their places in the packet walk's order (packet_order_index), of the rays as listed or, with
 // VKRAY_CALLER_BY_DIRECTION, as VKRAY_BINDING_RAY_ORDER orders them.
 #define VKRAY_RAY_INPUT_CALLER_DIRECTIONS 3
+// Points instead of rays (Renderer::closest_points, winding_numbers): a GpuPoint a point in
+// VKRAY_BINDING_RAYS (its w: the query's largest distance, +infinity for none), as many as rays;
+// with VKRAY_HIT_QUERY_NEAREST each point's nearest point of the scene written as its distance
+// (VKRAY_BINDING_DEPTH), its offset from the point (VKRAY_BINDING_NORMAL's planes) and what it lies
+// on (VKRAY_BINDING_HITS, VKRAY_BINDING_INSTANCE_HITS); with VKRAY_HIT_QUERY_WINDING the winding
+// number (VKRAY_BINDING_DEPTH). See shaders/point_walk.glsl.
+#define VKRAY_RAY_INPUT_POINTS 4
 // The device's subgroup size where it is 8, else 0 (see shaders/packet_walk.glsl).
 #define VKRAY_SPEC_SUBGROUP_SIZE 21
 // Write what each camera ray hit to VKRAY_BINDING_HITS too (the mesh-id and primitive-id outputs).
@@ -229,6 +246,7 @@ VKRAY_SHARED_FUNCTION uint direction_key(float x, float y, float z, uint bits) {
 #define VKRAY_HIT_QUERY_NEAREST 0
 #define VKRAY_HIT_QUERY_ANY 1
 #define VKRAY_HIT_QUERY_COUNT 2
+#define VKRAY_HIT_QUERY_WINDING 3  // points alone: the generalized winding number
 // The scene gives some mesh, sphere or plane a mask other than every bit (see Mask in
 // engine/scene/scene.hpp): a primitive counts only where its mask shares a bit with the call's ray
 // mask (RayGenParams.counts.w). Without, no mask is read or tested.
@@ -334,6 +352,9 @@ VKRAY_CHECK_SIZE(GpuPrimitive, 16);
 #define VKRAY_PRIMITIVE_INSTANCE 2u
 #define VKRAY_PRIMITIVE_KIND_BITS 0xffu
 #define VKRAY_PRIMITIVE_MASK_SHIFT 8
+// A triangle whose stored (canonical) order of vertices runs against its winding: its solid angle's
+// sign is turned (the winding number alone reads it; rays take either side alike). Above the mask.
+#define VKRAY_PRIMITIVE_FLIPPED 0x10000u
 #define VKRAY_TEXELS_PER_POINT 2
 // A triangle's normal: (x, y, z, 0) in float32 shaders; in float64 shaders a GpuPoint holding the
 // doubles (x, y, z, 0), two texels.

@@ -98,6 +98,40 @@ uint compact_even_bits(uint bits) {
 #ifdef VKRAY_RAY_QUERY
 #include "ray_query_walk.glsl"
 #endif
+#include "point_walk.glsl"
+// Points instead of rays: each invocation one point (see VKRAY_RAY_INPUT_POINTS).
+const bool POINT_QUERY = RAY_INPUT_KIND == VKRAY_RAY_INPUT_POINTS;
+
+// A point query's invocation: its point from the points' texels (rows of `width`), its answer into the
+// outputs at the same place; a point past the loop budget listed for the host.
+void answer_point() {
+  uint width = params.image.x;
+  uint local = gl_LocalInvocationIndex;
+  uvec2 place = gl_WorkGroupID.xy * gl_WorkGroupSize.xy + uvec2(local % gl_WorkGroupSize.x, local / gl_WorkGroupSize.x);
+  uint index = (params.image.z + place.y) * width + place.x;
+  if (place.x >= width || place.y >= params.image.w || index >= params.image.y) return;
+  Point point = fetch_point(rays_in, int(index));  // a GpuPoint a query point
+#ifdef VKRAY_FLOAT64
+  Origin query = Origin(point.value.xyz);
+  real max_distance = point.value.w;
+#else
+  Origin query = Origin(point.hi.xyz, point.lo.xyz);
+  real max_distance = point.hi.w;
+#endif
+  uint out_index = place.y * width + place.x;
+  uint plane_size = params.image.x * params.image.w;
+  if (WINDING) {
+    depth_out[out_index] = winding_number(query);
+  } else {
+    Nearest best = nearest_point(query, max_distance);
+    bool found = best.id != VKRAY_HIT_NONE;
+    depth_out[out_index] = found ? best.distance : uintBitsToFloat(0x7f800000u);
+    for (uint c = 0; c < 3; ++c) normal_out[c * plane_size + out_index] = found ? best.offset[c] : 0.0;
+    hit_out[out_index] = best.id;
+    if (WRITE_INSTANCE_HITS) instance_hit_out[out_index] = best.instance;
+  }
+  if (point_unfinished) overflow_pixels[atomicAdd(overflow_count, 1u)] = out_index;
+}
 #if defined(VKRAY_DOUBLE_EDGES)
 #define CALLER_RAY_TEXEL(index) FETCH(caller_rays, index)
 #include "caller_rays.glsl"
@@ -162,6 +196,10 @@ const uint RAYS = PACKET_WALK ? VKRAY_PACKET_ROWS : 1u;
 
 void main() {
   if (MASKS) ray_mask = params.counts.w >> VKRAY_RAY_MASK_SHIFT;
+  if (POINT_QUERY) {
+    answer_point();
+    return;
+  }
   uint width = params.image.x;
   uint height = params.image.y;
   // Where this invocation's first ray goes, relative to the tile, and the step to its next one.

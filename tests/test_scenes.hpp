@@ -14,6 +14,7 @@
 #include <cmath>
 #include <filesystem>
 #include <limits>
+#include <random>
 #include <vector>
 
 namespace vkray::test {
@@ -39,8 +40,10 @@ inline Scene translated(Scene scene, const glm::dvec3& offset) {
   for (auto& sphere : scene.spheres) sphere.center += offset;
   for (auto& plane : scene.planes) plane.point += offset;
   for (auto& mesh : scene.meshes) {
+    if (mesh.instanced) continue;  // placed by its instances, moved below
     for (auto& p : mesh.positions) p += offset;
   }
+  for (auto& instance : scene.instances) instance.translation += offset;
   return scene;
 }
 
@@ -162,5 +165,41 @@ inline Scene cube_scene() {
                                   "f 1 4 3 2\nf 5 6 7 8\nf 1 2 6 5\nf 4 8 7 3\nf 1 5 8 4\nf 2 3 7 6\n",
                                   "cube.obj"));
 }
+
+// `count` points uniform in `box` grown by `margin` on every side.
+inline std::vector<glm::dvec3> points_in(const Box& box, double margin, int count, uint32_t seed) {
+  std::mt19937_64 random(seed);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  std::vector<glm::dvec3> points;
+  for (int k = 0; k < count; ++k) {
+    const glm::dvec3 t(unit(random), unit(random), unit(random));
+    points.push_back(box.lower - margin + t * (box.upper - box.lower + 2.0 * margin));
+  }
+  return points;
+}
+
+// An ordinary closed mesh, an open grid, a sphere, a plane and the closed mesh placed four ways:
+// turned, sheared and unevenly scaled, mirrored, and at a thousandth of its size.
+inline Scene placed_shapes_scene() {
+  Scene scene;
+  scene.meshes.push_back(make_sphere_mesh(300, glm::dvec3(-2.5, 0.5, 0.0), 0.7));
+  Mesh placed = make_sphere_mesh(500);
+  placed.instanced = true;
+  scene.meshes.push_back(placed);
+  scene.meshes.push_back(quad_grid({-3, -1, -3}, {6, 0, 0}, {0, 0.3, 6}, 6));
+  scene.spheres.push_back({glm::dvec3(2.5, 0.4, -1.0), 0.6});
+  scene.planes.push_back({glm::dvec3(0.0, -1.5, 0.0), glm::dvec3(0.0, 1.0, 0.0)});
+  const double c = std::cos(0.7), s = std::sin(0.7);
+  const glm::dmat3 turned(glm::dvec3(c, 0.0, -s), glm::dvec3(0.0, 1.0, 0.0), glm::dvec3(s, 0.0, c));
+  const glm::dmat3 sheared(glm::dvec3(0.5, 0.0, 0.0), glm::dvec3(0.4 * 1.3, 1.3, 0.0), glm::dvec3(0.0, 0.0, 0.8));
+  const glm::dmat3 mirrored(glm::dvec3(-0.6, 0.0, 0.0), glm::dvec3(0.0, 0.6, 0.0), glm::dvec3(0.0, 0.0, 0.6));
+  scene.instances = {Instance{1, turned, {0.0, 0.0, 0.0}}, Instance{1, sheared, {0.3, 1.4, 1.5}},
+                     Instance{1, mirrored, {1.0, -0.6, 2.2}}, Instance{1, glm::dmat3(1e-3), {1.0, 1.0, -2.0}}};
+  check_scene(scene);
+  return scene;
+}
+
+// Its box, the plane aside.
+inline Box placed_shapes_box() { return {glm::dvec3(-3.5, -1.6, -3.5), glm::dvec3(3.5, 2.5, 3.5)}; }
 
 }  // namespace vkray::test

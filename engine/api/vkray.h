@@ -1,4 +1,4 @@
-/* vkray's C API, version 4 (VKRAY_API_VERSION): the engine's one outward boundary, libvkray.so. Python's `vkray`
+/* vkray's C API, version 5 (VKRAY_API_VERSION): the engine's one outward boundary, libvkray.so. Python's `vkray`
  * package is written over it (ctypes, any CPython 3.9 or later, any numpy 1.22 to 2.x); C, Rust and
  * Julia callers use it as it is.
  *
@@ -33,7 +33,7 @@
 extern "C" {
 #endif
 
-#define VKRAY_API_VERSION 4  /* 4: instances (vkray_scene_add_instance, vkray_renderer_set_transforms) */
+#define VKRAY_API_VERSION 5  /* 4: instances (vkray_scene_add_instance, vkray_renderer_set_transforms); 5: point queries */
 #define VKRAY_API __attribute__((visibility("default")))
 
 /* mesh_id and primitive_id of a ray that hit nothing. */
@@ -180,6 +180,32 @@ VKRAY_API vkray_status vkray_occluded(vkray_renderer* renderer, const double* ra
 VKRAY_API vkray_status vkray_count_intersections(vkray_renderer* renderer, const double* rays, uint64_t count,
                                                  const double* t_min, const double* t_max, uint32_t flags, uint32_t mask,
                                                  uint32_t* crossings);
+
+/* --- Point queries (version 5) --- */
+
+/* The outputs of point queries, index 0 up (0 past the last): name, description, components and
+ * whether uint32 (channels: none). */
+VKRAY_API int vkray_point_output(uint32_t index, vkray_output_info* info);
+/* For each of `count` points (count x 3 doubles, world coordinates), what the scene's surfaces that
+ * rays of `mask` can meet (as vkray_render's) say there: outputs[k] into results[k], count x
+ * components, each named as vkray_point_output() lists them:
+ * - "distance": to the nearest point of the scene, within max_distance (NULL: no bound; else count
+ *   values >= 0, +inf for none; a point at exactly its bound is found); +inf where nothing lies
+ *   within it. float32, or float64 where vkray_renderer_doubles.
+ * - "winding-number": the generalized winding number (Jacobson et al. 2013): 1 inside a closed mesh
+ *   and 0 outside (a mirrored instance's too), between for an open one; 1 inside a sphere and behind
+ *   a plane (the side its normal leaves). "signed-distance": the distance, negative where the winding
+ *   number is 1/2 or more; "occupancy" (uint32): 1 there, else 0.
+ * - "position" (3): the nearest point (NaN where none); "normal" (3): the outward unit normal there (a
+ *   triangle's by its winding, (b - a) x (c - a); an instance's through its inverse transpose, turned
+ *   where it mirrors; a sphere's away from its centre; a plane's own); "barycentric" (2): the
+ *   triangle's weights of its second and third vertices there.
+ * - "mesh-id", "primitive-id", "instance-id" (uint32, VKRAY_NO_HIT where none): what it lies on.
+ * A point with a coordinate not finite or beyond 1e15, or a bad max_distance: VKRAY_INPUT_ERROR naming
+ * it. Renderers of traversal "ray-query" walk no tree of vkray's: VKRAY_INPUT_ERROR. The error bound of
+ * each output in float32 is docs/points.md's. */
+VKRAY_API vkray_status vkray_query_points(vkray_renderer* renderer, const double* points, uint64_t count, const double* max_distance,
+                                          uint32_t mask, uint32_t output_count, const char* const* outputs, void* const* results);
 
 #ifdef __cplusplus
 }

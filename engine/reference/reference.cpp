@@ -128,6 +128,7 @@ ReferenceScene::Tree ReferenceScene::build_tree(std::vector<TreeEntry> entries, 
 ReferenceScene::ReferenceScene(const Scene& scene, Mask ray_mask)
     : spheres_(scene.spheres), planes_(scene.planes), ray_mask_(ray_mask), mesh_trees_(scene.meshes.size()) {
   uint32_t index = 0;
+  uint32_t vertex_base = 0;  // the world's vertex ids: each mesh's after the meshes before it
   std::vector<TreeEntry> entries;
   std::vector<Box> boxes;
   std::vector<bool> placed_mesh(scene.meshes.size(), false);
@@ -140,6 +141,8 @@ ReferenceScene::ReferenceScene(const Scene& scene, Mask ray_mask)
     // An instanced mesh's triangles in its own coordinates, where some instance the mask lets
     // through places it; the others' in the world's, where the mask lets the mesh through.
     const bool in_world = !mesh.instanced && mask_hits(mesh.mask, ray_mask);
+    const uint32_t base = vertex_base;
+    if (in_world) vertex_base += static_cast<uint32_t>(mesh.positions.size());
     if (!in_world && !placed_mesh[m]) {
       index += static_cast<uint32_t>(mesh.triangles.size());
       continue;
@@ -154,7 +157,8 @@ ReferenceScene::ReferenceScene(const Scene& scene, Mask ray_mask)
       const glm::dvec3 cross = glm::cross(v1 - v0, v2 - v0);
       if (cross != glm::dvec3(0.0)) {
         (in_world ? entries : mesh_entries).push_back({PrimitiveKind::triangle, static_cast<uint32_t>(triangles.size())});
-        triangles.push_back({v0, v1, v2, unit_vector(cross), index});
+        const uint32_t id_base = in_world ? base : 0;  // an instanced mesh's ids are its own
+        triangles.push_back({v0, v1, v2, unit_vector(cross), index, {id_base + corners[0], id_base + corners[1], id_base + corners[2]}});
         (in_world ? boxes : mesh_boxes).push_back(triangle_box(v0, v1, v2));
       }
       ++index;
@@ -165,7 +169,8 @@ ReferenceScene::ReferenceScene(const Scene& scene, Mask ray_mask)
     const Instance& instance = scene.instances[k];
     const glm::dmat3 to_mesh = glm::inverse(instance.linear);
     const double winding = glm::determinant(instance.linear) < 0.0 ? -1.0 : 1.0;
-    instances_.push_back({instance.mesh, to_mesh, instance.translation, winding * glm::transpose(to_mesh)});
+    instances_.push_back({instance.mesh, to_mesh, instance.translation, winding * glm::transpose(to_mesh), instance.linear,
+                          smallest_scale(instance.linear)});
     const Tree& mesh_tree = mesh_trees_[instance.mesh].tree;
     if (!mask_hits(instance.mask, ray_mask) || mesh_tree.empty()) continue;
     entries.push_back({PrimitiveKind::instance, k});

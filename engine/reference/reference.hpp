@@ -7,11 +7,14 @@
 #include "engine/scene/bvh.hpp"
 #include "engine/scene/camera.hpp"
 #include "engine/frame.hpp"
+#include "engine/point_outputs.hpp"
 #include "engine/scene/scene.hpp"
 
 #include <glm/vec3.hpp>
 
 #include <functional>
+#include <memory>
+#include <mutex>
 #include <limits>
 #include <utility>
 #include <vector>
@@ -34,6 +37,20 @@ double intersect_triangle(const glm::dvec3& v0, const glm::dvec3& v1, const glm:
 
 // `instance` marks a tree entry alone: a hit on an instance is a triangle with ReferenceHit::instance.
 enum class PrimitiveKind : uint8_t { none, sphere, plane, triangle, instance };
+
+// What a point query finds: the nearest point of what the scene's rays can meet (its mask's), and
+// the primitive it lies on.
+struct PointHit {
+  double distance = no_hit;  // +inf where nothing lies within the query's distance
+  glm::dvec3 point{0.0};
+  // The primitive's outward normal there: a triangle's by its winding, through its instance's
+  // placement (an instance places its mesh's solid: a mirrored one's normals point out of the
+  // mirrored solid), a sphere's away from its centre, a plane's own; 0 where nothing was found.
+  glm::dvec3 normal{0.0};
+  PrimitiveKind kind = PrimitiveKind::none;
+  uint32_t index = 0;             // as ReferenceHit's
+  uint32_t instance = no_object;  // as ReferenceHit's
+};
 
 struct ReferenceHit {
   double t = no_hit;
@@ -65,11 +82,35 @@ class ReferenceScene {
   std::vector<ReferenceHit> first_hits(const glm::dvec3& origin, const glm::dvec3& dir, double t_max, uint32_t count) const;
   // The hit's object and primitive as the outputs number them (see ObjectPrimitive).
   ObjectPrimitive source(const ReferenceHit& hit) const;
+  ObjectPrimitive source(const PointHit& hit) const;
+
+  // Point queries (reference_points.cpp), exact in double. The nearest point to `point` within
+  // `max_distance`, inclusive (beyond it a miss, its distance +inf): among points at exactly the same distance the lowest
+  // triangle index wins, then the lowest instance, so the tree and brute force agree on the
+  // primitive. An instance's triangles are measured in the world's coordinates, so a placement that
+  // scales unevenly still gives the world's nearest point.
+  PointHit closest_point(const glm::dvec3& point, double max_distance = no_hit) const;
+  // The same with every primitive measured: the check on the tree.
+  PointHit closest_point_brute_force(const glm::dvec3& point, double max_distance = no_hit) const;
+  // The generalized winding number at `point` (Jacobson et al. 2013): each triangle's solid angle over
+  // 4 pi, signed by its winding; an instance's mesh's at the point taken into its coordinates (so a
+  // mirrored placement of a closed mesh is 1 inside, as the mesh is); 1 inside a sphere, 1 behind a
+  // plane (the side its normal leaves). A closed mesh's is 1 inside and 0 outside; an open one's
+  // between. Walked with caps (engine/scene/winding_caps.hpp): exact, not an approximation.
+  double winding_number(const glm::dvec3& point) const;
+  // The same summed over every triangle: the check on the caps.
+  double winding_number_brute_force(const glm::dvec3& point) const;
+  // The caps of its trees' subtrees (reference_points.cpp), made at the first winding number asked.
+  struct Caps;
+  const Caps& caps() const;
 
  private:
   struct Triangle {
     glm::dvec3 v0, v1, v2, normal;
     uint32_t index;
+    // Its vertices' ids, in its winding order (winding_caps.hpp): a world triangle's numbered across
+    // the meshes, an instanced mesh's within it.
+    std::array<uint32_t, 3> corners;
   };
   // What a tree leaf holds: a triangle (into triangles_, or an instanced mesh's), a sphere (into
   // spheres_) or an instance (into instances_).
@@ -98,7 +139,17 @@ class ReferenceScene {
     // The inverse transpose, times the sign of the determinant: a placed triangle's normal by its
     // winding (a mirrored instance turns its winding over with its triangles).
     glm::dmat3 normal_to_world;
+    glm::dmat3 linear;      // Instance::linear: a mesh point's offset into the world's
+    double smallest_scale;  // the least factor it shrinks a length by (smallest_scale)
   };
+  // Point queries' pieces (reference_points.cpp): the nearest so far within a bound, each kind's
+  // nearest point, and an instanced mesh's triangles that may hold a nearer one.
+  class NearestSoFar;
+  PointHit plane_hit(uint32_t index, const glm::dvec3& point) const;
+  PointHit sphere_hit(uint32_t index, const glm::dvec3& point) const;
+  PointHit triangle_hit(const Triangle& triangle, uint32_t instance, const glm::dvec3& point) const;
+  template <typename Visit>
+  void nearest_in_mesh(uint32_t instance, const glm::dvec3& point, const NearestSoFar& nearest, Visit visit) const;
   static Tree build_tree(std::vector<TreeEntry> entries, const std::vector<Box>& boxes);
   void test_sphere(uint32_t index, const glm::dvec3& origin, const glm::dvec3& dir, ReferenceHit& hit) const;
   // `instance`: the instance placing the triangle (the ray already in its mesh's coordinates), or
@@ -129,7 +180,18 @@ class ReferenceScene {
   std::vector<MeshTree> mesh_trees_;    // by mesh: an instanced mesh's, empty for the others
   std::vector<Placement> instances_;    // all of them, those the mask leaves out too
   Tree tree_;  // triangles, spheres and instances in world coordinates
+  mutable std::once_flag caps_made_;
+  mutable std::shared_ptr<const Caps> caps_;
 };
+
+// Point queries answered by the reference on all cores, as the device's Renderer::closest_points
+// (query nearest) and winding_numbers (winding) answer them, in double. The points and largest
+// distances are checked (check_query_points).
+PointHits reference_point_hits(const ReferenceScene& reference, std::span<const glm::dvec3> points, std::span<const double> max_distances,
+                               HitQuery query);
+// One point's answer into hits' entry k (a device's point past its loop budget is answered so).
+void answer_point(const ReferenceScene& reference, const glm::dvec3& point, double max_distance, HitQuery query, PointHits& hits,
+                  size_t k);
 
 // Every pixel's hit for the scene's camera at width x height, on all cores. `progress`, when set,
 // receives the fraction of rows done from time to time, from a worker thread.

@@ -172,7 +172,7 @@ GpuScene make_gpu_scene(const Scene& scene, const GpuSceneOptions& options, cons
       }
       std::array<uint32_t, 3> index;
       for (size_t c = 0; c < 3; ++c) stored[triangle.vertex[c]] = index[c] = vertex_table.index(triangle.v[c]);
-      const gpu::GpuPrimitive record{glm::uvec4(index[0], index[1], index[2], primitive_word(VKRAY_PRIMITIVE_TRIANGLE, mesh.mask))};
+      const gpu::GpuPrimitive record{glm::uvec4(index[0], index[1], index[2], triangle.word(mesh.mask))};
       triangles.push_back({record, triangle.normal, triangle.box(), {mesh_index, triangle_index}});
     }
   }

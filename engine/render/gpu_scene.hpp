@@ -12,6 +12,7 @@
 #include <cstdint>
 #include <memory>
 #include <optional>
+#include <span>
 #include <string_view>
 #include <vector>
 
@@ -211,6 +212,10 @@ bool refit_in_place(GpuScene& gpu, const Scene& scene, const ShaderVariant& shad
 // they are: the top level alone is rebuilt, as Vulkan's and Embree's instances are. For ray queries
 // the texels alone: the device's top-level structure is the renderer's to build.
 void place_instances(GpuScene& gpu, const Scene& scene);
+
+// By mesh, the root node of an instanced mesh's tree (empty without instances): where the point
+// queries' winding caps of each mesh start.
+std::span<const uint32_t> instanced_mesh_roots(const GpuScene& gpu);
 
 // Texels a slot's normal takes in GpuScene::normal_texels (VKRAY_TEXELS_PER_NORMAL_*).
 size_t texels_per_normal(Precision precision);

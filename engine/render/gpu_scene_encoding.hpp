@@ -77,6 +77,11 @@ struct CanonicalTriangle {
   std::array<glm::dvec3, 3> v;   // the corners relative to the anchor, in canonical order
   std::array<uint32_t, 3> vertex;  // each one's index as given (in the mesh, or in the vertex buffer)
   glm::dvec3 normal{0.0};          // the unit normal; 0 for a triangle of zero area (left out)
+  bool flipped = false;            // the canonical order runs against the winding (VKRAY_PRIMITIVE_FLIPPED)
+  // Its record's w: a triangle with `mask`, flipped where it is.
+  uint32_t word(Mask mask) const {
+    return primitive_word(VKRAY_PRIMITIVE_TRIANGLE, mask) | (flipped ? VKRAY_PRIMITIVE_FLIPPED : 0u);
+  }
   FloatBox box() const { return outward(glm::min(v[0], glm::min(v[1], v[2])), glm::max(v[0], glm::max(v[1], v[2]))); }
 };
 
@@ -91,6 +96,7 @@ inline CanonicalTriangle canonical_triangle(const std::array<uint32_t, 3>& verte
     if (std::tie(result.v[b].x, result.v[b].y, result.v[b].z) < std::tie(result.v[a].x, result.v[a].y, result.v[a].z)) {
       std::swap(result.v[a], result.v[b]);
       std::swap(result.vertex[a], result.vertex[b]);
+      result.flipped = !result.flipped;  // each swap turns the order's winding over
     }
   };
   order(0, 1), order(1, 2), order(0, 1);

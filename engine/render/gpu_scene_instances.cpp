@@ -36,7 +36,7 @@ std::vector<EncodedPrimitive> encode_instanced_mesh(GpuScene& gpu, const Scene& 
     }
     std::array<uint32_t, 3> index;
     for (size_t c = 0; c < 3; ++c) index[c] = vertex_table.index(triangle.v[c]);
-    const gpu::GpuPrimitive record{glm::uvec4(index[0], index[1], index[2], primitive_word(VKRAY_PRIMITIVE_TRIANGLE, every_mask_bit))};
+    const gpu::GpuPrimitive record{glm::uvec4(index[0], index[1], index[2], triangle.word(every_mask_bit))};
     triangles.push_back({record, triangle.normal, triangle.box(), {mesh_index, triangle_index}});
   }
   return triangles;
@@ -171,6 +171,11 @@ void write_instance_texels(GpuScene& gpu, const Scene& scene) {
 }
 
 }  // namespace
+
+std::span<const uint32_t> instanced_mesh_roots(const GpuScene& gpu) {
+  if (!gpu.instance_level) return {};
+  return gpu.instance_level->root;
+}
 
 void place_instances(GpuScene& gpu, const Scene& scene) {
   const InstanceLevel& level = *gpu.instance_level;

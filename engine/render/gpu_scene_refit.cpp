@@ -127,7 +127,8 @@ bool refit_in_place(GpuScene& gpu, const Scene& scene, const ShaderVariant& shad
         fits = false;
         break;
       }
-      record.indices = glm::uvec4(triangle.vertex[0], triangle.vertex[1], triangle.vertex[2], record.indices.w);
+      record.indices = glm::uvec4(triangle.vertex[0], triangle.vertex[1], triangle.vertex[2],
+                                  triangle.word(static_cast<Mask>(record.indices.w >> VKRAY_PRIMITIVE_MASK_SHIFT)));
       write_normal(gpu.normal_texels.data() + slot * texels, triangle.normal, gpu.precision);
       state.slot_box[slot] = triangle.box();
     }

@@ -28,7 +28,7 @@ TexelBuffer texel_views_of(VulkanContext& context, GpuBuffer buffer) {
 }
 
 vk::Extent2D Renderer::Impl::workgroup_footprint(RaycastMode mode) const {
-  if (stats.search == PrimitiveSearch::bvh_packet && mode != RaycastMode::given_rays) {
+  if (stats.search == PrimitiveSearch::bvh_packet && mode != RaycastMode::given_rays && mode != RaycastMode::points) {
     return {VKRAY_PACKET_GROUP_WIDTH, VKRAY_PACKET_GROUP_HEIGHT};
   }
   return {options.shader.workgroup_width, options.shader.workgroup_height};
@@ -112,6 +112,9 @@ void Renderer::Impl::prepare_tile(uint32_t width, uint32_t rows, AovSet aovs, co
   resources.texel_views[VKRAY_BINDING_APART_MASKS] = uints(apart_masks);
   resources.texel_views[VKRAY_BINDING_INSTANCES] = geometry(instances);
   resources.buffers[VKRAY_BINDING_INSTANCE_HITS] = output(tile.instance_hits);
+  resources.texel_views[VKRAY_BINDING_PLACEMENTS] = geometry(placements);
+  resources.texel_views[VKRAY_BINDING_WINDING_CAPS] = uints(winding_caps);
+  resources.texel_views[VKRAY_BINDING_CAP_EDGES] = uints(cap_edges);
   // The same buffers whole, for the storage-geometry variant (pipeline->binding_type picks which
   // one a binding takes).
   auto whole = [&](const std::optional<TexelBuffer>& texels) {
@@ -121,7 +124,9 @@ void Renderer::Impl::prepare_tile(uint32_t width, uint32_t rows, AovSet aovs, co
                                         {VKRAY_BINDING_PRIMITIVES, &primitives}, {VKRAY_BINDING_VERTICES, &vertices},
                                         {VKRAY_BINDING_NORMALS, &normals}, {VKRAY_BINDING_BVH_BOUNDS, &bvh_nodes},
                                         {VKRAY_BINDING_BVH_LINKS, &bvh_nodes}, {VKRAY_BINDING_RAYS, &tile.rays},
-                                        {VKRAY_BINDING_APART_MASKS, &apart_masks}, {VKRAY_BINDING_INSTANCES, &instances}}) {
+                                        {VKRAY_BINDING_APART_MASKS, &apart_masks}, {VKRAY_BINDING_INSTANCES, &instances},
+                                        {VKRAY_BINDING_PLACEMENTS, &placements}, {VKRAY_BINDING_WINDING_CAPS, &winding_caps},
+                                        {VKRAY_BINDING_CAP_EDGES, &cap_edges}}) {
     resources.buffers[binding] = whole(*texels);
   }
   resources.buffers[VKRAY_BINDING_DEPTH] = output(tile.depth);

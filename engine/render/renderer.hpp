@@ -3,6 +3,8 @@
 #pragma once
 
 #include "engine/frame.hpp"
+#include "engine/host_memory.hpp"
+#include "engine/point_outputs.hpp"
 #include "engine/device/gpu_device.hpp"
 #include "engine/render/gpu_scene.hpp"
 #include "engine/vulkan/image_target.hpp"
@@ -72,22 +74,6 @@ struct SceneStats {
   PrimitiveSearch search = PrimitiveSearch::brute_force;
   uint32_t loop_budget = 0;        // iterations a tree walk may take on this device; 0: no limit
 };
-
-// An allocator whose vectors leave numbers uninitialized when they grow: cast_rays writes every
-// ray's entries once, where filling them first cost a million rays 2-3 ms of 40.
-template <typename T>
-struct UninitializedAllocator : std::allocator<T> {
-  template <typename U>
-  struct rebind {
-    using other = UninitializedAllocator<U>;
-  };
-  template <typename U>
-  void construct(U* place) noexcept {
-    ::new (static_cast<void*>(place)) U;
-  }
-};
-template <typename T>
-using UninitializedVector = std::vector<T, UninitializedAllocator<T>>;
 
 // What each of a batch of given rays hit, in the rays' order.
 // With first hits (Renderer::cast_rays' `hits` above 1), entry ray * hits_per_ray + k holds ray's
@@ -205,6 +191,19 @@ class Renderer {
   // walk runs one by one to the end of each range. The same rays, ranges and mask as cast_rays; the
   // first call makes its pipeline.
   std::vector<uint32_t> count_intersections(std::span<const GivenRay> rays, const RayRanges& ranges = {});
+
+  // Point queries, each point's position in world coordinates (checked: finite and within
+  // max_coordinate), with the precision contract of rays: positions relative to the point from their
+  // hi and lo parts. The nearest point of what rays of the ray mask can meet, within
+  // `max_distances` (none: no bound; one value for every point, or one a point; +inf: none), as
+  // PointHits: its distance, its offset from the point and what it lies on (an instance's
+  // triangles measured in the world's coordinates: an unevenly scaled placement's nearest point is
+  // the world's). Walks the tree nearest box first (or every primitive, with brute force); a
+  // renderer of ray queries has no tree of its own and refuses (InputError).
+  PointHits closest_points(std::span<const glm::dvec3> points, std::span<const double> max_distances = {});
+  // The generalized winding number at each point (see ReferenceScene::winding_number), in
+  // PointHits::distance: the tree's caps (made at the first call) answer exactly.
+  PointHits winding_numbers(std::span<const glm::dvec3> points);
 
   // Makes, side by side, every pipeline that render of `camera` at width x height with depth and
   // normal, cast_rays and occluded can take (one by one and, where the packet walk runs, in packets

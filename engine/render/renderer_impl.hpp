@@ -35,8 +35,10 @@ constexpr vk::BufferUsageFlags geometry_usage = vk::BufferUsageFlagBits::eUnifor
 // `buffer` with its float and uint views.
 TexelBuffer texel_views_of(VulkanContext& context, GpuBuffer buffer);
 
-// What the shader reads of a given ray: a GpuRay, or a direction from the shared origin (a texel).
+// What the shader reads of a given ray: a GpuRay, or a direction from the shared origin (a texel);
+// of a point, a GpuPoint.
 inline vk::DeviceSize given_ray_bytes(RaycastMode mode) {
+  if (mode == RaycastMode::points) return sizeof(gpu::GpuPoint);
   return mode == RaycastMode::given_directions ? texel_bytes : sizeof(gpu::GpuRay);
 }
 
@@ -123,6 +125,16 @@ struct Renderer::Impl {
   GpuBuffer placeholder;
   TexelBuffer placeholder_texels;
   std::optional<TexelBuffer> spheres, planes, primitives, vertices, normals, bvh_nodes, apart_masks, instances;
+  // What point queries read besides (point_queries.cpp): the slots' records and the nodes' children
+  // as uploaded (upload_scene and write_refitted keep them), each instanced mesh's root node, and
+  // what the first point query after a change makes of them: each instance's linear map and its
+  // mesh's closedness (VKRAY_BINDING_PLACEMENTS), the winding number's caps (made at the first
+  // winding number).
+  std::vector<glm::uvec4> point_records;
+  std::vector<std::array<uint32_t, 2>> point_links;
+  std::vector<uint32_t> mesh_roots;
+  std::optional<TexelBuffer> placements, winding_caps, cap_edges;
+  bool point_data_stale = true;
   std::optional<AccelerationStructures> structures;  // the ray-query traversal's
   HitSources hit_sources;
   // hit_sources.slots as the shader reads them (VKRAY_BINDING_HIT_SOURCES), made by the first
@@ -260,6 +272,14 @@ struct Renderer::Impl {
   // The depth, normal and ids of a camera whose rays do not leave one point through an image
   // plane's pixels, into `frame`: its pixels' rays cast as given rays.
   void render_by_given_rays(const Camera& camera, Frame& frame);
+
+  // point_queries.cpp: `points`' nearest points within `max_distances` (one a point, one for all, or
+  // none: no bound), or winding numbers (`query`).
+  PointHits query_points(std::span<const glm::dvec3> points, std::span<const double> max_distances, HitQuery query);
+  // The point queries' buffers for the scene as it now is (the caps where `winding`).
+  void make_point_data(bool winding);
+  // The point queries' source from `gpu_scene`: all of it, or what its refit rewrote.
+  void keep_point_source(const GpuScene& gpu_scene, bool rewritten_alone);
 
   // unfinished_rays.cpp
   // Rays listed in the overflow buffer ran out of the loop budget with part of the tree not yet

@@ -110,6 +110,7 @@ void Renderer::Impl::upload_scene(const GpuScene& gpu_scene, const Scene& scene)
   checked_count(gpu_scene.planes.size(), "planes");
   timings.bvh_build_ms = gpu_scene.bvh_build_ms;
   tree = gpu_scene.tree;
+  keep_point_source(gpu_scene, false);
   // The tiles' bindings name the buffers replaced above: the next call binds anew.
   tile = TileOutputs{};
   parked_tile = TileOutputs{};
@@ -139,6 +140,7 @@ void Renderer::Impl::write_refitted(const GpuScene& gpu_scene) {
   }
   anchor = gpu_scene.anchor;
   scene_radius = gpu_scene.radius;
+  keep_point_source(gpu_scene, true);
 }
 
 void Renderer::Impl::make_placeholders() {

@@ -14,6 +14,7 @@
 #include <cmath>
 #include <cstdio>
 #include <mutex>
+#include <numbers>
 #include <string>
 
 namespace vkray {
@@ -166,6 +167,28 @@ void check_scene(Scene& scene) {
   }
 }
 
+double smallest_scale(const glm::dmat3& linear) {
+  // One over the inverse's largest singular value: the square root of the largest eigenvalue of the
+  // symmetric m = A^T A, A the inverse, in closed form (Smith, "Eigenvalues of a symmetric 3x3
+  // matrix", CACM 4(4), 1961: the roots of its characteristic polynomial as q + 2 p cos(angle + 2 pi k
+  // / 3), the largest at k = 0). The largest eigenvalue comes to a few ulps of itself however
+  // ill-conditioned the placement (the least would not: their ratio reaches 2^64).
+  const glm::dmat3 inverse = glm::inverse(linear);
+  const glm::dmat3 m = glm::transpose(inverse) * inverse;
+  const double q = (m[0][0] + m[1][1] + m[2][2]) / 3.0;
+  const double off = m[0][1] * m[0][1] + m[0][2] * m[0][2] + m[1][2] * m[1][2];
+  const double p2 = (m[0][0] - q) * (m[0][0] - q) + (m[1][1] - q) * (m[1][1] - q) + (m[2][2] - q) * (m[2][2] - q) + 2.0 * off;
+  double largest = q;
+  if (p2 > 0.0) {
+    const double p = std::sqrt(p2 / 6.0);
+    const glm::dmat3 b = (m - q * glm::dmat3(1.0)) / p;
+    const double r = std::clamp(glm::determinant(b) / 2.0, -1.0, 1.0);
+    largest = q + 2.0 * p * std::cos(std::acos(r) / 3.0);
+  }
+  // A relative 1e-12 below, for that rounding: never above the true factor.
+  return (1.0 - 1e-12) / std::sqrt(largest);
+}
+
 std::string float32_placement_fault(const glm::dmat3& linear) {
   const glm::dmat3 to_mesh = glm::inverse(linear);
   double spread = 0.0, linear_norm = 0.0, to_mesh_norm = 0.0;
@@ -276,7 +299,7 @@ namespace {
 // found: the caller's rays may change meanwhile (another thread of theirs), and a second look could
 // find another fault or none. On every core (a million rays took 4 ms on one, a tenth of their casting).
 template <typename Fault>
-void check_each_ray(size_t count, Fault&& fault) {
+void check_each_ray(size_t count, Fault&& fault, const char* item = "ray") {
   std::mutex first_lock;
   size_t first_fault = count;
   const char* first_message = nullptr;
@@ -289,7 +312,7 @@ void check_each_ray(size_t count, Fault&& fault) {
       }
     }
   });
-  if (first_message) throw InputError("ray " + std::to_string(first_fault) + ": " + first_message);
+  if (first_message) throw InputError(std::string(item) + " " + std::to_string(first_fault) + ": " + first_message);
 }
 
 }  // namespace
@@ -335,6 +358,18 @@ void check_ray_ranges(std::span<const GivenRay> rays, const RayRanges& ranges) {
   check_range_sizes(rays, ranges);
   if (ranges.t_min.empty() && ranges.t_max.empty()) return;
   check_each_ray(rays.size(), [&](size_t k) { return ray_range_fault(rays, ranges, k); });
+}
+
+void check_query_points(std::span<const glm::dvec3> points, std::span<const double> max_distances) {
+  check_each_ray(points.size(), [&](size_t k) {
+    return within_coordinate_bound(points[k]) ? nullptr : "a coordinate is not finite or is farther than 1e15 from the world origin";
+  }, "point");
+  if (!max_distances.empty() && max_distances.size() != 1 && max_distances.size() != points.size()) {
+    throw InputError("max_distance: " + std::to_string(max_distances.size()) + " values for " + std::to_string(points.size()) +
+                     " points (one for all, one a point, or none)");
+  }
+  check_each_ray(max_distances.size(), [&](size_t k) { return max_distances[k] >= 0.0 ? nullptr : "is negative or NaN (+inf for none)"; },
+                 "max_distance");
 }
 
 std::vector<uint8_t> refused_rays(std::span<const GivenRay> rays, const RayRanges& ranges) {

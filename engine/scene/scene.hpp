@@ -88,6 +88,11 @@ struct Instance {
   Mask mask = every_mask_bit;
 };
 
+// The least factor by which `linear` shrinks a length: its smallest singular value (the square root
+// of the least eigenvalue of linear^T linear), a little below it. A distance in a mesh's coordinates
+// times this bounds the placed distance from below: what prunes an instance's boxes in a point query.
+double smallest_scale(const glm::dmat3& linear);
+
 // The affine 4x4 of a placement (columns; the last row 0 0 0 1), and the placement a 4x4's upper
 // three rows give: the form set_transforms, views files and the manifest hold transforms in.
 inline glm::dmat4 affine_matrix(const glm::dmat3& linear, const glm::dvec3& translation) {
@@ -335,8 +340,14 @@ struct RayRanges {
 };
 
 // What a given ray looks for: its nearest hit, any hit at all (an occlusion query), or how many
-// times it crosses a surface (VKRAY_SPEC_HIT_QUERY).
-enum class HitQuery : uint32_t { nearest = VKRAY_HIT_QUERY_NEAREST, any = VKRAY_HIT_QUERY_ANY, count = VKRAY_HIT_QUERY_COUNT };
+// times it crosses a surface (VKRAY_SPEC_HIT_QUERY); what a point looks for: its nearest point
+// (nearest), or the winding number there.
+enum class HitQuery : uint32_t {
+  nearest = VKRAY_HIT_QUERY_NEAREST,
+  any = VKRAY_HIT_QUERY_ANY,
+  count = VKRAY_HIT_QUERY_COUNT,
+  winding = VKRAY_HIT_QUERY_WINDING
+};
 
 // The ray traced for `ray`'s range from `t_min` on: its origin moved to the range's start, its
 // direction unit length.
@@ -346,6 +357,15 @@ GivenRay range_start_ray(const GivenRay& ray, double t_min);
 // t_max is NaN or below its t_min, or whose range starts beyond max_coordinate; or naming the span
 // whose length is not `rays`'.
 void check_ray_ranges(std::span<const GivenRay> rays, const RayRanges& ranges);
+
+// Throws InputError naming the first query point (by its index) with a coordinate that is not finite
+// or beyond max_coordinate, the first largest distance that is negative or NaN, or a count of
+// largest distances that is neither none, one for all nor one a point.
+void check_query_points(std::span<const glm::dvec3> points, std::span<const double> max_distances);
+// Point k's largest distance among those check_query_points takes: +inf where none is given.
+inline double max_distance_of(std::span<const double> max_distances, size_t k) {
+  return max_distances.empty() ? std::numeric_limits<double>::infinity() : max_distances[max_distances.size() == 1 ? 0 : k];
+}
 
 // Which of `rays` check_given_rays or check_ray_ranges would refuse (1), in one pass: the rays a
 // caller that takes bad rays as misses leaves out (the C API's default). Throws InputError where a

@@ -88,6 +88,7 @@ const vk::raii::Pipeline& RaycastPipeline::pipeline(AovSet aovs, bool lo_parts, 
   values[VKRAY_SPEC_RAY_INPUT] = mode == RaycastMode::given_rays         ? VKRAY_RAY_INPUT_RAYS
                                 : mode == RaycastMode::given_directions ? VKRAY_RAY_INPUT_DIRECTIONS
                                 : mode == RaycastMode::caller_arrays    ? VKRAY_RAY_INPUT_CALLER_DIRECTIONS
+                                : mode == RaycastMode::points           ? VKRAY_RAY_INPUT_POINTS
                                                                         : VKRAY_RAY_INPUT_NONE;
   values[VKRAY_SPEC_STACK_REGISTERS] = specialization_.stack_registers;
   values[VKRAY_SPEC_SUBGROUP_SIZE] = context_.info.subgroup_size == 8 ? 8u : 0u;

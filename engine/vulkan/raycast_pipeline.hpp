@@ -39,10 +39,13 @@ enum class RaycastMode : uint32_t {
   given_rays,     // the caller's rays (VKRAY_RAY_INPUT_RAYS) into output buffers
   given_directions,  // the caller's rays from one origin (VKRAY_RAY_INPUT_DIRECTIONS) into output buffers
   caller_arrays,     // the caller's rays from one origin read, and hits written, in its own memory
+  points,            // the caller's points (VKRAY_RAY_INPUT_POINTS): their nearest points or winding numbers
 };
 
+// Whether the caller gives what is traced (rays or points), laid out as rows of `width` entries.
 inline bool is_given(RaycastMode mode) {
-  return mode == RaycastMode::given_rays || mode == RaycastMode::given_directions || mode == RaycastMode::caller_arrays;
+  return mode == RaycastMode::given_rays || mode == RaycastMode::given_directions || mode == RaycastMode::caller_arrays ||
+         mode == RaycastMode::points;
 }
 
 // How float32 shaders on `device` take the triangle edge functions for `requested` (see

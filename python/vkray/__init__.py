@@ -21,7 +21,7 @@ import numpy as np
 
 from . import _native
 
-__all__ = ["Error", "NO_HIT", "HITS_MAX", "outputs", "traversals", "Scene", "load", "Renderer", "Reference", "__version__"]
+__all__ = ["Error", "NO_HIT", "HITS_MAX", "outputs", "point_outputs", "traversals", "Scene", "load", "Renderer", "Reference", "__version__"]
 
 __version__: str = _native.lib.vkray_version().decode()
 
@@ -366,7 +366,10 @@ def _render_help() -> str:
 RAY_OUTPUTS = ("t", "normal", "primitive_id", "mesh_id", "instance_id", "position", "barycentric", "front_facing", "shading_normal", "texcoord")
 
 
-class _Caster:
+from ._points import CLOSEST_POINT_OUTPUTS, PointQueries as _PointQueries, point_outputs  # noqa: E402 (it uses the helpers above)
+
+
+class _Caster(_PointQueries):
     """What Renderer and Reference share: calls into a vkray_renderer of the C API."""
 
     _handle: Optional[ctypes.c_void_p] = None

@@ -6,7 +6,7 @@ the relocatable bundle's lib/ two folders up. ctypes releases the GIL for every 
 import ctypes
 import pathlib
 
-API_VERSION = 4  # VKRAY_API_VERSION of the header this file declares
+API_VERSION = 5  # VKRAY_API_VERSION of the header this file declares
 
 
 def _find_library():
@@ -71,6 +71,9 @@ _signatures = {
                                 ctypes.POINTER(ctypes.c_uint8)]),
     "vkray_count_intersections": (Status, [_renderer, _doubles, ctypes.c_uint64, _doubles, _doubles, ctypes.c_uint32,
                                            ctypes.c_uint32, ctypes.POINTER(ctypes.c_uint32)]),
+    "vkray_point_output": (ctypes.c_int, [ctypes.c_uint32, ctypes.POINTER(OutputInfo)]),
+    "vkray_query_points": (Status, [_renderer, _doubles, ctypes.c_uint64, _doubles, ctypes.c_uint32, ctypes.c_uint32, _names,
+                                    _pointers]),
 }
 for _name, (_result, _arguments) in _signatures.items():
     _function = getattr(lib, _name)
