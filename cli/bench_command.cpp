@@ -95,8 +95,11 @@ Action add_bench_command(CLI::App& app) {
                                               variant_names));
   measuring.push_back(add_device_options(command, options->device_options));
   measuring.push_back(
-      command->add_option("--models", options->models, "Folder of .obj files for --suite models and rays")->capture_default_str());
+      command->add_option("--models", options->models, "Folder of .obj files for --suite models, rays and points")->capture_default_str());
   measuring.push_back(command->add_option("--rays", options->rays, "Rays of each kind in --suite rays")
+                          ->capture_default_str()
+                          ->check(CLI::Range(size_t{1}, size_t{1} << 26)));
+  measuring.push_back(command->add_option("--points", options->points, "Points of each set in --suite points")
                           ->capture_default_str()
                           ->check(CLI::Range(size_t{1}, size_t{1} << 26)));
   measuring.push_back(command->add_option("--instances", options->instances, "Instances in --suite instances")

@@ -25,6 +25,8 @@ const BenchSuiteRow suite_table[] = {
     {"moving", "a deforming mesh: refit against rebuild, and the renders after", 0, moving_scenes, run_moving},
     {"instances", "models placed --instances times against the scene flattened, then every instance moved", takes_instances,
      instances_scenes, run_instances},
+    {"points", "--points points uniform in the box and near the surface: distance and signed distance against Embree's "
+               "rtcPointQuery", 0, points_scenes, run_points},
 };
 
 }  // namespace

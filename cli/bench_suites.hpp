@@ -27,6 +27,7 @@ struct BenchOptions {
   std::vector<std::string> compare;
   size_t rays = 1 << 20;  // a kind's rays in --suite rays
   uint32_t instances = 1000;  // --suite instances
+  size_t points = 1 << 20;    // each set's points in --suite points
 };
 
 // The options beyond the scenes, --size, --frames, --models and the device's that a suite's rows
@@ -65,6 +66,7 @@ int run_variants(const BenchOptions& options, const std::vector<BenchScene>& sce
 int run_given_rays(const BenchOptions& options, const std::vector<BenchScene>& scenes);
 int run_moving(const BenchOptions& options, const std::vector<BenchScene>& scenes);
 int run_instances(const BenchOptions& options, const std::vector<BenchScene>& scenes);
+int run_points(const BenchOptions& options, const std::vector<BenchScene>& scenes);
 int run_host_stages(const BenchOptions& options, const std::vector<BenchScene>& scenes);
 
 }  // namespace vkray::cli

@@ -17,5 +17,6 @@ Action add_bench_command(CLI::App& app);
 Action add_view_command(CLI::App& app);
 Action add_manifest_command(CLI::App& app);
 Action add_report_command(CLI::App& app);
+Action add_points_command(CLI::App& app);
 
 }  // namespace vkray::cli

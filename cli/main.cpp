@@ -50,6 +50,7 @@ int main(int argc, char** argv) {
   const vkray::cli::Action view = vkray::cli::add_view_command(app);
   const vkray::cli::Action manifest = vkray::cli::add_manifest_command(app);
   const vkray::cli::Action report = vkray::cli::add_report_command(app);
+  const vkray::cli::Action points = vkray::cli::add_points_command(app);
 
   // A mistyped command would otherwise read as a stray argument ("A subcommand is required").
   if (argc > 1 && argv[1][0] != '-') {
@@ -81,6 +82,7 @@ int main(int argc, char** argv) {
     if (app.got_subcommand("view")) return view();
     if (app.got_subcommand("manifest")) return manifest();
     if (app.got_subcommand("report")) return report();
+    if (app.got_subcommand("points")) return points();
     return info();
   } catch (const vkray::InputError& error) {
     std::cerr << "vkray: " << error.what() << '\n';

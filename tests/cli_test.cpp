@@ -1292,6 +1292,39 @@ TEST_F(CliTest, BenchMovingSuitePrintsARowPerModel) {
                {"--json", "--suite moving"});
 }
 
+// --suite points: a row for each set of points on the bunny (the dragon and armadillo absent from
+// the folder named as skipped), vkray's distance and signed distance beside Embree's rtcPointQuery;
+// both within float32's rounding of the reference (16 units of 2^-24 of the distance and the
+// longest edge, docs/points.md: under 1e-5 of the bunny's diagonal) and no sign unlike its winding
+// number's away from the surface.
+TEST_F(CliTest, BenchPointsSuitePrintsARowPerSet) {
+  const fs::path bunny = fs::path(VKRAY_MODELS_DIR) / "stanford-bunny.obj";
+  if (!fs::exists(bunny)) GTEST_SKIP() << bunny << " is absent: the shared models folder is not beside the project";
+  fs::create_directory(path("models"));
+  fs::create_symlink(bunny, path("models/stanford-bunny.obj"));
+  const RunResult run = vkray({"bench", "--suite", "points", "--models", path("models").string(), "--points", "4096", "--frames", "1"});
+  ASSERT_EQ(run.exit_code, 0) << run.out << run.err;
+  EXPECT_NE(run.err.find("skipped stanford-dragon-100k.obj"), std::string::npos) << run.err;
+  for (const std::string set : {"uniform", "near-surface"}) {
+    const size_t at = run.out.find(" " + set + " ");
+    ASSERT_NE(at, std::string::npos) << run.out;
+    const size_t start = run.out.rfind('\n', at) + 1;
+    std::istringstream fields(run.out.substr(start, run.out.find('\n', at) - start));
+    std::string model, name;
+    size_t count = 0, flips = 1;
+    double distance = 0, signed_distance = 0, embree = 0, ratio = 0, signed_ratio = 0, error = 1, embree_error = 1;
+    fields >> model >> name >> count >> distance >> signed_distance >> embree >> ratio >> signed_ratio >> error >> embree_error >> flips;
+    EXPECT_EQ(name, set);
+    EXPECT_EQ(count, 4096u);
+    EXPECT_GT(distance, 0.0);
+    EXPECT_GT(signed_distance, 0.0);
+    EXPECT_GT(embree, 0.0);
+    EXPECT_LT(error, 1e-5) << run.out;
+    EXPECT_LT(embree_error, 1e-5) << run.out;
+    EXPECT_EQ(flips, 0u) << run.out;
+  }
+}
+
 // --suite instances measures against the scene flattened: where that scene could not fit in the
 // machine's memory it is refused at once, naming the most instances that fit (hostile campaign 3:
 // 20000 instances grew to 6.9 GB and ended in std::bad_alloc).
@@ -1739,7 +1772,7 @@ TEST_F(CliTest, DuplicateSceneKeysAreRefused) {
 TEST_F(CliTest, AMistypedCommandGetsTheNearestOne) {
   expect_error(vkray({"rendr"}), 2, {"unknown command 'rendr'", "did you mean 'render'?"});
   expect_error(vkray({"benhc", "--size", "8x8"}), 2, {"'benhc'", "'bench'"});
-  expect_error(vkray({"paint"}), 2, {"'paint'", "render, info, bench, view"});
+  expect_error(vkray({"xyzzy"}), 2, {"'xyzzy'", "render, info, bench, view"});
 }
 
 TEST_F(CliTest, AFolderAsTheSceneIsNamedAFolder) {

@@ -3,6 +3,7 @@
 // scene without what it hides.
 #include "engine/reference/reference.hpp"
 #include "engine/render/gpu_scene.hpp"
+#include "engine/render/gpu_scene_encoding.hpp"
 #include "engine/scene/scene_loader.hpp"
 #include "tests/gpu_test_support.hpp"
 
@@ -256,7 +257,7 @@ TEST(Masks, OnlyAScenesMasksAreTested) {
   EXPECT_EQ(masked.apart_masks.size(), 2u) << "the sphere tested apart and the plane";
   for (size_t slot = 0; slot < masked.primitives.size(); ++slot) {
     const uint32_t object = masked.hit_sources.slots[slot].object;
-    EXPECT_EQ(masked.primitives[slot].indices.w >> VKRAY_PRIMITIVE_MASK_SHIFT, object_mask(scene, object));
+    EXPECT_EQ(scene_encoding::primitive_mask(masked.primitives[slot].indices.w), object_mask(scene, object));
   }
   EXPECT_THROW(set_object_mask(scene, 4, 1), InputError) << "two meshes, a sphere and a plane: ids 0 to 3";
   Renderer renderer(device(), scene);

@@ -3,7 +3,7 @@
 // name), in a temporary copy of the layout they assume (build/vkray, ../shared/models, docs/ with its
 // bench scenes, a scene.json made of docs/scene-format.md's own scene example). So an option renamed,
 // removed or misspelt in the README or a page fails here. To keep the suite short, image sizes are cut to 64x36, the bench to one
-// frame of one round and the rays suite to 4096 rays a kind: what this checks is that each
+// frame of one round, the rays suite to 4096 rays a kind and point counts to a few thousand: what this checks is that each
 // command is accepted and works, not the figures beside it (those come from the commands as
 // printed, re-run by hand). `view` commands run under xvfb-run for
 // two frames. The setup and test commands (install-deps, cmake, ctest) are what CI itself runs.
@@ -109,6 +109,16 @@ std::string shrunk(std::string command) {
     if (command.find("--suite instances") != std::string::npos && command.find("--instances") == std::string::npos) {
       command += " --instances 10";
     }
+    // Nor the points suite's million points a set (its signed distances take minutes here).
+    if (command.find("--suite points") != std::string::npos) {
+      command = std::regex_replace(command, std::regex(R"(--points [0-9]+)"), "--points 4096");
+      if (command.find("--points") == std::string::npos) command += " --points 4096";
+    }
+  }
+  // The points command's grid and samples, as small: what it writes is its own tests' business.
+  if (command.starts_with("build/vkray points")) {
+    command = std::regex_replace(command, std::regex(R"(--grid [0-9]+)"), "--grid 8");
+    command = std::regex_replace(command, std::regex(R"(--(uniform|near-surface) [0-9]+)"), "--$1 1000");
   }
   // The report at its reduced sizes, one section: the others are what the suite's own tests run.
   if (command.starts_with("build/vkray report")) command += " --reduced --only views";

@@ -147,4 +147,9 @@ std::vector<BenchScene> instances_scenes(uint32_t width, uint32_t height, const 
                       height, models_dir, skipped);
 }
 
+std::vector<BenchScene> points_scenes(uint32_t width, uint32_t height, const std::filesystem::path& models_dir,
+                                      std::vector<std::string>* skipped) {
+  return named_models({"stanford-bunny.obj", "stanford-dragon-100k.obj", "armadillo-50k.obj"}, width, height, models_dir, skipped);
+}
+
 }  // namespace vkray

@@ -51,4 +51,9 @@ std::vector<BenchScene> moving_scenes(uint32_t width, uint32_t height, const std
 std::vector<BenchScene> instances_scenes(uint32_t width, uint32_t height, const std::filesystem::path& models_dir,
                                          std::vector<std::string>* skipped);
 
+// For point queries: the Stanford bunny (70k triangles, open at its base), dragon (100k) and
+// armadillo (50k).
+std::vector<BenchScene> points_scenes(uint32_t width, uint32_t height, const std::filesystem::path& models_dir,
+                                      std::vector<std::string>* skipped);
+
 }  // namespace vkray

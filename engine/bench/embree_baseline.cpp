@@ -4,6 +4,7 @@
 #include "engine/scene/camera.hpp"
 #include "engine/stopwatch.hpp"
 #include "engine/unit_vector.hpp"
+#include "shaders/point_geometry.h"
 
 #include <embree3/rtcore.h>
 #include <glm/geometric.hpp>
@@ -53,6 +54,12 @@ class EmbreeScene {
   EmbreeScene& operator=(const EmbreeScene&) = delete;
 
   RTCScene handle() const { return scene_; }
+  // By geometry ID, as rtcAttachGeometry numbered them: the mesh or the spheres it holds.
+  struct Attached {
+    const Mesh* mesh = nullptr;
+    const std::vector<Sphere>* spheres = nullptr;
+  };
+  const std::vector<Attached>& attached() const { return attached_; }
   void check_errors(const char* what) const { check(device_, what); }
   double build_ms = 0.0;
 
@@ -69,6 +76,7 @@ class EmbreeScene {
     auto* indices = static_cast<uint32_t*>(rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
                                                                    3 * sizeof(uint32_t), mesh.triangles.size()));
     for (size_t i = 0; i < mesh.triangles.size(); ++i) std::copy_n(mesh.triangles[i].begin(), 3, indices + 3 * i);
+    attached_.push_back({&mesh, nullptr});
     commit(geometry);
   }
 
@@ -81,6 +89,7 @@ class EmbreeScene {
       points[4 * i] = c.x, points[4 * i + 1] = c.y, points[4 * i + 2] = c.z;
       points[4 * i + 3] = static_cast<float>(spheres[i].radius);
     }
+    attached_.push_back({nullptr, &spheres});
     commit(geometry);
   }
 
@@ -92,6 +101,7 @@ class EmbreeScene {
 
   RTCDevice device_;
   RTCScene scene_ = nullptr;
+  std::vector<Attached> attached_;
 };
 
 // Rays a call of rtcIntersect1M takes: the chunk Open3D's RaycastingScene hands to it.
@@ -115,7 +125,88 @@ double run_tiles(uint32_t width, uint32_t height, unsigned threads, TraceTile tr
   return elapsed_ms(start);
 }
 
+// Runs `chunk(first, end, context)` over `count` items in chunks of rays_a_call on `threads` workers,
+// each taking the next chunk in turn, with a `Context` of its own made once; returns the time.
+template <typename Context, typename Chunk>
+double run_chunks(size_t count, unsigned threads, Chunk chunk) {
+  const size_t chunks = (count + rays_a_call - 1) / rays_a_call;
+  std::atomic<size_t> next{0};
+  const auto start = Clock::now();
+  {
+    std::vector<std::jthread> workers;
+    for (unsigned t = 0; t < threads; ++t) {
+      workers.emplace_back([&] {
+        Context context;
+        for (size_t c = next++; c < chunks; c = next++) chunk(c * rays_a_call, std::min(count, (c + 1) * rays_a_call), context);
+      });
+    }
+  }
+  return elapsed_ms(start);
+}
+
+// What a point query's callback reads: the scene's primitives in double and the query point.
+struct PointQueryData {
+  const EmbreeScene* embree;
+  glm::dvec3 point;
+};
+
+// rtcPointQuery's callback: the primitive's distance to the point; a nearer one shrinks the query's
+// radius, which prunes the rest of Embree's walk (true: the radius changed).
+bool nearest_primitive(RTCPointQueryFunctionArguments* arguments) {
+  const auto* data = static_cast<const PointQueryData*>(arguments->userPtr);
+  const EmbreeScene::Attached& attached = data->embree->attached()[arguments->geomID];
+  double distance;
+  if (attached.mesh) {
+    const Mesh& mesh = *attached.mesh;
+    const auto& triangle = mesh.triangles[arguments->primID];
+    const glm::dvec3 a = mesh.positions[triangle[0]] - data->point, b = mesh.positions[triangle[1]] - data->point,
+                     c = mesh.positions[triangle[2]] - data->point;
+    const glm::dvec2 weights = point_geometry::nearest_on_triangle(a, b, c);
+    distance = glm::length(a + weights.x * (b - a) + weights.y * (c - a));
+  } else {
+    const Sphere& sphere = (*attached.spheres)[arguments->primID];
+    distance = std::abs(glm::length(sphere.center - data->point) - sphere.radius);
+  }
+  if (!(distance < arguments->query->radius)) return false;
+  arguments->query->radius = static_cast<float>(distance);
+  return true;
+}
+
 }  // namespace
+
+EmbreePoints query_points_with_embree(const Scene& scene, std::span<const glm::dvec3> points, uint32_t repeats) {
+  const glm::dvec3 anchor = scene_anchor(scene);
+  EmbreeScene embree(scene, anchor);
+  EmbreePoints result;
+  result.threads = std::max(1u, std::thread::hardware_concurrency());
+  std::vector<glm::vec3> relative(points.size());
+  for (size_t k = 0; k < points.size(); ++k) relative[k] = glm::vec3(points[k] - anchor);
+  result.distance.assign(points.size(), std::numeric_limits<float>::infinity());
+  auto query = [&] {
+    return run_chunks<RTCPointQueryContext>(points.size(), result.threads, [&](size_t first, size_t end, RTCPointQueryContext& context) {
+      for (size_t k = first; k < end; ++k) {
+        rtcInitPointQueryContext(&context);
+        const glm::vec3& p = relative[k];
+        RTCPointQuery point_query{p.x, p.y, p.z, 0.0f, std::numeric_limits<float>::infinity()};
+        PointQueryData data{&embree, points[k]};
+        rtcPointQuery(embree.handle(), &point_query, &context, nearest_primitive, &data);
+        result.distance[k] = point_query.radius;
+      }
+    });
+  };
+  query();  // warm-up
+  std::vector<double> times_ms;
+  for (uint32_t r = 0; r < std::max(repeats, 1u); ++r) times_ms.push_back(query());
+  result.time = time_stats(times_ms);
+  embree.check_errors("querying points");
+  for (size_t k = 0; k < points.size(); ++k) {
+    for (const Plane& plane : scene.planes) {
+      const double height = std::abs(glm::dot(plane.normal, points[k] - plane.point));
+      result.distance[k] = std::min(result.distance[k], static_cast<float>(height));
+    }
+  }
+  return result;
+}
 
 EmbreeResult trace_with_embree(const Scene& scene, uint32_t width, uint32_t height, uint32_t repeats) {
   const glm::dvec3 anchor = scene_anchor(scene);
@@ -222,35 +313,27 @@ EmbreeRays trace_rays_with_embree(const Scene& scene, std::span<const GivenRay> 
     origins[k] = glm::vec3(glm::dvec3(rays[k][0], rays[k][1], rays[k][2]) - anchor);
     directions[k] = glm::vec3(unit_vector(glm::dvec3(rays[k][3], rays[k][4], rays[k][5])));
   }
-  const size_t calls = (rays.size() + rays_a_call - 1) / rays_a_call;
+  // An intersect context made ready once per worker.
+  struct IntersectContext {
+    RTCIntersectContext context;
+    IntersectContext() { rtcInitIntersectContext(&context); }
+  };
   auto trace = [&] {
-    std::atomic<size_t> next{0};
-    const auto start = Clock::now();
-    {
-      std::vector<std::jthread> workers;
-      for (unsigned t = 0; t < result.threads; ++t) {
-        workers.emplace_back([&] {
-          RTCIntersectContext context;
-          rtcInitIntersectContext(&context);
-          for (size_t call = next++; call < calls; call = next++) {
-            const size_t first = call * rays_a_call, count = std::min(rays_a_call, rays.size() - first);
-            for (size_t k = first; k < first + count; ++k) {  // a query is also its answer: set anew each run
-              const glm::vec3 &o = origins[k], &d = directions[k];
-              queries[k] = {};
-              queries[k].ray = {o.x, o.y, o.z, static_cast<float>(ranges.start(k)), d.x, d.y, d.z, 0.0f,
-                                static_cast<float>(ranges.end(k)), ~0u, 0, 0};
-              queries[k].hit.geomID = RTC_INVALID_GEOMETRY_ID;
-            }
-            if (query == HitQuery::any) {
-              rtcOccluded1M(embree.handle(), &context, &queries[first].ray, static_cast<unsigned>(count), sizeof(RTCRayHit));
-            } else {
-              rtcIntersect1M(embree.handle(), &context, &queries[first], static_cast<unsigned>(count), sizeof(RTCRayHit));
-            }
-          }
-        });
+    return run_chunks<IntersectContext>(rays.size(), result.threads, [&](size_t first, size_t end, IntersectContext& worker) {
+      for (size_t k = first; k < end; ++k) {  // a query is also its answer: set anew each run
+        const glm::vec3 &o = origins[k], &d = directions[k];
+        queries[k] = {};
+        queries[k].ray = {o.x, o.y, o.z, static_cast<float>(ranges.start(k)), d.x, d.y, d.z, 0.0f,
+                          static_cast<float>(ranges.end(k)), ~0u, 0, 0};
+        queries[k].hit.geomID = RTC_INVALID_GEOMETRY_ID;
       }
-    }
-    return elapsed_ms(start);
+      const auto count = static_cast<unsigned>(end - first);
+      if (query == HitQuery::any) {
+        rtcOccluded1M(embree.handle(), &worker.context, &queries[first].ray, count, sizeof(RTCRayHit));
+      } else {
+        rtcIntersect1M(embree.handle(), &worker.context, &queries[first], count, sizeof(RTCRayHit));
+      }
+    });
   };
   trace();  // warm-up
   std::vector<double> times_ms;

@@ -40,4 +40,16 @@ struct EmbreeRays {
 EmbreeRays trace_rays_with_embree(const Scene& scene, std::span<const GivenRay> rays, uint32_t repeats,
                                   const RayRanges& ranges = {}, HitQuery query = HitQuery::nearest);
 
+// Embree's point queries (rtcPointQuery, Open3D's compute_distance and compute_closest_points): each
+// point's nearest triangle or sphere through a callback that shrinks the query's radius to the
+// distance found (the nearest point in double: engine's point_geometry), in chunks of 1024 points on
+// every core; the points relative to the scene's anchor in float, made once outside the timed runs;
+// `repeats` timed runs after a warm-up. Planes are measured after each query, as for rays.
+struct EmbreePoints {
+  TimeStats time;
+  unsigned threads = 0;
+  std::vector<float> distance;  // +inf where the scene is empty
+};
+EmbreePoints query_points_with_embree(const Scene& scene, std::span<const glm::dvec3> points, uint32_t repeats);
+
 }  // namespace vkray

@@ -7,6 +7,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <fstream>
+#include <iterator>
 
 namespace vkray {
 namespace {
@@ -48,14 +50,13 @@ void check_png16_outputs(AovSet aovs) {
   }
 }
 
-std::string npy_file(const Frame& frame, Aov aov, float miss, bool half) {
-  const OutputInfo& output = output_info(aov);
-  const char* descr = output.integer ? "<u4" : half ? "<f2" : "<f4";
-  const std::string shape = std::to_string(frame.height) + ", " + std::to_string(frame.width) +
-                            (output.components > 1 ? ", " + std::to_string(output.components) : "");
+std::string npy_header(std::string_view descr, std::span<const size_t> shape) {
+  std::string dims;
+  for (const size_t d : shape) dims += std::to_string(d) + ", ";
+  if (shape.size() > 1) dims.resize(dims.size() - 2);  // (n,) for one dimension, (a, b) for more
   // NumPy's format 1.0: magic, version, the header's length, a Python dict padded with spaces to a
   // newline that makes the data start at a multiple of 64 bytes (numpy/lib/format.py).
-  std::string header = "{'descr': '" + std::string(descr) + "', 'fortran_order': False, 'shape': (" + shape + "), }";
+  std::string header = "{'descr': '" + std::string(descr) + "', 'fortran_order': False, 'shape': (" + dims + "), }";
   const size_t preamble = 10;
   header.append(63 - (preamble + header.size()) % 64, ' ');
   header += '\n';
@@ -63,7 +64,15 @@ std::string npy_file(const Frame& frame, Aov aov, float miss, bool half) {
   bytes += '\x01';
   bytes += '\x00';
   append(bytes, static_cast<uint16_t>(header.size()));
-  bytes += header;
+  return bytes + header;
+}
+
+std::string npy_file(const Frame& frame, Aov aov, float miss, bool half) {
+  const OutputInfo& output = output_info(aov);
+  const char* descr = output.integer ? "<u4" : half ? "<f2" : "<f4";
+  std::vector<size_t> shape{frame.height, frame.width};
+  if (output.components > 1) shape.push_back(output.components);
+  std::string bytes = npy_header(descr, shape);
   const size_t pixels = frame.pixel_count();
   bytes.reserve(bytes.size() + pixels * output.components * 4);
   // The frame's planes are one a component; the file interleaves them pixel by pixel.
@@ -83,6 +92,69 @@ std::string npy_file(const Frame& frame, Aov aov, float miss, bool half) {
     }
   }
   return bytes;
+}
+
+std::vector<glm::dvec3> read_npy_points(const std::filesystem::path& path) {
+  std::ifstream file(path, std::ios::binary);
+  if (!file) throw InputError(path.string() + ": cannot be read");
+  const std::string bytes((std::istreambuf_iterator<char>(file)), std::istreambuf_iterator<char>());
+  const auto refuse = [&](const std::string& why) -> std::vector<glm::dvec3> {
+    throw InputError(path.string() + ": " + why + " (expected a .npy file of float64 or float32 points, shape (..., 3), C order)");
+  };
+  if (bytes.size() < 10 || bytes.compare(0, 6, "\x93NUMPY") != 0) return refuse("not a .npy file");
+  const auto major = static_cast<uint8_t>(bytes[6]);
+  const size_t length_bytes = major == 1 ? 2 : 4, start = 8 + length_bytes;
+  if (major < 1 || major > 3 || bytes.size() < start) return refuse("an unknown .npy version");
+  size_t header_length = 0;
+  for (size_t b = 0; b < length_bytes; ++b) header_length |= size_t{static_cast<uint8_t>(bytes[8 + b])} << (8 * b);
+  if (bytes.size() < start + header_length) return refuse("its header runs past its end");
+  const std::string header = bytes.substr(start, header_length);
+  const auto value_of = [&](const std::string& key) {
+    const size_t at = header.find("'" + key + "':");
+    return at == std::string::npos ? std::string() : header.substr(at + key.size() + 3);
+  };
+  const std::string descr = value_of("descr"), order = value_of("fortran_order"), shape_text = value_of("shape");
+  const bool doubles = descr.rfind(" '<f8'", 0) == 0 || descr.rfind("'<f8'", 0) == 0;
+  const bool floats = descr.rfind(" '<f4'", 0) == 0 || descr.rfind("'<f4'", 0) == 0;
+  if (!doubles && !floats) return refuse("its dtype is not float64 or float32 (little-endian)");
+  if (order.find("False") > 1) return refuse("it is in Fortran order");
+  const size_t open = shape_text.find('('), close = shape_text.find(')');
+  if (open == std::string::npos || close == std::string::npos || close < open) return refuse("its shape cannot be read");
+  std::vector<size_t> shape;
+  std::string dims = shape_text.substr(open + 1, close - open - 1);
+  for (size_t at = 0; at < dims.size();) {
+    const size_t comma = std::min(dims.find(',', at), dims.size());
+    const std::string dim = dims.substr(at, comma - at);
+    if (dim.find_first_not_of(' ') != std::string::npos) {
+      try {
+        shape.push_back(std::stoull(dim));
+      } catch (const std::exception&) {
+        return refuse("its shape cannot be read");
+      }
+    }
+    at = comma + 1;
+  }
+  if (shape.empty() || shape.back() != 3) return refuse("its last dimension is not 3");
+  size_t count = 1;
+  for (const size_t d : shape) {
+    if (d != 0 && count > (size_t{1} << 40) / d) return refuse("it holds too many points");
+    count *= d;
+  }
+  const size_t item = doubles ? 8 : 4, data = start + header_length;
+  if (bytes.size() - data != count * item) return refuse("it holds " + std::to_string(bytes.size() - data) + " bytes of data, not the " + std::to_string(count * item) + " its shape says");
+  std::vector<glm::dvec3> points(count / 3);
+  for (size_t k = 0; k < count; ++k) {
+    double value;
+    if (doubles) {
+      std::memcpy(&value, bytes.data() + data + 8 * k, 8);
+    } else {
+      float single;
+      std::memcpy(&single, bytes.data() + data + 4 * k, 4);
+      value = single;
+    }
+    points[k / 3][static_cast<glm::length_t>(k % 3)] = value;
+  }
+  return points;
 }
 
 std::vector<uint8_t> png16_samples(const Frame& frame, Aov aov, double step, size_t& beyond) {

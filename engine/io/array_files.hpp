@@ -5,9 +5,12 @@
 
 #include "engine/frame.hpp"
 
+#include <glm/vec3.hpp>
+
 #include <cstdint>
 #include <filesystem>
 #include <optional>
+#include <span>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -35,6 +38,14 @@ void check_png16_outputs(AovSet aovs);
 // width, components), rows from the top; float32 ('<f4'), half ('<f2') when `half`, or uint32 ('<u4')
 // for ids. A depth holds `miss` where the ray missed, as the EXR does.
 std::string npy_file(const Frame& frame, Aov aov, float miss, bool half);
+
+// The header of a .npy file (format 1.0) of dtype `descr` ("<f4", "<f8", "<u4") and C-order `shape`;
+// the data follows it, little-endian.
+std::string npy_header(std::string_view descr, std::span<const size_t> shape);
+
+// The points of a .npy file of shape (..., 3), float64 or float32, C order. Throws InputError naming
+// the file and what is wrong with it.
+std::vector<glm::dvec3> read_npy_points(const std::filesystem::path& path);
 
 // The 16-bit samples (big-endian, as PNG stores them) of depth output `aov`: round(depth / step),
 // and 0 where there is none, a miss or a depth past 65535 steps; `beyond` counts those past.

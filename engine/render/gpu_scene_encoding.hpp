@@ -23,6 +23,8 @@ inline glm::vec4 to_float4(const glm::dvec3& v, double w = 0.0) { return glm::ve
 
 // GpuPrimitive's w: the primitive's kind, its mask above it.
 inline uint32_t primitive_word(uint32_t kind, Mask mask) { return kind | uint32_t{mask} << VKRAY_PRIMITIVE_MASK_SHIFT; }
+// The mask a record's w holds (the flags above it, VKRAY_PRIMITIVE_FLIPPED, left out).
+inline Mask primitive_mask(uint32_t word) { return static_cast<Mask>(word >> VKRAY_PRIMITIVE_MASK_SHIFT); }
 
 // `value` (relative to the anchor) as the shader of `precision` reads it: see GpuPoint.
 inline gpu::GpuPoint encode_point(const glm::dvec4& value, Precision precision) {

@@ -128,7 +128,7 @@ bool refit_in_place(GpuScene& gpu, const Scene& scene, const ShaderVariant& shad
         break;
       }
       record.indices = glm::uvec4(triangle.vertex[0], triangle.vertex[1], triangle.vertex[2],
-                                  triangle.word(static_cast<Mask>(record.indices.w >> VKRAY_PRIMITIVE_MASK_SHIFT)));
+                                  triangle.word(primitive_mask(record.indices.w)));
       write_normal(gpu.normal_texels.data() + slot * texels, triangle.normal, gpu.precision);
       state.slot_box[slot] = triangle.box();
     }

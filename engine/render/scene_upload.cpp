@@ -1,3 +1,4 @@
+#include "engine/render/gpu_scene_encoding.hpp"
 #include "engine/render/renderer_impl.hpp"
 #include "engine/render/specialization.hpp"
 
@@ -87,7 +88,7 @@ void Renderer::Impl::upload_scene(const GpuScene& gpu_scene, const Scene& scene)
     input.vertex_stride = sizeof(gpu::GpuPoint);
     for (const auto& mesh : gpu_scene.structure_meshes) {
       // The mesh's mask, as each of its triangles' records carries it.
-      const auto mask = static_cast<uint8_t>(gpu_scene.primitives[mesh.first].indices.w >> VKRAY_PRIMITIVE_MASK_SHIFT);
+      const Mask mask = scene_encoding::primitive_mask(gpu_scene.primitives[mesh.first].indices.w);
       input.meshes.push_back({mesh.first, mesh.count, mask, mesh.placed});
       for (uint32_t slot = mesh.first; slot < mesh.first + mesh.count; ++slot) {
         const glm::uvec4& record = gpu_scene.primitives[slot].indices;

@@ -2,6 +2,9 @@
 outputs' shapes and types, the shorthands, the largest distance, masks and bad input. The device's
 arithmetic over every search, instance and extreme case is tests/point_queries_test.cpp's; here the
 package over the C API."""
+import os
+import subprocess
+
 import numpy as np
 import pytest
 
@@ -112,3 +115,62 @@ def test_bad_input_is_named(renderer):
     with pytest.raises(ValueError, match="max_distance"):
         renderer.distance(np.zeros((2, 3)), max_distance=[1.0, -1.0])
     assert renderer.distance(np.zeros((0, 3))).shape == (0,)
+
+
+def write_cube(path):
+    with open(path, "w") as obj:
+        obj.writelines(f"v {x} {y} {z}\n" for x, y, z in CUBE_CORNERS)
+        obj.writelines(f"f {a + 1} {b + 1} {c + 1}\n" for a, b, c in CUBE_FACES)
+
+
+def vkray_points(*arguments):
+    return subprocess.run([os.environ["VKRAY_CLI"], "points", *map(str, arguments)], capture_output=True, text=True)
+
+
+def test_the_command_line_writes_a_grid_and_samples_as_npy(tmp_path):
+    cube = tmp_path / "cube.obj"
+    write_cube(cube)
+    prefix = tmp_path / "grid"
+    run = vkray_points(cube, "--grid", 12, "--output", "signed-distance,occupancy,position", "-o", prefix)
+    assert run.returncode == 0, run.stderr
+    points = np.load(f"{prefix}.points.npy")
+    sdf, occupancy = np.load(f"{prefix}.signed-distance.npy"), np.load(f"{prefix}.occupancy.npy")
+    assert points.shape == (12, 12, 12, 3) and sdf.shape == (12, 12, 12) and occupancy.dtype == np.uint32
+    assert np.load(f"{prefix}.position.npy").shape == (12, 12, 12, 3)
+    # [x][y][z]: z runs fastest; the box is the cube's, 1.1 times.
+    assert points[0, 0, 1, 2] > points[0, 0, 0, 2] and points[1, 0, 0, 0] > points[0, 0, 0, 0]
+    assert np.allclose(points.min(axis=(0, 1, 2)), -1.1 + 2.2 / 24)
+    exact = vkray.Reference(vkray.load(str(cube))).signed_distance(points)
+    assert np.all(np.abs(sdf - exact) <= distance_bound(np.abs(exact)))
+    assert np.array_equal(occupancy == 1, exact < 0)
+
+    prefix = tmp_path / "samples"
+    run = vkray_points(cube, "--uniform", 300, "--near-surface", 700, "--sigma", 0.01, "--seed", 5, "-o", prefix, "--reference")
+    assert run.returncode == 0, run.stderr
+    points, sdf = np.load(f"{prefix}.points.npy"), np.load(f"{prefix}.signed-distance.npy")
+    assert points.shape == (1000, 3) and sdf.dtype == np.float64
+    # Near the surface: within a few sigma of it (5 sigma: one in 1.7 million leaves).
+    assert np.all(np.abs(sdf[300:]) < 0.05) and np.abs(sdf[:300]).max() > 0.2
+    given = tmp_path / "given.npy"
+    np.save(given, points.astype(np.float32).reshape(10, 100, 3))
+    run = vkray_points(cube, "--points", given, "--output", "distance", "-o", tmp_path / "given")
+    assert run.returncode == 0, run.stderr
+    assert np.load(tmp_path / "given.distance.npy").shape == (1000,)
+
+
+def test_the_command_line_names_bad_points(tmp_path):
+    cube = tmp_path / "cube.obj"
+    write_cube(cube)
+    bad = tmp_path / "bad.npy"
+    np.save(bad, np.zeros((4, 2)))
+    out = tmp_path / "p"
+    run = vkray_points(cube, "--points", bad, "-o", out)
+    assert run.returncode == 2 and "bad.npy" in run.stderr and "last dimension" in run.stderr and run.stderr.count("\n") == 1
+    np.save(bad, np.array([[0.0, 0.0, 0.0], [np.nan, 0.0, 0.0]]))
+    run = vkray_points(cube, "--points", bad, "-o", out)
+    assert run.returncode == 2 and "point 1" in run.stderr
+    run = vkray_points(cube, "--grid", 4, "--uniform", 10, "-o", out)
+    assert run.returncode == 2 and "one way" in run.stderr
+    run = vkray_points(cube, "--grid", 4, "--output", "depth", "-o", out)
+    assert run.returncode == 2 and "unknown point output" in run.stderr
+    assert not list(tmp_path.glob("p.*"))
