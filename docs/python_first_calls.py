@@ -1,8 +1,8 @@
 """How long a Renderer's constructor takes, and each kind of call's first run against its tenth, for
-the bunny at 640x480 (docs/python.md): the constructor makes and runs every pipeline once, so no
-call pays for a first use.
+the bunny at 640x480 (docs/python.md): each call makes its pipeline at its first use, or, with
+--prepare, Renderer.prepare() makes them all first.
 
-    PYTHONPATH=build/python /usr/bin/python3 docs/python_first_calls.py [MODEL]
+    PYTHONPATH=build/python /usr/bin/python3 docs/python_first_calls.py [MODEL] [--prepare]
 """
 import sys
 import time
@@ -11,10 +11,13 @@ import numpy as np
 
 import vkray
 
-model = sys.argv[1] if len(sys.argv) > 1 else "../shared/models/stanford-bunny.obj"
+arguments = [argument for argument in sys.argv[1:] if argument != "--prepare"]
+model = arguments[0] if arguments else "../shared/models/stanford-bunny.obj"
 scene = vkray.load(model, 640, 480)
 start = time.perf_counter()
 renderer = vkray.Renderer(scene)
+if "--prepare" in sys.argv:
+    renderer.prepare()
 setup = renderer.timings["setup"]
 print(f"constructor {1e3 * (time.perf_counter() - start):.0f} ms (upload {setup['upload_ms']:.0f} ms, "
       f"making and first running the pipelines {setup['pipeline_ms']:.0f} ms) on {renderer.device_name}")

@@ -7,6 +7,7 @@
 
 #include <math.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 #define CHECK(condition)                                                        \
@@ -27,6 +28,11 @@ int main(void) {
   CHECK(strstr(vkray_scene_describe(scene), "\"width\":32") != NULL);
   vkray_renderer* renderer = NULL;
   CHECK(vkray_renderer_new(scene, NULL, "float", "auto", &renderer) == VKRAY_OK);
+  CHECK(vkray_renderer_prepare(renderer) == VKRAY_OK);
+  /* Its time joins the setup's, the one "pipeline_ms" there is (no call has run). */
+  const char* made = strstr(vkray_renderer_timings(renderer), "\"pipeline_ms\":");
+  CHECK(made != NULL && strtod(made + strlen("\"pipeline_ms\":"), NULL) > 0.0);
+  CHECK(vkray_renderer_prepare(NULL) == VKRAY_INPUT_ERROR);
 
   static float depth[24][32], normal[24][32][3];
   const char* aovs[] = {"depth", "normal"};

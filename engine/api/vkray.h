@@ -1,4 +1,4 @@
-/* vkray's C API, version 5 (VKRAY_API_VERSION): the engine's one outward boundary, libvkray.so. Python's `vkray`
+/* vkray's C API, version 6 (VKRAY_API_VERSION): the engine's one outward boundary, libvkray.so. Python's `vkray`
  * package is written over it (ctypes, any CPython 3.9 or later, any numpy 1.22 to 2.x); C, Rust and
  * Julia callers use it as it is.
  *
@@ -33,7 +33,8 @@
 extern "C" {
 #endif
 
-#define VKRAY_API_VERSION 5  /* 4: instances (vkray_scene_add_instance, vkray_renderer_set_transforms); 5: point queries */
+#define VKRAY_API_VERSION 6  /* 4: instances (vkray_scene_add_instance, vkray_renderer_set_transforms); 5: point queries;
+                                6: pipelines made at first use (vkray_renderer_prepare) */
 #define VKRAY_API __attribute__((visibility("default")))
 
 /* mesh_id and primitive_id of a ray that hit nothing. */
@@ -111,12 +112,16 @@ VKRAY_API void vkray_scene_free(vkray_scene* scene);
 
 /* --- Renderers --- */
 
-/* Opens the device, uploads the scene and makes every pipeline its calls will take (render of the
- * scene's camera, cast_rays and occluded), so that no call pays for a first use. device: NULL or
- * part of a device name (`vkray info`); precision: "float" or "double"; traversal: "auto" or one of
- * vkray_traversal(). */
+/* Opens the device and uploads the scene (its tree built); each call makes the pipeline it takes at
+ * its first use of it (vkray_renderer_timings: "pipeline_ms"). device: NULL or part of a device name
+ * (`vkray info`); precision: "float" or "double"; traversal: "auto" or one of vkray_traversal(). */
 VKRAY_API vkray_status vkray_renderer_new(const vkray_scene* scene, const char* device, const char* precision,
                                           const char* traversal, vkray_renderer** renderer);
+/* Makes and first runs every pipeline that render (of the scene's camera), cast_rays and occluded
+ * take, several at once, so that no later call of theirs pays for a first use; its time is added to
+ * the setup's "pipeline_ms" (version 6). For a process that answers calls as they come (a service, a
+ * robot's loop), not for a script that makes one call of each kind. */
+VKRAY_API vkray_status vkray_renderer_prepare(vkray_renderer* renderer);
 /* The double-precision CPU reference, with the renderer's calls (every float output in float64). */
 VKRAY_API vkray_status vkray_reference_new(const vkray_scene* scene, vkray_renderer** renderer);
 /* Whether depth, normal and t come in float64 (the float64 shader, the reference). */

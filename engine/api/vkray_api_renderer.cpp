@@ -44,9 +44,17 @@ vkray_status vkray_renderer_new(const vkray_scene* scene, const char* device, co
     made->device = std::make_unique<GpuDevice>(device ? device : "");
     made->device_name = made->device->info().name;
     made->renderer = std::make_unique<Renderer>(*made->device, made->scene, options);
-    made->renderer->prepare_pipelines(made->scene.camera, made->scene.width, made->scene.height);
     made->setup = made->renderer->timings();
     *renderer = made.release();
+  });
+}
+
+vkray_status vkray_renderer_prepare(vkray_renderer* renderer) {
+  return guarded([&] {
+    require(renderer, "renderer");
+    if (!renderer->renderer) return;  // the reference has no pipelines
+    renderer->renderer->prepare_pipelines(renderer->scene.camera, renderer->scene.width, renderer->scene.height);
+    renderer->setup.pipeline_ms += renderer->renderer->timings().pipeline_ms;
   });
 }
 

@@ -8,6 +8,24 @@
 namespace vkray {
 
 double Renderer::Impl::dispatch_tile(const vk::raii::Pipeline& chosen, const gpu::RayGenParams& params) {
+  if (pipeline->first_dispatch(chosen)) {
+    // A pipeline's first dispatch runs over one row of workgroups, untimed: lavapipe compiles a
+    // pipeline's code there (a first render or occlusion query took 3 to 5 times its tenth's time;
+    // the viewer's first frame 657 ms of GPU time against 24 ms). Timed, it would pass for a dispatch
+    // over the budget and shrink every dispatch after it (13 where 2 do, in the report that found it).
+    // That time is the pipeline's; the same rows run again below, writing the same values.
+    const auto warm_up_start = Clock::now();
+    const RenderTimings before = timings;
+    gpu::RayGenParams first_rows = params;
+    first_rows.image.w = std::min(params.image.w, workgroup_footprint(tile.mode).height);
+    submit_tile(chosen, first_rows);
+    timings = before;
+    timings.pipeline_ms += elapsed_ms(warm_up_start);
+  }
+  return submit_tile(chosen, params);
+}
+
+double Renderer::Impl::submit_tile(const vk::raii::Pipeline& chosen, const gpu::RayGenParams& params) {
   const auto submitted = Clock::now();
   const bool to_image = tile.image_id != 0;
   context.submit_and_wait([&](const vk::raii::CommandBuffer& commands) {
@@ -92,21 +110,6 @@ double Renderer::Impl::dispatch_tile(const vk::raii::Pipeline& chosen, const gpu
 void Renderer::Impl::dispatch_camera_rows(const vk::raii::Pipeline& camera_pipeline, const CameraBasis& basis,
                                           uint32_t width, uint32_t height, uint32_t tile_rows, RaycastMode mode,
                                           const std::function<void(uint32_t first_row, uint32_t rows)>& tile_done) {
-  if (mode == RaycastMode::image_target && timings.pipeline_ms > 0.0) {
-    // A pipeline made for this render first runs once over one row of workgroups, untimed:
-    // llvmpipe compiles its storage-image code at the first dispatch that writes such an image
-    // (the viewer's first frame took 657 ms of GPU time against 24 ms for the next; later
-    // pipelines and images of the process cost nothing more, so for them this is one small
-    // dispatch). Timed, it would pass for a dispatch over the budget and shrink every dispatch
-    // after it (13 where 2 do, in the report that found it). That time is the pipeline's; the
-    // rows are rendered again below.
-    const auto warm_up_start = Clock::now();
-    const RenderTimings before = timings;
-    dispatch_tile(camera_pipeline, make_ray_gen_params(basis, anchor, precision(), width, height, 0,
-                                                       std::min(height, workgroup_footprint(mode).height), counts));
-    timings = before;
-    timings.pipeline_ms += elapsed_ms(warm_up_start);
-  }
   DispatchSizer sizer(width, tile_rows, options.dispatch_budget_ms, camera_ms_per_pixel, workgroup_footprint(mode).height);
   for (uint32_t first_row = 0, rows = 0; first_row < height; first_row += rows) {
     rows = std::min(sizer.next_rows(), height - first_row);

@@ -233,8 +233,9 @@ struct Renderer::Impl {
   // Casts the rays of one tile: resets the overflow list (and the depth range, for an image),
   // dispatches, and copies what the host reads into host-visible memory; waits for it.
   // Returns the dispatch's GPU time (its wall time, submission included, where there are no
-  // timestamps).
+  // timestamps). A pipeline's first dispatch is run small first, untimed (its compilation).
   double dispatch_tile(const vk::raii::Pipeline& chosen, const gpu::RayGenParams& params);
+  double submit_tile(const vk::raii::Pipeline& chosen, const gpu::RayGenParams& params);
   // A camera's rows in dispatches, each sized by what the earlier ones took (DispatchSizer);
   // `tile_done(first_row, rows)` reads each back before the next runs.
   void dispatch_camera_rows(const vk::raii::Pipeline& camera_pipeline, const CameraBasis& basis, uint32_t width,

@@ -110,6 +110,11 @@ const vk::raii::Pipeline& RaycastPipeline::pipeline(AovSet aovs, bool lo_parts, 
   return entry->second;
 }
 
+bool RaycastPipeline::first_dispatch(const vk::raii::Pipeline& pipeline) {
+  const std::lock_guard lock(*pipelines_lock_);
+  return dispatched_.insert(*pipeline).second;
+}
+
 bool RaycastPipeline::ray_query() const { return specialization_.search_mode == VKRAY_SEARCH_RAY_QUERY; }
 
 uint32_t RaycastPipeline::binding_count() const { return static_cast<uint32_t>(shader_->types.size()); }

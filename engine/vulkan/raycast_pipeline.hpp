@@ -10,6 +10,7 @@
 
 #include <array>
 #include <map>
+#include <set>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -85,6 +86,9 @@ class RaycastPipeline {
 
   void bind(const vk::raii::CommandBuffer& commands, const vk::raii::Pipeline& pipeline,
             const gpu::RayGenParams& params) const;
+  // True at the first call for `pipeline` alone: lavapipe compiles a pipeline's code at its first
+  // dispatch, not when it is made (Renderer::Impl::dispatch_tile runs that one small and untimed).
+  bool first_dispatch(const vk::raii::Pipeline& pipeline);
 
  private:
   VulkanContext& context_;
@@ -93,6 +97,7 @@ class RaycastPipeline {
   vk::raii::PipelineLayout layout_{nullptr};
   std::map<uint64_t, vk::raii::Pipeline> pipelines_;  // by AovSet bits, bit 32 the lo parts, the mode from bit 33
   std::unique_ptr<std::mutex> pipelines_lock_ = std::make_unique<std::mutex>();  // a pointer: the class moves
+  std::set<VkPipeline> dispatched_;
 };
 
 }  // namespace vkray

@@ -557,8 +557,8 @@ _Caster.render.__doc__ = _render_help()
 
 
 class Renderer(_Caster):
-    """Opens the device, uploads the scene and makes every pipeline its calls take once; then renders
-    and casts rays any number of times, no call paying for a first use."""
+    """Opens the device and uploads the scene; then renders and casts rays any number of times, each
+    kind of call making its pipeline at its first use (prepare() makes them all at once)."""
 
     def __init__(self, scene: Scene, device: Optional[str] = None, precision: str = "float", traversal: str = "auto"):
         """device: part of a device name (`vkray info`), None for the first; precision: 'float' or
@@ -576,6 +576,12 @@ class Renderer(_Caster):
     def device_name(self) -> str:
         """The name of the device it opened (`vkray info`)."""
         return _native.lib.vkray_renderer_device_name(self._handle).decode()
+
+    def prepare(self) -> None:
+        """Makes and first runs every pipeline that render (of the scene's camera), cast_rays and
+        occluded take, several at once, so that no later call of theirs pays for a first use (its time
+        in timings['setup']['pipeline_ms']): for a process that answers calls as they come."""
+        _check(_native.lib.vkray_renderer_prepare(self._handle))
 
 
 class Reference(_Caster):

@@ -6,7 +6,7 @@ the relocatable bundle's lib/ two folders up. ctypes releases the GIL for every 
 import ctypes
 import pathlib
 
-API_VERSION = 5  # VKRAY_API_VERSION of the header this file declares
+API_VERSION = 6  # VKRAY_API_VERSION of the header this file declares
 
 
 def _find_library():
@@ -63,6 +63,7 @@ _signatures = {
     "vkray_renderer_set_transforms": (Status, [_renderer, ctypes.POINTER(ctypes.c_uint32), _doubles, ctypes.c_uint64]),
     "vkray_renderer_timings": (ctypes.c_char_p, [_renderer]),
     "vkray_renderer_free": (None, [_renderer]),
+    "vkray_renderer_prepare": (Status, [_renderer]),
     "vkray_render": (Status, [_renderer, ctypes.c_char_p, ctypes.c_uint32, ctypes.c_uint32, ctypes.c_uint32, ctypes.c_uint32,
                               _names, _pointers]),
     "vkray_cast_rays": (Status, [_renderer, _doubles, ctypes.c_uint64, _doubles, _doubles, ctypes.c_uint32, ctypes.c_uint32,
