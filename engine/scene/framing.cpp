@@ -23,7 +23,18 @@ std::optional<FramingView> framing_view_from_name(std::string_view name) {
 }
 
 Camera frame_scene(const Scene& scene, uint32_t width, uint32_t height, const FramingView& view) {
-  if (finite_bounds(scene).empty()) throw InputError("nothing to frame: the scene has no mesh or sphere");
+  if (finite_bounds(scene).empty()) {
+    if (scene.planes.empty()) throw InputError("nothing to frame: the scene has no mesh, sphere or plane");
+    // Planes alone have no extent to fit: the first is seen from one unit along its normal, looking
+    // 14 degrees below its horizon (atan 1/4, within half the field of view: the plane and the sky
+    // above it), so that a scene made only to cast rays at a ground plane needs no camera (issue 64).
+    const Plane& plane = scene.planes.front();
+    const glm::dvec3 normal = unit_vector(plane.normal);
+    const glm::dvec3 across = unit_vector(std::abs(normal.y) < 0.9 ? glm::cross(normal, glm::dvec3(0.0, 1.0, 0.0))
+                                                                    : glm::cross(normal, glm::dvec3(1.0, 0.0, 0.0)));
+    const glm::dvec3 along = glm::cross(across, normal);
+    return {plane.point + normal + 4.0 * along, plane.point, normal, framing_fovy_degrees};
+  }
   const glm::dvec3 centre = scene_centre(scene);
   double radius = scene_radius(scene, centre);
   // A single point still needs a camera somewhere: one unit away.

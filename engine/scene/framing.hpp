@@ -29,8 +29,8 @@ inline constexpr const char* framing_view_names = "front, back, left, right, top
 
 // A camera that sees the whole bounding sphere of the scene's meshes and spheres at width x
 // height from `view`'s side: the sphere (centre of the bounding box, radius the largest distance
-// from it) touches the shorter borders of the image. Throws InputError when the scene has no
-// finite geometry.
+// from it) touches the shorter borders of the image. Planes alone: the first seen at a slant from
+// one unit along its normal. Throws InputError when the scene has nothing at all.
 Camera frame_scene(const Scene& scene, uint32_t width, uint32_t height, const FramingView& view = front_view);
 
 // A scene holding the model file's meshes alone (model_loader.hpp), its camera from frame_scene at

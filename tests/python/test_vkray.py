@@ -275,12 +275,25 @@ def test_bad_calls_raise_value_error_with_the_place(default_renderer, call, mess
     ({"planes": np.array([[0, 0, 0, 0, 0, 0]]), "camera": {"from": [0, 0, 5], "to": [0, 0, 0]}}, "planes[0].normal: must be finite and non-zero"),
     ({"meshes": [{"vertices": np.eye(3), "triangles": [[0, 1, 2]], "scale": 2}]}, "meshes[0]: unknown key 'scale'"),
     ({"meshes": [{"vertices": np.eye(3), "triangles": [[0, 1, 2]], "transform": np.eye(3)}]}, "meshes[0].transform: expected a 4 x 4 matrix, got shape (3, 3)"),
-    ({"planes": np.array([[0, 0, 0, 0, 1, 0]])}, "nothing to frame: the scene has no mesh or sphere"),
+    ({}, "nothing to frame: the scene has no mesh, sphere or plane"),
 ])
 def test_bad_scenes_raise_value_error_with_the_place(arguments, message):
     with pytest.raises(ValueError) as raised:
         vkray.Scene(**arguments)
     assert message in str(raised.value)
+
+
+def test_planes_alone_need_no_camera():
+    """A ground plane made only to cast rays at (issue 64: refused as "nothing to frame"): the scene
+    frames it at a slant from one unit along its normal, rays hit it where the plane's formula says,
+    and its render sees the plane below the horizon."""
+    scene = vkray.Scene(planes=np.array([[0.0, -2.0, 0.0, 0.0, 1.0, 0.0]]), width=32, height=24)
+    assert np.allclose(scene.camera["to"], [0, -2, 0]) and scene.camera["from"][1] == pytest.approx(-1.0)
+    renderer = vkray.Renderer(scene)
+    t = renderer.cast_rays(np.array([[0.3, 1.0, 0.2, 0.0, -1.0, 0.0], [0.3, 1.0, 0.2, 0.0, 1.0, 0.0]]))["t"]
+    assert t[0] == pytest.approx(3.0, rel=2**-22) and t[1] == np.inf
+    depth = renderer.render()["depth"]
+    assert np.isfinite(depth[-1]).all() and np.isfinite(depth).mean() < 1.0
 
 
 def test_an_array_too_large_to_convert_raises_memory_error():
