@@ -26,6 +26,17 @@ int main(void) {
   vkray_scene* scene = NULL;
   CHECK(vkray_scene_load("", 32, 24, NULL, NULL, &scene) == VKRAY_OK);
   CHECK(strstr(vkray_scene_describe(scene), "\"width\":32") != NULL);
+  /* A mesh's arrays: the counts first, then the copies (the built-in scene's first mesh). */
+  uint64_t vertex_count = 0, triangle_count = 0;
+  CHECK(vkray_scene_mesh(scene, 0, NULL, NULL, &vertex_count, &triangle_count) == VKRAY_OK && vertex_count >= 3 && triangle_count >= 1);
+  double* positions = malloc(vertex_count * 3 * sizeof(double));
+  uint32_t* indices = malloc(triangle_count * 3 * sizeof(uint32_t));
+  CHECK(vkray_scene_mesh(scene, 0, positions, indices, NULL, NULL) == VKRAY_OK);
+  for (uint64_t k = 0; k < triangle_count * 3; ++k) CHECK(indices[k] < vertex_count);
+  CHECK(isfinite(positions[3 * vertex_count - 1]));
+  free(positions);
+  free(indices);
+  CHECK(vkray_scene_mesh(scene, 1000, NULL, NULL, NULL, NULL) == VKRAY_INPUT_ERROR);
   vkray_renderer* renderer = NULL;
   CHECK(vkray_renderer_new(scene, NULL, "float", "auto", &renderer) == VKRAY_OK);
   CHECK(vkray_renderer_prepare(renderer) == VKRAY_OK);

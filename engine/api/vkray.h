@@ -34,7 +34,7 @@ extern "C" {
 #endif
 
 #define VKRAY_API_VERSION 6  /* 4: instances (vkray_scene_add_instance, vkray_renderer_set_transforms); 5: point queries;
-                                6: pipelines made at first use (vkray_renderer_prepare) */
+                                6: pipelines made at first use (vkray_renderer_prepare), a mesh's arrays (vkray_scene_mesh) */
 #define VKRAY_API __attribute__((visibility("default")))
 
 /* mesh_id and primitive_id of a ray that hit nothing. */
@@ -102,12 +102,19 @@ VKRAY_API vkray_status vkray_scene_set_mask(vkray_scene* scene, uint32_t object,
 VKRAY_API vkray_status vkray_scene_set_camera(vkray_scene* scene, const char* camera_json);
 /* Checks the scene as a scene file is checked (every coordinate finite and within 1e15, radii > 0,
  * plane normals non-zero, each instance's transform invertible, its mesh's box placed within 1e15 and
- * walkable in float32 as the reference walks it); frames the geometry where no camera was set. */
+ * walkable in float32 as the reference walks it); frames the geometry where no camera was set (planes
+ * alone: the first seen from one unit above it, the horizon in view). */
 VKRAY_API vkray_status vkray_scene_finish(vkray_scene* scene);
 /* The finished scene as JSON: {"width", "height", "meshes", "triangles", "spheres", "planes",
  * "camera" (the scene file's form), "object_names" (what each mesh_id stands for), "masks" (each
  * one's mask)}. */
 VKRAY_API const char* vkray_scene_describe(vkray_scene* scene);
+/* Mesh `mesh`'s vertex positions (vertex_count x 3 doubles, in the order vkray_renderer_set_vertices
+ * takes them: a model's every vertex in its file's order, used or not) and its triangles (triangle_count x
+ * 3 indices into them), each copied into its array where that is not NULL; the counts into
+ * vertex_count and triangle_count where those are not NULL (version 6). A finished scene. */
+VKRAY_API vkray_status vkray_scene_mesh(const vkray_scene* scene, uint32_t mesh, double* positions, uint32_t* triangles,
+                                        uint64_t* vertex_count, uint64_t* triangle_count);
 VKRAY_API void vkray_scene_free(vkray_scene* scene);
 
 /* --- Renderers --- */

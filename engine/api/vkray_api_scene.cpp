@@ -7,6 +7,7 @@
 #include "engine/scene/scene_or_model.hpp"
 
 #include <cmath>
+#include <cstring>
 
 using namespace vkray;
 using namespace vkray::api;
@@ -179,6 +180,24 @@ const char* vkray_scene_describe(vkray_scene* scene) {
   json["masks"] = masks;
   returned_description = json.dump();
   return returned_description.c_str();
+}
+
+vkray_status vkray_scene_mesh(const vkray_scene* scene, uint32_t mesh, double* positions, uint32_t* triangles,
+                              uint64_t* vertex_count, uint64_t* triangle_count) {
+  return guarded([&] {
+    require(scene, "scene");
+    if (!scene->finished) throw InputError("scene: not finished (vkray_scene_finish)");
+    const std::vector<Mesh>& meshes = scene->scene.meshes;
+    if (mesh >= meshes.size()) {
+      throw InputError("mesh " + std::to_string(mesh) + ": the scene has " + std::to_string(meshes.size()) + " meshes");
+    }
+    const Mesh& given = meshes[mesh];
+    if (vertex_count) *vertex_count = given.positions.size();
+    if (triangle_count) *triangle_count = given.triangles.size();
+    static_assert(sizeof(glm::dvec3) == 3 * sizeof(double) && sizeof(given.triangles[0]) == 3 * sizeof(uint32_t));
+    if (positions) std::memcpy(positions, given.positions.data(), given.positions.size() * sizeof(glm::dvec3));
+    if (triangles) std::memcpy(triangles, given.triangles.data(), given.triangles.size() * sizeof(given.triangles[0]));
+  });
 }
 
 void vkray_scene_free(vkray_scene* scene) { delete scene; }

@@ -308,6 +308,28 @@ class Scene:
         """Each object's ray mask, by mesh_id (a scene file's "mask"; 255, every bit, by default)."""
         return list(self._masks)
 
+    def _mesh_arrays(self, mesh: int, vertices: bool) -> np.ndarray:
+        if isinstance(mesh, bool) or not isinstance(mesh, (int, np.integer)) or not 0 <= mesh < 2**32:
+            raise ValueError(f"mesh: expected a mesh_id, a whole number from 0, got {mesh!r}")
+        counts = (ctypes.c_uint64(), ctypes.c_uint64())
+        _check(_native.lib.vkray_scene_mesh(self._handle, int(mesh), None, None, ctypes.byref(counts[0]), ctypes.byref(counts[1])))
+        if vertices:
+            positions = np.empty((counts[0].value, 3), dtype=np.float64)
+            _check(_native.lib.vkray_scene_mesh(self._handle, int(mesh), _pointer(positions), None, None, None))
+            return positions
+        triangles = np.empty((counts[1].value, 3), dtype=np.uint32)
+        _check(_native.lib.vkray_scene_mesh(self._handle, int(mesh), None, _pointer(triangles, ctypes.c_uint32), None, None))
+        return triangles
+
+    def vertices(self, mesh: int = 0) -> np.ndarray:
+        """Mesh `mesh`'s (a mesh_id) vertex positions, N x 3 float64, in the order Renderer.set_vertices
+        takes them: a model's every vertex in its file's order (used by a face or not), moved by its transform."""
+        return self._mesh_arrays(mesh, True)
+
+    def triangles(self, mesh: int = 0) -> np.ndarray:
+        """Mesh `mesh`'s triangles, M x 3 uint32 indices into its vertices(mesh)."""
+        return self._mesh_arrays(mesh, False)
+
     def __repr__(self) -> str:
         meshes, triangles, spheres, planes = self._counts
         return (f"<vkray.Scene: {meshes} meshes, {triangles} triangles, {spheres} spheres, {planes} planes, "

@@ -55,6 +55,8 @@ _signatures = {
     "vkray_scene_finish": (Status, [_scene]),
     "vkray_scene_describe": (ctypes.c_char_p, [_scene]),
     "vkray_scene_free": (None, [_scene]),
+    "vkray_scene_mesh": (Status, [_scene, ctypes.c_uint32, ctypes.POINTER(ctypes.c_double), ctypes.POINTER(ctypes.c_uint32),
+                                  ctypes.POINTER(ctypes.c_uint64), ctypes.POINTER(ctypes.c_uint64)]),
     "vkray_renderer_new": (Status, [_scene, ctypes.c_char_p, ctypes.c_char_p, ctypes.c_char_p, ctypes.POINTER(_renderer)]),
     "vkray_reference_new": (Status, [_scene, ctypes.POINTER(_renderer)]),
     "vkray_renderer_doubles": (ctypes.c_int, [_renderer]),

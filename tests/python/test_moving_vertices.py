@@ -86,3 +86,24 @@ def test_bad_input_raises_and_changes_nothing():
     with pytest.raises(ValueError, match="mesh: expected a mesh_id"):
         renderer.set_vertices(-1, vertices)
     np.testing.assert_array_equal(renderer.cast_rays(rays)["t"], before)
+
+
+def test_a_loaded_model_gives_the_vertices_set_vertices_takes(tmp_path):
+    """A model opened with vkray.load is deformed from its own arrays (issue 64: a Scene showed no
+    vertices, and a count of the vertices the faces use, 34834 of the bunny's 35947, was refused):
+    Scene.vertices(mesh) is every vertex of the file in its order, used or not, triangles(mesh) the
+    faces' indices into them, and set_vertices of them moved answers as the moved scene."""
+    model = tmp_path / "quad.obj"
+    model.write_text("v -1 -1 0\nv 1 -1 0\nv 9 9 9\nv 1 1 0\nv -1 1 0\nf 1 2 4\nf 1 4 5\n")
+    scene = vkray.load(str(model), width=40, height=30)
+    vertices, triangles = scene.vertices(0), scene.triangles(0)
+    assert vertices.dtype == np.float64 and triangles.dtype == np.uint32
+    assert np.array_equal(vertices, [[-1, -1, 0], [1, -1, 0], [9, 9, 9], [1, 1, 0], [-1, 1, 0]])
+    assert np.array_equal(triangles, [[0, 1, 3], [0, 3, 4]])
+    reference = vkray.Reference(scene)
+    ray = np.array([[0.2, 0.3, 5.0, 0.0, 0.0, -1.0]])
+    assert reference.cast_rays(ray)["t"][0] == pytest.approx(5.0, rel=4 * 2.0**-52)
+    reference.set_vertices(0, vertices + [0.0, 0.0, 1.5])
+    assert reference.cast_rays(ray)["t"][0] == pytest.approx(3.5, rel=4 * 2.0**-52)  # a few fp64 roundings
+    with pytest.raises(ValueError, match="mesh 1: the scene has 1 meshes"):
+        scene.vertices(1)
