@@ -88,7 +88,9 @@ class RaycastingScene:
                                  "t.geometry.TriangleMesh with vertex positions and triangle indices") from None
         vertices = _rows(vertex_positions, "vertex_positions", 3).reshape(-1, 3).astype(np.float64)
         triangles = _rows(triangle_indices, "triangle_indices", 3).reshape(-1, 3)
-        if triangles.dtype.kind == "f" or (len(triangles) and (triangles.min() < 0 or triangles.max() >= len(vertices))):
+        if not len(triangles):
+            raise ValueError("triangle_indices: a mesh needs at least one triangle (Open3D keeps an empty one; vkray refuses it)")
+        if triangles.dtype.kind == "f" or triangles.min() < 0 or triangles.max() >= len(vertices):
             raise ValueError(f"triangle_indices: expected whole numbers from 0 to {len(vertices) - 1} (the vertices)")
         triangles = triangles.astype(np.uint32)
         corners = vertices[triangles]
@@ -101,14 +103,10 @@ class RaycastingScene:
 
     def _caster(self) -> Optional[Renderer]:
         """The renderer of the triangles added so far; None while there are none."""
-        if self._renderer is None and any(len(triangles) for _, triangles in self._meshes):
-            points = np.vstack([vertices for vertices, _ in self._meshes])
-            centre = 0.5 * (points.min(axis=0) + points.max(axis=0))
-            reach = float(np.linalg.norm(points.max(axis=0) - points.min(axis=0))) or 1.0
-            # A camera of its own: the queries never render, and a flat scene has nothing to frame.
-            camera = {"from": (centre + [0.0, 0.0, 2.0 * reach]).tolist(), "to": centre.tolist()}
+        if self._renderer is None and self._meshes:
+            # The queries never render: the smallest image the framing takes.
             scene = Scene(meshes=[{"vertices": vertices, "triangles": triangles} for vertices, triangles in self._meshes],
-                          camera=camera, width=64, height=64)
+                          width=1, height=1)
             self._renderer = Renderer(scene, device=self._device)
         return self._renderer
 

@@ -184,6 +184,8 @@ def test_the_renderer_is_made_at_the_first_query_and_again_when_triangles_are_ad
 
 def test_bad_input_raises_one_clear_line():
     scene = RaycastingScene()
+    with pytest.raises(ValueError, match="a mesh needs at least one triangle"):
+        scene.add_triangles(CUBE_CORNERS, np.zeros((0, 3), np.uint32))
     with pytest.raises(ValueError, match="triangle_indices: expected whole numbers from 0 to 7"):
         scene.add_triangles(CUBE_CORNERS, CUBE_FACES + 1)
     with pytest.raises(ValueError, match=r"rays: expected an array of shape \(\.\.\., 6\)"):
