@@ -246,8 +246,8 @@ void Renderer::prepare_pipelines(const Camera& camera, uint32_t width, uint32_t 
     cast_rays_in_place(arc, {t.data(), normal.data(), object.data(), primitive.data()});
     cast_rays_in_place(scrambled, {t.data(), normal.data(), object.data(), primitive.data()});
   }
-  // Each pipeline's first dispatch above took its compilation too: no measure of what a pixel or a
-  // ray costs (the first dispatch of the next call would be sized by it, and every one after it).
+  // The calls above are a few rays each, their time mostly a submission's: no measure of what a pixel
+  // or a ray costs (the first dispatch of the next call would be sized by it, and every one after it).
   r.camera_ms_per_pixel = 0.0;
   r.given_ms_per_ray.clear();
   r.timings = constructor;
