@@ -18,7 +18,7 @@ from typing import Any, Dict, List, Optional, Tuple
 
 import numpy as np
 
-from . import HITS_MAX, NO_HIT, Renderer, Scene
+from . import HITS_MAX, NO_HIT, Renderer, Scene, _array
 
 __all__ = ["RaycastingScene", "INVALID_ID", "Tensor"]
 
@@ -41,13 +41,7 @@ def _numbers(value: Any, what: str) -> np.ndarray:
     """An array from numpy, a sequence or anything with `.numpy()` (an Open3D tensor)."""
     if not isinstance(value, np.ndarray) and callable(getattr(value, "numpy", None)):
         value = value.numpy()
-    try:
-        array = np.asarray(value)
-    except (TypeError, ValueError):
-        raise ValueError(f"{what}: expected an array of numbers (numpy, or an Open3D tensor), got {type(value).__name__}") from None
-    if array.dtype.kind not in "biuf":
-        raise ValueError(f"{what}: expected an array of numbers (numpy, or an Open3D tensor), got dtype {array.dtype}")
-    return array
+    return _array(value, what, "numpy, or an Open3D tensor")
 
 
 def _rows(value: Any, what: str, width: int) -> np.ndarray:
